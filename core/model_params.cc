@@ -25,7 +25,82 @@ absl::Status CheckPositive(const char* name, double value, double hi) {
   return absl::OkStatus();
 }
 
+struct FieldRef {
+  std::string_view name;
+  double ModelParams::*real = nullptr;
+  int ModelParams::*integer = nullptr;
+};
+
+// One table for SetModelParam, GetModelParam and ModelParamNames, so that a new
+// field needs one line here.
+const std::vector<FieldRef>& Fields() {
+  static const auto* fields = new std::vector<FieldRef>{
+      {"mass_kg", &ModelParams::mass_kg},
+      {"drag_coefficient", &ModelParams::drag_coefficient},
+      {"frontal_area_m2", &ModelParams::frontal_area_m2},
+      {"airspeed_mps", &ModelParams::airspeed_mps},
+      {"uav_radius_m", &ModelParams::uav_radius_m},
+      {"turn_radius_m", &ModelParams::turn_radius_m},
+      {"max_climb_rad", &ModelParams::max_climb_rad},
+      {"failure_rate_per_s", &ModelParams::failure_rate_per_s},
+      {"gravity_mps2", &ModelParams::gravity_mps2},
+      {"air_density_kgpm3", &ModelParams::air_density_kgpm3},
+      {"person_radius_m", &ModelParams::person_radius_m},
+      {"person_height_m", &ModelParams::person_height_m},
+      {"alpha_j", &ModelParams::alpha_j},
+      {"beta_j", &ModelParams::beta_j},
+      {"sigma_pos_m", &ModelParams::sigma_pos_m},
+      {"sigma_speed_mps", &ModelParams::sigma_speed_mps},
+      {"sigma_wind_mps", &ModelParams::sigma_wind_mps},
+      {"heading_bins", nullptr, &ModelParams::heading_bins},
+      {"height_bin_m", &ModelParams::height_bin_m},
+      {"table_max_height_m", &ModelParams::table_max_height_m},
+      {"max_half_width", nullptr, &ModelParams::max_half_width},
+      {"sample_step_m", &ModelParams::sample_step_m},
+      {"min_agl_m", &ModelParams::min_agl_m},
+      {"max_agl_m", &ModelParams::max_agl_m},
+      {"glide_ratio", &ModelParams::glide_ratio},
+      {"glide_clearance_m", &ModelParams::glide_clearance_m},
+  };
+  return *fields;
+}
+
 }  // namespace
+
+absl::Status SetModelParam(ModelParams* params, std::string_view name, double value) {
+  for (const FieldRef& f : Fields()) {
+    if (f.name != name) continue;
+    if (f.real != nullptr) {
+      params->*f.real = value;
+      return absl::OkStatus();
+    }
+    if (!std::isfinite(value) || value != std::floor(value) || std::fabs(value) > 1e9) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "parameter '%s' has value %g; it must be a whole number", std::string(name), value));
+    }
+    params->*f.integer = static_cast<int>(value);
+    return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError(
+      absl::StrFormat("unknown model parameter '%s'", std::string(name)));
+}
+
+absl::StatusOr<double> GetModelParam(const ModelParams& params, std::string_view name) {
+  for (const FieldRef& f : Fields()) {
+    if (f.name != name) continue;
+    return f.real != nullptr ? params.*f.real : static_cast<double>(params.*f.integer);
+  }
+  return absl::NotFoundError(absl::StrFormat("unknown model parameter '%s'", std::string(name)));
+}
+
+const std::vector<std::string_view>& ModelParamNames() {
+  static const auto* names = [] {
+    auto* v = new std::vector<std::string_view>;
+    for (const FieldRef& f : Fields()) v->push_back(f.name);
+    return v;
+  }();
+  return *names;
+}
 
 int ModelParams::HeightBins() const {
   return static_cast<int>(std::lround(table_max_height_m / height_bin_m));

@@ -7,8 +7,11 @@
 #define RISKPLAN_CORE_MODEL_PARAMS_H_
 
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
 
 namespace riskplan {
 
@@ -60,6 +63,18 @@ struct ModelParams {
 // Returns OK when every field is finite and inside the range riskplan accepts,
 // else InvalidArgument naming the first offending field and its value.
 absl::Status ValidateModelParams(const ModelParams& params);
+
+// Sets the field called `name` (the field names above, e.g. "mass_kg") to
+// `value`. Integer fields take integral values only. Returns InvalidArgument for
+// an unknown name or a non-integral value for an integer field; the range is
+// checked by ValidateModelParams().
+absl::Status SetModelParam(ModelParams* params, std::string_view name, double value);
+
+// Reads the field called `name`; NotFound for an unknown name.
+absl::StatusOr<double> GetModelParam(const ModelParams& params, std::string_view name);
+
+// Every settable field name, in declaration order.
+const std::vector<std::string_view>& ModelParamNames();
 
 // True when the two parameter sets give the same impact table for the same map
 // resolution (every field the table depends on is equal).

@@ -1,0 +1,261 @@
+// riskplan-tool: offline access to riskplan's core (no server needed).
+//
+//   riskplan-tool evaluate [--map=DIR] (--waypoints=... | --polyline=... | --trajectory_file=F)
+//                          [--samples] [--json] [--params=name=value,...]
+//   riskplan-tool write-map --out=DIR [--seed=N] [--size_m=M] [--res_m=R]
+//   riskplan-tool info [--map=DIR]
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
+#include "core/demo_city.h"
+#include "core/map_bundle.h"
+#include "core/risk_model.h"
+#include "core/trajectory.h"
+#include "core/trajectory_io.h"
+#include "nlohmann/json.hpp"
+
+ABSL_FLAG(std::string, map, "",
+          "Map bundle directory (docs/map-bundle.md). Empty: the built-in demo-city.");
+ABSL_FLAG(std::string, waypoints, "",
+          "evaluate: waypoints 'x,y,z,theta;...' (m, m, m AMSL, rad), joined by Dubins-airplane "
+          "manoeuvres");
+ABSL_FLAG(std::string, polyline, "", "evaluate: polyline 'x,y,z;...' of straight segments");
+ABSL_FLAG(std::string, trajectory_file, "",
+          "evaluate: JSON file {\"waypoints\": [[x,y,z,theta],...]} or {\"polyline\": "
+          "[[x,y,z],...]}");
+ABSL_FLAG(bool, samples, false, "evaluate: also print every sample's configuration risk");
+ABSL_FLAG(bool, json, false, "evaluate: print the result as JSON");
+ABSL_FLAG(std::string, params, "",
+          "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
+          "mass_kg=12,airspeed_mps=20)");
+ABSL_FLAG(std::string, out, "", "write-map: directory to write the bundle into");
+ABSL_FLAG(uint64_t, seed, riskplan::kDemoCitySeed, "write-map: demo-city seed");
+ABSL_FLAG(double, size_m, 8000.0, "write-map: demo-city side in metres");
+ABSL_FLAG(double, res_m, 5.0, "write-map: demo-city cell size in metres");
+
+namespace riskplan {
+namespace {
+
+constexpr char kUsage[] =
+    "riskplan-tool: offline risk evaluation and map tools.\n"
+    "\n"
+    "Commands:\n"
+    "  evaluate   risk, length and admissibility of a trajectory on a map\n"
+    "  write-map  write the built-in demo-city as a map bundle (--out=DIR)\n"
+    "  info       describe a map\n"
+    "\n"
+    "Examples:\n"
+    "  riskplan-tool evaluate --waypoints='1000,1000,250,0; 7000,7000,250,1.57'\n"
+    "  riskplan-tool evaluate --map=maps/demo-city --polyline='0,0,200;100,0,200' --samples\n"
+    "  riskplan-tool write-map --out=maps/demo-city\n";
+
+int Fail(const absl::Status& status) {
+  std::fprintf(stderr, "riskplan-tool: %s\n", std::string(status.message()).c_str());
+  return status.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
+}
+
+absl::StatusOr<ModelParams> ParamsFromFlag() {
+  ModelParams params;
+  const std::string text = absl::GetFlag(FLAGS_params);
+  for (absl::string_view item : absl::StrSplit(text, ',', absl::SkipWhitespace())) {
+    std::vector<std::string> kv = absl::StrSplit(item, absl::MaxSplits('=', 1));
+    double value = 0.0;
+    if (kv.size() != 2 || !absl::SimpleAtod(kv[1], &value)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("--params: '%s' is not name=number", std::string(item)));
+    }
+    if (absl::Status s = SetModelParam(&params, std::string(absl::StripAsciiWhitespace(kv[0])), value);
+        !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrFormat("--params: %s", s.message()));
+    }
+  }
+  if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
+  return params;
+}
+
+absl::StatusOr<std::shared_ptr<const RiskMap>> LoadMap(const ModelParams& params) {
+  const std::string dir = absl::GetFlag(FLAGS_map);
+  if (dir.empty()) return MakeDemoCity(DemoCityOptions{}, params);
+  return LoadMapBundle(dir, params);
+}
+
+absl::StatusOr<TrajectoryInput> TrajectoryFromFlags() {
+  const std::string w = absl::GetFlag(FLAGS_waypoints);
+  const std::string p = absl::GetFlag(FLAGS_polyline);
+  const std::string f = absl::GetFlag(FLAGS_trajectory_file);
+  const int given = !w.empty() + !p.empty() + !f.empty();
+  if (given != 1) {
+    return absl::InvalidArgumentError(
+        "evaluate: give exactly one of --waypoints, --polyline and --trajectory_file");
+  }
+  TrajectoryInput input;
+  if (!f.empty()) return ReadTrajectoryFile(f);
+  if (!w.empty()) {
+    auto parsed = ParseWaypoints(w);
+    if (!parsed.ok()) return parsed.status();
+    input.waypoints = *std::move(parsed);
+  } else {
+    auto parsed = ParsePolyline(p);
+    if (!parsed.ok()) return parsed.status();
+    input.polyline = *std::move(parsed);
+  }
+  return input;
+}
+
+void PrintText(const RiskMap& map, const TrajectoryInput& input, const TrajectoryEvaluation& e,
+               bool samples) {
+  std::printf("map         %s (%d x %d cells of %g m, origin (%g, %g))\n", map.name().c_str(),
+              map.nx(), map.ny(), map.res(), map.x0(), map.y0());
+  if (input.is_polyline()) {
+    std::printf("trajectory  polyline of %zu points, %zu straight pieces\n", input.polyline.size(),
+                e.pieces.size());
+  } else {
+    std::printf("trajectory  %zu waypoints, %zu Dubins-airplane pieces\n", input.waypoints.size(),
+                e.pieces.size());
+  }
+  std::printf("risk        %.6e expected casualties per flight\n", e.risk);
+  std::printf("length      %.1f m\n", e.length_m);
+  std::printf("admissible  %s\n", e.admissible ? "yes" : "no");
+  if (e.first_violation.has_value()) {
+    std::printf("violation   %s\n", e.first_violation->ToString().c_str());
+  }
+  for (size_t p = 0; p < e.pieces.size(); ++p) {
+    std::printf("  piece %zu: length %.1f m, %d samples, risk %.6e%s\n", p, e.pieces[p].length_m,
+                e.pieces[p].parts, e.pieces[p].risk, e.pieces[p].admissible ? "" : ", inadmissible");
+  }
+  if (samples) {
+    std::printf("%5s %10s %10s %10s %8s %8s %14s %12s %8s %8s\n", "piece", "s_m", "x_m", "y_m",
+                "z_m", "theta", "M", "I", "S", "p_cas");
+    for (const SampleEvaluation& s : e.samples) {
+      std::printf("%5d %10.3f %10.3f %10.3f %8.3f %8.5f %14.8e %12.6e %8.5f %8.6f\n", s.piece,
+                  s.arc_length_m, s.pose.x, s.pose.y, s.pose.z, s.pose.theta, s.risk.risk,
+                  s.risk.impact_factor, s.risk.expected_shelter, s.risk.casualty_probability);
+    }
+  }
+}
+
+void PrintJson(const RiskMap& map, const TrajectoryEvaluation& e, bool samples) {
+  nlohmann::json out;
+  out["map"] = map.name();
+  out["risk"] = e.risk;
+  out["length_m"] = e.length_m;
+  out["admissible"] = e.admissible;
+  if (e.first_violation.has_value()) {
+    const Violation& v = *e.first_violation;
+    out["first_violation"] = {{"kind", std::string(ViolationKindName(v.kind))},
+                              {"x", v.pose.x},
+                              {"y", v.pose.y},
+                              {"z", v.pose.z},
+                              {"arc_length_m", v.arc_length_m},
+                              {"piece", v.piece},
+                              {"message", v.ToString()}};
+  }
+  for (const PieceEvaluation& p : e.pieces) {
+    out["pieces"].push_back({{"risk", p.risk},
+                             {"length_m", p.length_m},
+                             {"samples", p.parts},
+                             {"admissible", p.admissible}});
+  }
+  if (samples) {
+    out["samples"] = nlohmann::json::array();
+    for (const SampleEvaluation& s : e.samples) {
+      out["samples"].push_back({{"piece", s.piece},
+                                {"arc_length_m", s.arc_length_m},
+                                {"x", s.pose.x},
+                                {"y", s.pose.y},
+                                {"z", s.pose.z},
+                                {"theta", s.pose.theta},
+                                {"M", s.risk.risk},
+                                {"I", s.risk.impact_factor},
+                                {"S", s.risk.expected_shelter},
+                                {"p_cas", s.risk.casualty_probability},
+                                {"defined", s.risk.defined}});
+    }
+  }
+  std::printf("%s\n", out.dump(2).c_str());
+}
+
+int Evaluate() {
+  auto params = ParamsFromFlag();
+  if (!params.ok()) return Fail(params.status());
+  auto input = TrajectoryFromFlags();
+  if (!input.ok()) return Fail(input.status());
+  auto map = LoadMap(*params);
+  if (!map.ok()) return Fail(map.status());
+  auto model = RiskModel::Create(*map, *params);
+  if (!model.ok()) return Fail(model.status());
+  auto pieces = input->is_polyline() ? PiecesFromPolyline(input->polyline)
+                                     : PiecesFromWaypoints(input->waypoints, *params);
+  if (!pieces.ok()) return Fail(pieces.status());
+  const bool samples = absl::GetFlag(FLAGS_samples);
+  auto eval = EvaluateTrajectory(**model, *pieces, {.keep_samples = samples});
+  if (!eval.ok()) return Fail(eval.status());
+  if (absl::GetFlag(FLAGS_json)) {
+    PrintJson(**map, *eval, samples);
+  } else {
+    PrintText(**map, *input, *eval, samples);
+  }
+  return 0;
+}
+
+int WriteMap() {
+  const std::string out = absl::GetFlag(FLAGS_out);
+  if (out.empty()) return Fail(absl::InvalidArgumentError("write-map: --out=DIR is required"));
+  auto params = ParamsFromFlag();
+  if (!params.ok()) return Fail(params.status());
+  const absl::Time start = absl::Now();
+  auto map = MakeDemoCity(DemoCityOptions{absl::GetFlag(FLAGS_seed), absl::GetFlag(FLAGS_size_m),
+                                          absl::GetFlag(FLAGS_res_m)},
+                          *params);
+  if (!map.ok()) return Fail(map.status());
+  const double generate_s = absl::ToDoubleSeconds(absl::Now() - start);
+  if (absl::Status s = WriteMapBundle(**map, out); !s.ok()) return Fail(s);
+  std::printf("wrote %s (%d x %d cells, generated in %.2f s) to %s\n", (*map)->name().c_str(),
+              (*map)->nx(), (*map)->ny(), generate_s, out.c_str());
+  return 0;
+}
+
+int Info() {
+  auto params = ParamsFromFlag();
+  if (!params.ok()) return Fail(params.status());
+  auto map = LoadMap(*params);
+  if (!map.ok()) return Fail(map.status());
+  const RiskMap& m = **map;
+  std::printf("name            %s\n", m.name().c_str());
+  std::printf("origin          (%g, %g) m\n", m.x0(), m.y0());
+  std::printf("size            %d x %d cells of %g m (%g x %g m)\n", m.nx(), m.ny(), m.res(),
+              m.width_m(), m.height_m());
+  std::printf("landing sites   %zu\n", m.landing_sites().size());
+  std::printf("provenance      %s\n", m.header().provenance.c_str());
+  std::printf("memory          %.1f MiB\n", m.MemoryBytes() / 1048576.0);
+  return 0;
+}
+
+}  // namespace
+}  // namespace riskplan
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(riskplan::kUsage);
+  std::vector<char*> args = absl::ParseCommandLine(argc, argv);
+  if (args.size() != 2) {
+    std::fprintf(stderr, "%s\nriskplan-tool: give exactly one command (see --help)\n",
+                 riskplan::kUsage);
+    return 2;
+  }
+  const std::string command = args[1];
+  if (command == "evaluate") return riskplan::Evaluate();
+  if (command == "write-map") return riskplan::WriteMap();
+  if (command == "info") return riskplan::Info();
+  std::fprintf(stderr, "riskplan-tool: unknown command '%s' (see --help)\n", command.c_str());
+  return 2;
+}

@@ -47,7 +47,8 @@ DubinsPath2D ShortestDubinsPath(double x0, double y0, double th0, double x1, dou
                                 double th1, double radius);
 
 // Length of a specific word, or +infinity when the word does not exist for
-// these poses. Exposed for tests.
+// these poses. `segments`, when given, receives the three lengths in metres
+// (all +infinity when the word does not exist). Exposed for tests.
 double DubinsWordLength(DubinsWord word, double x0, double y0, double th0, double x1, double y1,
                         double th1, double radius, std::array<double, 3>* segments = nullptr);
 

@@ -3,10 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <limits>
 #include <numbers>
-#include <queue>
 #include <string>
 #include <utility>
 #include <vector>
@@ -68,6 +66,71 @@ std::vector<float> PadLayer(const std::vector<float>& layer, int nx, int ny, flo
   }
   return padded;
 }
+
+// Binary min-heap of (altitude, cell) entries. Besides push and pop it offers
+// ReplaceTop(), a pop followed by a push in one sift.
+class GlideHeap {
+ public:
+  struct Entry {
+    double alt;
+    uint32_t index;
+  };
+
+  bool empty() const { return heap_.empty(); }
+  const Entry& Top() const { return heap_.front(); }
+
+  void Push(Entry e) {
+    size_t at = heap_.size();
+    heap_.push_back(e);
+    while (at > 0) {
+      const size_t parent = (at - 1) / 2;
+      if (!(e.alt < heap_[parent].alt)) break;
+      heap_[at] = heap_[parent];
+      at = parent;
+    }
+    heap_[at] = e;
+  }
+
+  // REQUIRES: !empty().
+  void Pop() {
+    const Entry last = heap_.back();
+    heap_.pop_back();
+    if (!heap_.empty()) SiftDown(last);
+  }
+
+  // REQUIRES: !empty(). Removes the top and inserts e.
+  void ReplaceTop(Entry e) { SiftDown(e); }
+
+ private:
+  // Places e from the root down, Floyd's way: the entries placed here are a
+  // popped heap's last entry, or a neighbour one climb step above the popped
+  // altitude, so both belong near the bottom. The hole goes down to a leaf
+  // along the smaller children without comparing with e (a select rather than
+  // a hard-to-predict branch), and e climbs back the short way.
+  void SiftDown(Entry e) {
+    const size_t n = heap_.size();
+    size_t at = 0;
+    while (2 * at + 2 < n) {
+      const size_t left = 2 * at + 1;
+      const size_t child = left + (heap_[left + 1].alt < heap_[left].alt ? 1 : 0);
+      heap_[at] = heap_[child];
+      at = child;
+    }
+    if (2 * at + 1 < n) {
+      heap_[at] = heap_[2 * at + 1];
+      at = 2 * at + 1;
+    }
+    while (at > 0) {
+      const size_t parent = (at - 1) / 2;
+      if (!(e.alt < heap_[parent].alt)) break;
+      heap_[at] = heap_[parent];
+      at = parent;
+    }
+    heap_[at] = e;
+  }
+
+  std::vector<Entry> heap_;
+};
 
 }  // namespace
 
@@ -211,31 +274,32 @@ std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
                                          const std::vector<uint8_t>& nofly,
                                          const std::vector<LandingSite>& sites, double glide_ratio,
                                          double clearance_m) {
-  const int64_t cells = static_cast<int64_t>(nx) * ny;
-  std::vector<double> glide(static_cast<size_t>(cells), kInf);
+  const size_t cells = static_cast<size_t>(nx) * static_cast<size_t>(ny);
+  // Everything a relaxation reads about a cell sits in one 16-byte record: the
+  // frontiers around dozens of sites grow at once, all over the map, and three
+  // separate arrays cost three cache misses per neighbour instead of one.
+  // floor = T + clearance, or +infinity for a no-fly cell, which then can
+  // never be lowered below its initial +infinity, i.e. is never entered.
+  struct Cell {
+    double glide;
+    double floor;
+  };
+  std::vector<Cell> work(cells);
+  for (size_t k = 0; k < cells; ++k) {
+    work[k] = {kInf, nofly[k] != 0 ? kInf : static_cast<double>(terrain[k]) + clearance_m};
+  }
 
   // Lazy-deletion Dijkstra on (altitude, index) pairs. The update
   // max(T(c) + clearance, glide(n) + d/G) never lowers a value below the value
   // it came from, so the first pop of a cell is final, and the result is the
   // unique fixed point of the recurrence whatever order ties are popped in.
-  struct Entry {
-    double alt;
-    uint32_t index;
-    bool operator>(const Entry& o) const { return alt > o.alt; }
-  };
-  std::vector<Entry> storage;
-  storage.reserve(static_cast<size_t>(std::min<int64_t>(cells, int64_t{1} << 20)));
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap(std::greater<Entry>(),
-                                                                           std::move(storage));
-
+  GlideHeap heap;
   for (const LandingSite& site : sites) {
     if (site.i < 0 || site.j < 0 || site.i >= nx || site.j >= ny) continue;
-    const int64_t k = static_cast<int64_t>(site.j) * nx + site.i;
-    if (nofly[k] != 0) continue;
-    const double alt = static_cast<double>(terrain[k]) + clearance_m;
-    if (alt < glide[k]) {
-      glide[k] = alt;
-      heap.push({alt, static_cast<uint32_t>(k)});
+    const size_t k = static_cast<size_t>(site.j) * nx + site.i;
+    if (work[k].floor < work[k].glide) {  // false for no-fly cells and repeated sites
+      work[k].glide = work[k].floor;
+      heap.Push({work[k].floor, static_cast<uint32_t>(k)});
     }
   }
 
@@ -245,12 +309,18 @@ std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
   constexpr int kDi[8] = {1, -1, 0, 0, 1, 1, -1, -1};
   constexpr int kDj[8] = {0, 0, 1, -1, 1, -1, 1, -1};
 
-  // A visited flag per cell would cost another pass over memory; comparing the
-  // popped altitude with the stored one skips stale entries just as well.
   while (!heap.empty()) {
-    const Entry top = heap.top();
-    heap.pop();
-    if (top.alt > glide[top.index]) continue;
+    const GlideHeap::Entry top = heap.Top();
+    // Stale entries (a cell lowered after it was pushed) are skipped by value
+    // rather than with a settled flag per cell.
+    if (top.alt > work[top.index].glide) {
+      heap.Pop();
+      continue;
+    }
+    // The top stays in the heap until the first improved neighbour replaces
+    // it: one sift instead of a pop and a push. Most cells are settled this
+    // way, as a cell is pushed about once on average.
+    bool top_replaced = false;
     const int ci = static_cast<int>(top.index % static_cast<uint32_t>(nx));
     const int cj = static_cast<int>(top.index / static_cast<uint32_t>(nx));
     for (int d = 0; d < 8; ++d) {
@@ -258,15 +328,23 @@ std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
       const int nj = cj + kDj[d];
       if (ni < 0 || nj < 0 || ni >= nx || nj >= ny) continue;
       const uint32_t nk = static_cast<uint32_t>(nj) * static_cast<uint32_t>(nx) + ni;
-      if (nofly[nk] != 0) continue;
-      const double climb = d < 4 ? straight_climb : diagonal_climb;
-      const double alt = std::max(static_cast<double>(terrain[nk]) + clearance_m, top.alt + climb);
-      if (alt < glide[nk]) {
-        glide[nk] = alt;
-        heap.push({alt, nk});
+      Cell& n = work[nk];
+      const double alt = std::max(n.floor, top.alt + (d < 4 ? straight_climb : diagonal_climb));
+      if (alt < n.glide) {
+        n.glide = alt;
+        if (top_replaced) {
+          heap.Push({alt, nk});
+        } else {
+          heap.ReplaceTop({alt, nk});
+          top_replaced = true;
+        }
       }
     }
+    if (!top_replaced) heap.Pop();
   }
+
+  std::vector<double> glide(cells);
+  for (size_t k = 0; k < cells; ++k) glide[k] = work[k].glide;
   return glide;
 }
 

@@ -1,0 +1,97 @@
+#include "server/metrics.h"
+
+#include <exception>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "server/status_util.h"
+
+namespace riskplan::server {
+namespace {
+
+// first, first*factor, ... (count boundaries).
+prometheus::Histogram::BucketBoundaries Exponential(double first, double factor, int count) {
+  prometheus::Histogram::BucketBoundaries b;
+  double v = first;
+  for (int i = 0; i < count; ++i, v *= factor) b.push_back(v);
+  return b;
+}
+
+}  // namespace
+
+ServerMetrics::ServerMetrics() : registry_(std::make_shared<prometheus::Registry>()) {
+  rpcs_ = &prometheus::BuildCounter()
+               .Name("riskplan_rpcs_total")
+               .Help("RPCs finished, by method and status code")
+               .Register(*registry_);
+  rpc_duration_ = &prometheus::BuildHistogram()
+                       .Name("riskplan_rpc_duration_seconds")
+                       .Help("Time from the start of an RPC to its status, by method")
+                       .Register(*registry_);
+  running_plans_ = &prometheus::BuildGauge()
+                        .Name("riskplan_running_plans")
+                        .Help("Plans admitted and not yet finished (queued or planning)")
+                        .Register(*registry_)
+                        .Add({});
+  plan_duration_ = &prometheus::BuildHistogram()
+                        .Name("riskplan_plan_duration_seconds")
+                        .Help("Planner time of finished plans, by end reason")
+                        .Register(*registry_);
+  plan_updates_ = &prometheus::BuildCounter()
+                       .Name("riskplan_plan_updates_total")
+                       .Help("Plan improvements, by kind: sent to the client or replaced unsent")
+                       .Register(*registry_);
+  map_memory_ = &prometheus::BuildGauge()
+                     .Name("riskplan_map_memory_bytes")
+                     .Help("Bytes held by each loaded map's layers")
+                     .Register(*registry_);
+  model_builds_ = &prometheus::BuildCounter()
+                       .Name("riskplan_model_cache_builds_total")
+                       .Help("Risk models built for overridden model parameters")
+                       .Register(*registry_)
+                       .Add({});
+}
+
+ServerMetrics::~ServerMetrics() = default;
+
+absl::StatusOr<std::string> ServerMetrics::Expose(const std::string& address) {
+  try {
+    exposer_ = std::make_unique<prometheus::Exposer>(address, /*num_threads=*/1);
+  } catch (const std::exception& e) {
+    return absl::UnavailableError(
+        absl::StrFormat("--metrics_listen=%s: cannot serve metrics: %s", address, e.what()));
+  }
+  exposer_->RegisterCollectable(registry_);
+  const std::vector<int> ports = exposer_->GetListeningPorts();
+  const std::string host = address.substr(0, address.rfind(':'));
+  return absl::StrCat(host, ":", ports.empty() ? 0 : ports.front());
+}
+
+void ServerMetrics::RecordRpc(std::string_view method, grpc::StatusCode code,
+                              absl::Duration duration) {
+  rpcs_->Add({{"method", std::string(method)}, {"code", std::string(GrpcCodeName(code))}})
+      .Increment();
+  static const auto* buckets =
+      new prometheus::Histogram::BucketBoundaries(Exponential(0.0001, 2.0, 22));  // 100 us .. 210 s
+  rpc_duration_->Add({{"method", std::string(method)}}, *buckets)
+      .Observe(absl::ToDoubleSeconds(duration));
+}
+
+void ServerMetrics::RecordPlan(std::string_view end_reason, absl::Duration planner_time) {
+  static const auto* buckets =
+      new prometheus::Histogram::BucketBoundaries(Exponential(0.01, 2.0, 17));  // 10 ms .. 655 s
+  plan_duration_->Add({{"end_reason", std::string(end_reason)}}, *buckets)
+      .Observe(absl::ToDoubleSeconds(planner_time));
+}
+
+void ServerMetrics::RecordUpdates(int64_t sent, int64_t replaced) {
+  plan_updates_->Add({{"kind", "sent"}}).Increment(static_cast<double>(sent));
+  plan_updates_->Add({{"kind", "replaced"}}).Increment(static_cast<double>(replaced));
+}
+
+void ServerMetrics::SetMapMemory(const std::string& map, double bytes) {
+  map_memory_->Add({{"map", map}}).Set(bytes);
+}
+
+}  // namespace riskplan::server

@@ -1,0 +1,66 @@
+// ServerMetrics: the server's Prometheus metrics (prometheus-cpp), optionally
+// served over HTTP at /metrics.
+//
+//   riskplan_rpcs_total{method, code}             counter
+//   riskplan_rpc_duration_seconds{method}          histogram
+//   riskplan_running_plans                         gauge (admitted plans, queued or planning)
+//   riskplan_plan_duration_seconds{end_reason}     histogram (planner time of finished plans)
+//   riskplan_plan_updates_total{kind}              counter (kind: sent, replaced)
+//   riskplan_map_memory_bytes{map}                 gauge
+//   riskplan_model_cache_builds_total              counter
+//
+// Thread-safe.
+#ifndef RISKPLAN_SERVER_METRICS_H_
+#define RISKPLAN_SERVER_METRICS_H_
+
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "grpcpp/support/status_code_enum.h"
+#include "prometheus/counter.h"
+#include "prometheus/exposer.h"
+#include "prometheus/family.h"
+#include "prometheus/gauge.h"
+#include "prometheus/histogram.h"
+#include "prometheus/registry.h"
+
+namespace riskplan::server {
+
+class ServerMetrics {
+ public:
+  ServerMetrics();
+  ~ServerMetrics();
+
+  // Serves the metrics at http://ADDRESS/metrics (ADDRESS "host:port", port 0
+  // picks one). Returns the bound "host:port", or an error when it cannot bind.
+  absl::StatusOr<std::string> Expose(const std::string& address);
+
+  void RecordRpc(std::string_view method, grpc::StatusCode code, absl::Duration duration);
+  void PlanAdmitted() { running_plans_->Increment(); }
+  void PlanReleased() { running_plans_->Decrement(); }
+  void RecordPlan(std::string_view end_reason, absl::Duration planner_time);
+  void RecordUpdates(int64_t sent, int64_t replaced);
+  void SetMapMemory(const std::string& map, double bytes);
+  void RecordModelBuild() { model_builds_->Increment(); }
+
+  prometheus::Registry& registry() { return *registry_; }
+
+ private:
+  std::shared_ptr<prometheus::Registry> registry_;
+  std::unique_ptr<prometheus::Exposer> exposer_;
+  prometheus::Family<prometheus::Counter>* rpcs_;
+  prometheus::Family<prometheus::Histogram>* rpc_duration_;
+  prometheus::Gauge* running_plans_;
+  prometheus::Family<prometheus::Histogram>* plan_duration_;
+  prometheus::Family<prometheus::Counter>* plan_updates_;
+  prometheus::Family<prometheus::Gauge>* map_memory_;
+  prometheus::Counter* model_builds_;
+};
+
+}  // namespace riskplan::server
+
+#endif  // RISKPLAN_SERVER_METRICS_H_

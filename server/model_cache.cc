@@ -1,0 +1,139 @@
+#include "server/model_cache.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "absl/strings/str_format.h"
+#include "absl/synchronization/notification.h"
+
+namespace riskplan::server {
+
+struct RiskModelCache::Entry {
+  absl::Notification built;
+  absl::StatusOr<std::shared_ptr<const RiskModel>> model;  // valid once `built` is notified
+};
+
+absl::StatusOr<std::unique_ptr<RiskModelCache>> RiskModelCache::Create(const MapRegistry& registry,
+                                                                       size_t max_overridden) {
+  std::unique_ptr<RiskModelCache> cache(new RiskModelCache(registry, max_overridden));
+  const ModelParams defaults;
+  cache->default_fingerprint_ = Fingerprint(defaults);
+  for (const std::shared_ptr<const RiskMap>& map : registry.maps()) {
+    absl::StatusOr<std::shared_ptr<const RiskModel>> model = RiskModel::Create(map, defaults);
+    if (!model.ok()) {
+      return absl::Status(model.status().code(),
+                          absl::StrFormat("map '%s': building the default risk model: %s",
+                                          map->name(), model.status().message()));
+    }
+    cache->defaults_.emplace(map->name(), *std::move(model));
+  }
+  return cache;
+}
+
+std::string RiskModelCache::Fingerprint(const ModelParams& params) {
+  std::string fingerprint;
+  for (std::string_view name : ModelParamNames()) {
+    // %a is exact: equal fingerprints mean bit-equal parameters.
+    absl::StrAppendFormat(&fingerprint, "|%a", *GetModelParam(params, std::string(name)));
+  }
+  return fingerprint;
+}
+
+std::shared_ptr<const RiskModel> RiskModelCache::Default(const RiskMap& map) const {
+  auto it = defaults_.find(map.name());
+  return it == defaults_.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<const RiskModel> RiskModelCache::Peek(const RiskMap& map,
+                                                      const ModelParams& params) {
+  const std::string fingerprint = Fingerprint(params);
+  if (fingerprint == default_fingerprint_) return Default(map);
+  const std::string key = map.name() + fingerprint;
+  absl::MutexLock lock(&mu_);
+  auto it = entries_.find(key);
+  if (it == entries_.end() || !it->second->built.HasBeenNotified() || !it->second->model.ok()) {
+    return nullptr;
+  }
+  ++stats_.hits;
+  TouchLocked(key);
+  return *it->second->model;
+}
+
+absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskMap& map,
+                                                                     const ModelParams& params) {
+  const std::string fingerprint = Fingerprint(params);
+  if (fingerprint == default_fingerprint_) {
+    std::shared_ptr<const RiskModel> model = Default(map);
+    if (model == nullptr) {
+      return absl::NotFoundError(absl::StrFormat("map '%s' is not served", map.name()));
+    }
+    return model;
+  }
+  const std::string key = map.name() + fingerprint;
+  std::shared_ptr<Entry> entry;
+  bool build = false;
+  {
+    absl::MutexLock lock(&mu_);
+    auto [it, inserted] = entries_.try_emplace(key);
+    if (inserted) {
+      it->second = std::make_shared<Entry>();
+      build = true;
+      ++stats_.builds;
+    } else {
+      ++stats_.hits;
+      if (it->second->built.HasBeenNotified()) TouchLocked(key);
+    }
+    entry = it->second;
+  }
+  if (!build) {
+    entry->built.WaitForNotification();
+    return entry->model;
+  }
+
+  // Share the default model's impact table when the table parameters match
+  // (only the flight band, sampling step or failure rate differ, say).
+  std::shared_ptr<const RiskModel> base = Default(map);
+  std::shared_ptr<const ImpactTable> table;
+  if (base != nullptr && SameImpactTableParams(base->params(), params)) table = base->table_ptr();
+  std::shared_ptr<const RiskMap> map_ptr = registry_.Find(map.name());
+  if (map_ptr == nullptr) {
+    entry->model = absl::NotFoundError(absl::StrFormat("map '%s' is not served", map.name()));
+  } else {
+    entry->model = RiskModel::Create(map_ptr, params, table);
+  }
+  {
+    absl::MutexLock lock(&mu_);
+    entry->built.Notify();
+    if (!entry->model.ok() || max_overridden_ == 0) {
+      // Failures are not cached: the parameters were validated, so a failure
+      // is unexpected and a retry should try again.
+      entries_.erase(key);
+    } else {
+      lru_.push_front(key);
+      EvictLocked();
+    }
+  }
+  return entry->model;
+}
+
+void RiskModelCache::TouchLocked(const std::string& key) {
+  auto it = std::find(lru_.begin(), lru_.end(), key);
+  if (it != lru_.end()) lru_.splice(lru_.begin(), lru_, it);
+}
+
+void RiskModelCache::EvictLocked() {
+  while (lru_.size() > max_overridden_) {
+    entries_.erase(lru_.back());
+    lru_.pop_back();
+    ++stats_.evictions;
+  }
+}
+
+RiskModelCache::Stats RiskModelCache::stats() const {
+  absl::MutexLock lock(&mu_);
+  Stats s = stats_;
+  s.overridden_cached = lru_.size();
+  return s;
+}
+
+}  // namespace riskplan::server

@@ -1,0 +1,240 @@
+#include "server/planner_service.h"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "core/trajectory.h"
+#include "server/proto_convert.h"
+#include "server/rpc_log.h"
+#include "server/status_util.h"
+
+namespace riskplan::server {
+namespace {
+
+const grpc::Status kDraining(grpc::StatusCode::UNAVAILABLE,
+                             "riskplan-server is shutting down; retry on another replica");
+
+// The reactor of every unary RPC: finishes once, then logs the RPC and
+// records its metrics when gRPC is done with it.
+class UnaryCall final : public grpc::ServerUnaryReactor {
+ public:
+  UnaryCall(const char* method, grpc::CallbackServerContext* ctx, ServerMetrics* metrics)
+      : method_(method), started_(absl::Now()), ctx_(ctx), metrics_(metrics) {}
+
+  // Ends the call. Call exactly once, from any thread.
+  void Complete(const grpc::Status& status, std::string map = "") {
+    status_ = status;
+    map_ = std::move(map);
+    Finish(status);
+  }
+
+  void OnDone() override {
+    const absl::Duration duration = absl::Now() - started_;
+    metrics_->RecordRpc(method_, status_.error_code(), duration);
+    LogRpc({.method = method_,
+            .status = status_,
+            .duration = duration,
+            .peer = ctx_->peer(),
+            .map = map_,
+            .detail = ""});
+    delete this;
+  }
+
+ private:
+  const char* const method_;
+  const absl::Time started_;
+  grpc::CallbackServerContext* const ctx_;
+  ServerMetrics* const metrics_;
+  // Written by Complete() before Finish(); read in OnDone(), which gRPC runs
+  // after Finish() (its own synchronisation orders the two).
+  grpc::Status status_;
+  std::string map_;
+};
+
+// Risk of a validated trajectory (runs on the evaluation pool).
+absl::Status Evaluate(RiskModelCache& models, const RequestLimits& limits, const EvaluateSpec& spec,
+                      v1::EvaluateRiskResponse* response) {
+  absl::StatusOr<std::shared_ptr<const RiskModel>> model = models.Get(*spec.map, spec.params);
+  if (!model.ok()) return model.status();
+  const ModelParams& params = (*model)->params();
+  absl::StatusOr<std::vector<TrajectoryPiece>> pieces =
+      spec.polyline.empty() ? PiecesFromWaypoints(spec.waypoints, params, limits.max_waypoints)
+                            : PiecesFromPolyline(spec.polyline, limits.max_waypoints);
+  if (!pieces.ok()) return pieces.status();
+  int64_t samples = 0;
+  double length_m = 0.0;
+  for (const TrajectoryPiece& piece : *pieces) {
+    samples += PartCount(piece.Length(), params.sample_step_m);
+    length_m += piece.Length();
+  }
+  if (absl::Status s =
+          CheckSampleCount(samples, length_m, params.sample_step_m, spec.include_samples, limits);
+      !s.ok()) {
+    return s;
+  }
+  absl::StatusOr<TrajectoryEvaluation> evaluation =
+      EvaluateTrajectory(**model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples});
+  if (!evaluation.ok()) return evaluation.status();
+  EvaluationToProto(*evaluation, spec.include_samples, response);
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
+                               ServerMetrics& metrics, const ServiceOptions& options)
+    : maps_(maps),
+      models_(models),
+      metrics_(metrics),
+      options_(options),
+      active_(options.max_running_plans),
+      eval_pool_(options.eval_threads, options.max_queued_evals),
+      plan_pool_(options.plan_threads) {
+  for (const std::shared_ptr<const RiskMap>& map : maps_.maps()) {
+    *map_list_.add_maps() = MapInfoFromMap(*map);
+    metrics_.SetMapMemory(map->name(), static_cast<double>(map->MemoryBytes()));
+  }
+}
+
+PlannerService::~PlannerService() = default;
+
+grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
+    grpc::CallbackServerContext* ctx, const v1::PlanRequest* request) {
+  absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(*request, maps_, options_.limits);
+  // A call that fails before admission still goes through a PlanCall, so
+  // that every PlanTrajectory is logged and counted the same way.
+  PlanSpec call_spec;
+  if (spec.ok()) call_spec = *spec;
+  std::shared_ptr<PlanCall> call = PlanCall::Create(
+      PlanCallEnv{.models = &models_, .metrics = &metrics_, .timer = &timer_, .active = &active_},
+      ctx, std::move(call_spec));
+  if (draining()) {
+    call->Reject(kDraining);
+    return call.get();
+  }
+  if (!spec.ok()) {
+    call->Reject(ToGrpcStatus(spec.status()));
+    return call.get();
+  }
+  if (absl::Status s = call->CheckEndpointsIfModelReady(); !s.ok()) {
+    call->Reject(ToGrpcStatus(s));
+    return call.get();
+  }
+  if (!active_.TryAdmit(call)) {
+    call->Reject(
+        grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                     absl::StrFormat("riskplan-server is running its maximum of %d plans "
+                                     "(--max_running_plans); retry later or on another replica",
+                                     active_.max_running())));
+    return call.get();
+  }
+  metrics_.PlanAdmitted();
+  if (!plan_pool_.TrySubmit([call, this] {
+        call->Run();
+        metrics_.PlanReleased();
+      })) {
+    active_.Release(call.get());
+    metrics_.PlanReleased();
+    call->Reject(kDraining);
+  }
+  return call.get();
+}
+
+grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerContext* ctx,
+                                                       const v1::EvaluateRiskRequest* request,
+                                                       v1::EvaluateRiskResponse* response) {
+  auto* call = new UnaryCall("EvaluateRisk", ctx, &metrics_);
+  if (draining()) {
+    call->Complete(kDraining, request->map());
+    return call;
+  }
+  absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(*request, maps_, options_.limits);
+  if (!spec.ok()) {
+    call->Complete(ToGrpcStatus(spec.status()), request->map());
+    return call;
+  }
+  const bool queued = eval_pool_.TrySubmit([this, call, response, spec = *std::move(spec)] {
+    absl::Status status = Evaluate(models_, options_.limits, spec, response);
+    call->Complete(ToGrpcStatus(status), spec.map->name());
+  });
+  if (!queued) {
+    call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                absl::StrFormat("riskplan-server has %d evaluations waiting "
+                                                "(--max_queued_evals); retry later",
+                                                options_.max_queued_evals)),
+                   request->map());
+  }
+  return call;
+}
+
+grpc::ServerUnaryReactor* PlannerService::ListMaps(grpc::CallbackServerContext* ctx,
+                                                   const v1::ListMapsRequest* /*request*/,
+                                                   v1::ListMapsResponse* response) {
+  auto* call = new UnaryCall("ListMaps", ctx, &metrics_);
+  if (draining()) {
+    call->Complete(kDraining);
+    return call;
+  }
+  *response = map_list_;
+  call->Complete(grpc::Status::OK);
+  return call;
+}
+
+grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContext* ctx,
+                                                      const v1::GetMapLayerRequest* request,
+                                                      v1::GetMapLayerResponse* response) {
+  auto* call = new UnaryCall("GetMapLayer", ctx, &metrics_);
+  if (draining()) {
+    call->Complete(kDraining, request->map());
+    return call;
+  }
+  absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(maps_, request->map());
+  if (!map.ok()) {
+    call->Complete(ToGrpcStatus(map.status()), request->map());
+    return call;
+  }
+  const v1::MapLayer layer = request->layer();
+  if (layer != v1::POPULATION_DENSITY && layer != v1::SHELTER && layer != v1::TERRAIN &&
+      layer != v1::NO_FLY) {
+    call->Complete(
+        grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                     absl::StrFormat("layer has value %d; it must be POPULATION_DENSITY (1), "
+                                     "SHELTER (2), TERRAIN (3) or NO_FLY (4)",
+                                     static_cast<int>(layer))),
+        request->map());
+    return call;
+  }
+  int max_side = request->max_side_cells();
+  if (max_side == 0) max_side = 512;
+  if (max_side < 1 || max_side > 4096) {
+    call->Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                absl::StrFormat("max_side_cells has value %d; it must be in "
+                                                "[1, 4096] (0: 512)",
+                                                request->max_side_cells())),
+                   request->map());
+    return call;
+  }
+  const bool queued = eval_pool_.TrySubmit([call, response, map = *map, layer, max_side] {
+    *response = DownsampleLayer(*map, layer, max_side);
+    call->Complete(grpc::Status::OK, map->name());
+  });
+  if (!queued) {
+    call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                "riskplan-server's evaluation queue is full; retry later"),
+                   request->map());
+  }
+  return call;
+}
+
+grpc::ServerUnaryReactor* PlannerService::Ping(grpc::CallbackServerContext* ctx,
+                                               const v1::PingRequest* /*request*/,
+                                               v1::PingResponse* /*response*/) {
+  auto* call = new UnaryCall("Ping", ctx, &metrics_);
+  call->Complete(draining() ? kDraining : grpc::Status::OK);
+  return call;
+}
+
+}  // namespace riskplan::server

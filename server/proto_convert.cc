@@ -1,0 +1,215 @@
+#include "server/proto_convert.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/strings/str_format.h"
+
+namespace riskplan::server {
+
+void PoseToProto(const Pose& pose, v1::Pose* out) {
+  out->set_x(pose.x);
+  out->set_y(pose.y);
+  out->set_z(pose.z);
+  out->set_theta(pose.theta);
+}
+
+v1::ViolationKind ViolationKindToProto(ViolationKind kind) {
+  switch (kind) {
+    case ViolationKind::kNone:
+      return v1::VIOLATION_KIND_UNSPECIFIED;
+    case ViolationKind::kOutsideMap:
+      return v1::OUTSIDE_MAP;
+    case ViolationKind::kNoFlyZone:
+      return v1::NO_FLY_ZONE;
+    case ViolationKind::kTerrainCollision:
+      return v1::TERRAIN_COLLISION;
+    case ViolationKind::kBelowSafeAltitude:
+      return v1::BELOW_SAFE_ALTITUDE;
+    case ViolationKind::kAboveMaxAltitude:
+      return v1::ABOVE_MAX_ALTITUDE;
+  }
+  return v1::VIOLATION_KIND_UNSPECIFIED;
+}
+
+void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samples,
+                       v1::EvaluateRiskResponse* out) {
+  out->Clear();
+  out->set_risk(evaluation.risk);
+  out->set_length_m(evaluation.length_m);
+  out->set_admissible(evaluation.admissible);
+  if (evaluation.first_violation.has_value()) {
+    const Violation& v = *evaluation.first_violation;
+    v1::Violation* violation = out->mutable_first_violation();
+    violation->set_kind(ViolationKindToProto(v.kind));
+    PoseToProto(v.pose, violation->mutable_pose());
+    violation->set_arc_length_m(v.arc_length_m);
+    violation->set_piece(v.piece);
+    if (!std::isnan(v.limit_m)) violation->set_limit_m(v.limit_m);
+    violation->set_message(v.ToString());
+  }
+  int64_t samples = 0;
+  out->mutable_pieces()->Reserve(static_cast<int>(evaluation.pieces.size()));
+  for (const PieceEvaluation& piece : evaluation.pieces) {
+    v1::PieceEvaluation* p = out->add_pieces();
+    p->set_risk(piece.risk);
+    p->set_length_m(piece.length_m);
+    p->set_parts(piece.parts);
+    p->set_admissible(piece.admissible);
+    samples += piece.parts;
+  }
+  out->set_sample_count(samples);
+  if (!include_samples) return;
+  out->mutable_samples()->Reserve(static_cast<int>(evaluation.samples.size()));
+  for (const SampleEvaluation& sample : evaluation.samples) {
+    v1::Sample* s = out->add_samples();
+    s->set_x(sample.pose.x);
+    s->set_y(sample.pose.y);
+    s->set_z(sample.pose.z);
+    s->set_theta(sample.pose.theta);
+    s->set_arc_length_m(sample.arc_length_m);
+    s->set_piece(sample.piece);
+    s->set_risk(sample.risk.risk);
+    s->set_impact_factor(sample.risk.impact_factor);
+    s->set_expected_shelter(sample.risk.expected_shelter);
+    s->set_casualty_probability(sample.risk.casualty_probability);
+    s->set_defined(sample.risk.defined);
+  }
+}
+
+absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelParams& params,
+                               double display_step_m, v1::Trajectory* out) {
+  out->Clear();
+  for (const Pose& pose : improvement.waypoints) PoseToProto(pose, out->add_waypoints());
+  out->set_risk(improvement.risk);
+  out->set_length_m(improvement.length_m);
+  out->set_found_at_iteration(improvement.iterations);
+  out->set_found_at_s(improvement.elapsed_s);
+
+  absl::StatusOr<std::vector<TrajectoryPiece>> pieces =
+      PiecesFromWaypoints(improvement.waypoints, params);
+  if (!pieces.ok()) return pieces.status();
+  double total_m = 0.0;
+  for (const TrajectoryPiece& piece : *pieces) total_m += piece.Length();
+  const double step_m = std::max(display_step_m, total_m / (kMaxDisplayPathPoses - 1));
+  // Samples at k * step_m of the whole path's arc length, then the end.
+  double piece_start_m = 0.0;
+  double next_m = 0.0;
+  for (const TrajectoryPiece& piece : *pieces) {
+    const double piece_end_m = piece_start_m + piece.Length();
+    while (next_m <= piece_end_m && out->path_size() < kMaxDisplayPathPoses - 1) {
+      PoseToProto(piece.PoseAt(next_m - piece_start_m), out->add_path());
+      next_m += step_m;
+    }
+    piece_start_m = piece_end_m;
+  }
+  if (!pieces->empty()) PoseToProto(pieces->back().End(), out->add_path());
+  return absl::OkStatus();
+}
+
+v1::MapInfo MapInfoFromMap(const RiskMap& map) {
+  v1::MapInfo info;
+  info.set_name(map.name());
+  info.set_x0_m(map.x0());
+  info.set_y0_m(map.y0());
+  info.set_width_m(map.width_m());
+  info.set_height_m(map.height_m());
+  info.set_resolution_m(map.res());
+  info.set_nx(map.nx());
+  info.set_ny(map.ny());
+  for (const char* layer : {"density", "shelter", "terrain", "nofly", "glide_altitude"}) {
+    info.add_layers(layer);
+  }
+  for (const LandingSite& site : map.landing_sites()) {
+    v1::LandingSite* s = info.add_landing_sites();
+    s->set_name(site.name);
+    s->set_i(site.i);
+    s->set_j(site.j);
+    s->set_x(map.x0() + (site.i + 0.5) * map.res());
+    s->set_y(map.y0() + (site.j + 0.5) * map.res());
+    s->set_terrain_m(map.terrain(site.i, site.j));
+  }
+  info.set_provenance(map.header().provenance);
+  if (map.header().geo.has_value()) {
+    info.mutable_geo()->set_origin_lat_deg(map.header().geo->origin_lat_deg);
+    info.mutable_geo()->set_origin_lon_deg(map.header().geo->origin_lon_deg);
+    info.mutable_geo()->set_crs(map.header().geo->crs);
+  }
+  const std::vector<float>& terrain = map.layers().terrain;
+  if (!terrain.empty()) {
+    const auto [lo, hi] = std::minmax_element(terrain.begin(), terrain.end());
+    info.set_terrain_min_m(*lo);
+    info.set_terrain_max_m(*hi);
+  }
+  info.set_memory_bytes(static_cast<int64_t>(map.MemoryBytes()));
+  return info;
+}
+
+v1::GetMapLayerResponse DownsampleLayer(const RiskMap& map, v1::MapLayer layer,
+                                        int max_side_cells) {
+  const int side = std::max(map.nx(), map.ny());
+  const int factor = std::max(1, (side + max_side_cells - 1) / max_side_cells);
+  const int nx = (map.nx() + factor - 1) / factor;
+  const int ny = (map.ny() + factor - 1) / factor;
+  v1::GetMapLayerResponse out;
+  out.set_map(map.name());
+  out.set_layer(layer);
+  out.set_x0_m(map.x0());
+  out.set_y0_m(map.y0());
+  out.set_cell_m(map.res() * factor);
+  out.set_nx(nx);
+  out.set_ny(ny);
+  out.set_factor(factor);
+  out.mutable_values()->Resize(nx * ny, 0.0f);
+  float* values = out.mutable_values()->mutable_data();
+  for (int bj = 0; bj < ny; ++bj) {
+    for (int bi = 0; bi < nx; ++bi) {
+      double sum = 0.0;
+      int count = 0;
+      bool any_nofly = false;
+      for (int j = bj * factor; j < std::min(map.ny(), (bj + 1) * factor); ++j) {
+        for (int i = bi * factor; i < std::min(map.nx(), (bi + 1) * factor); ++i) {
+          switch (layer) {
+            case v1::POPULATION_DENSITY:
+              sum += map.density(i, j);
+              break;
+            case v1::SHELTER:
+              sum += map.shelter(i, j);
+              break;
+            case v1::TERRAIN:
+              sum += map.terrain(i, j);
+              break;
+            default:
+              any_nofly = any_nofly || map.nofly(i, j);
+              break;
+          }
+          ++count;
+        }
+      }
+      values[bj * nx + bi] = layer == v1::NO_FLY ? (any_nofly ? 1.0f : 0.0f)
+                                                 : static_cast<float>(sum / std::max(count, 1));
+    }
+  }
+  return out;
+}
+
+v1::EndReason EndReasonToProto(StopReason reason, bool stopped_by_shutdown) {
+  // A plan the shutdown cut short says so, whether or not it had a solution.
+  if (stopped_by_shutdown &&
+      (reason == StopReason::kCancelled || reason == StopReason::kNoSolution)) {
+    return v1::SHUTDOWN;
+  }
+  switch (reason) {
+    case StopReason::kBudgetExhausted:
+      return v1::BUDGET_EXHAUSTED;
+    case StopReason::kConverged:
+      return v1::CONVERGED;
+    case StopReason::kCancelled:
+      return v1::CANCELLED;
+    case StopReason::kNoSolution:
+      return v1::NO_SOLUTION;
+  }
+  return v1::END_REASON_UNSPECIFIED;
+}
+
+}  // namespace riskplan::server

@@ -1,0 +1,54 @@
+// Domain values to API messages (the other direction is
+// request_validation.h). Pure functions, thread-safe.
+#ifndef RISKPLAN_SERVER_PROTO_CONVERT_H_
+#define RISKPLAN_SERVER_PROTO_CONVERT_H_
+
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/geometry.h"
+#include "core/model_params.h"
+#include "core/planner.h"
+#include "core/risk_map.h"
+#include "core/trajectory.h"
+#include "riskplan/v1/planner.pb.h"
+
+namespace riskplan::server {
+
+// Most poses in Trajectory.path; the display step grows for longer paths.
+inline constexpr int kMaxDisplayPathPoses = 10000;
+// Most tree edges in a final PlanUpdate.
+inline constexpr size_t kMaxTreeEdges = 50000;
+
+void PoseToProto(const Pose& pose, v1::Pose* out);
+
+v1::ViolationKind ViolationKindToProto(ViolationKind kind);
+
+// Fills risk, length, admissibility, first violation and pieces, and the
+// samples when `include_samples`. Clears `out` first.
+void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samples,
+                       v1::EvaluateRiskResponse* out);
+
+// The trajectory of an improvement: waypoints, risk, length, and the flown
+// path sampled every `display_step_m` (Dubins-airplane pieces with `params`).
+// Fails only if the waypoints do not make pieces (they always do for a
+// planner's output).
+absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelParams& params,
+                               double display_step_m, v1::Trajectory* out);
+
+// Everything ListMaps says about `map`.
+v1::MapInfo MapInfoFromMap(const RiskMap& map);
+
+// One layer of `map` in blocks of factor x factor cells, factor =
+// ceil(max(nx, ny) / max_side_cells). REQUIRES: max_side_cells >= 1, and
+// `layer` one of POPULATION_DENSITY, SHELTER, TERRAIN, NO_FLY.
+v1::GetMapLayerResponse DownsampleLayer(const RiskMap& map, v1::MapLayer layer, int max_side_cells);
+
+// The end reason of a plan: the planner's stop reason, or SHUTDOWN when the
+// server's shutdown cut it short (cancelled, or stopped before any solution).
+v1::EndReason EndReasonToProto(StopReason reason, bool stopped_by_shutdown);
+
+}  // namespace riskplan::server
+
+#endif  // RISKPLAN_SERVER_PROTO_CONVERT_H_

@@ -1,0 +1,270 @@
+#include "server/request_validation.h"
+
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "google/protobuf/descriptor.h"
+#include "google/protobuf/reflection.h"
+
+namespace riskplan::server {
+namespace {
+
+using google::protobuf::FieldDescriptor;
+
+// Prefixes a status message with the request field it concerns.
+absl::Status InField(std::string_view field, const absl::Status& status) {
+  if (status.ok()) return status;
+  return absl::Status(status.code(),
+                      absl::StrFormat("%s: %s", std::string(field), status.message()));
+}
+
+absl::Status CheckFinite(double value, std::string_view field) {
+  if (std::isfinite(value)) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrFormat("%s has value %g; it must be finite", std::string(field), value));
+}
+
+}  // namespace
+
+absl::StatusOr<ModelParams> ModelParamsFromProto(const v1::ModelParameters& proto) {
+  ModelParams params;
+  const google::protobuf::Descriptor* descriptor = proto.GetDescriptor();
+  const google::protobuf::Reflection* reflection = proto.GetReflection();
+  for (int i = 0; i < descriptor->field_count(); ++i) {
+    const FieldDescriptor* field = descriptor->field(i);
+    if (!reflection->HasField(proto, field)) continue;
+    double value = 0.0;
+    switch (field->cpp_type()) {
+      case FieldDescriptor::CPPTYPE_DOUBLE:
+        value = reflection->GetDouble(proto, field);
+        break;
+      case FieldDescriptor::CPPTYPE_INT32:
+        value = reflection->GetInt32(proto, field);
+        break;
+      default:
+        return absl::InternalError(
+            absl::StrFormat("model_params.%s has an unexpected type", field->name()));
+    }
+    if (absl::Status s = SetModelParam(&params, std::string_view(field->name()), value); !s.ok()) {
+      return InField("model_params", s);
+    }
+  }
+  if (absl::Status s = ValidateModelParams(params); !s.ok()) return InField("model_params", s);
+  return params;
+}
+
+absl::StatusOr<Pose> PoseFromProto(const v1::Pose& pose, std::string_view field) {
+  const std::string f(field);
+  if (absl::Status s = CheckFinite(pose.x(), f + ".x"); !s.ok()) return s;
+  if (absl::Status s = CheckFinite(pose.y(), f + ".y"); !s.ok()) return s;
+  if (absl::Status s = CheckFinite(pose.z(), f + ".z"); !s.ok()) return s;
+  if (absl::Status s = CheckFinite(pose.theta(), f + ".theta"); !s.ok()) return s;
+  return Pose{pose.x(), pose.y(), pose.z(), NormalizeHeading(pose.theta())};
+}
+
+absl::StatusOr<std::shared_ptr<const RiskMap>> FindMap(const MapRegistry& registry,
+                                                       std::string_view name) {
+  if (name.empty()) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("map is required; served maps: %s", registry.NameList()));
+  }
+  std::shared_ptr<const RiskMap> map = registry.Find(name);
+  if (map == nullptr) {
+    return absl::NotFoundError(absl::StrFormat("map '%s' is not served; served maps: %s",
+                                               std::string(name), registry.NameList()));
+  }
+  return map;
+}
+
+absl::Status CheckInsideMap(const RiskMap& map, const Pose& pose, std::string_view field) {
+  int i = 0, j = 0;
+  if (map.CellOf(pose.x, pose.y, &i, &j)) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s (x, y) = (%g, %g) is outside map '%s', which covers x in [%g, %g), y in [%g, %g)",
+      std::string(field), pose.x, pose.y, map.name(), map.x0(), map.x0() + map.width_m(), map.y0(),
+      map.y0() + map.height_m()));
+}
+
+absl::StatusOr<PlannerAlgorithm> AlgorithmFromProto(int algorithm) {
+  switch (algorithm) {
+    case v1::ALGORITHM_UNSPECIFIED:
+    case v1::RISK_RRT_STAR:
+      return PlannerAlgorithm::kRiskRrtStar;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "algorithm has value %d, which this server does not offer; known: RISK_RRT_STAR (1)",
+          algorithm));
+  }
+}
+
+absl::Status CheckPlannerParams(PlannerAlgorithm algorithm,
+                                const google::protobuf::Map<std::string, double>& params) {
+  const std::vector<PlannerParamInfo>& infos = PlannerParams(algorithm);
+  // Sorted, so that the first error is the same whatever the map's order.
+  std::map<std::string, double> sorted(params.begin(), params.end());
+  for (const auto& [name, value] : sorted) {
+    const PlannerParamInfo* info = nullptr;
+    for (const PlannerParamInfo& candidate : infos) {
+      if (candidate.name == name) info = &candidate;
+    }
+    if (info == nullptr) {
+      std::vector<std::string> known;
+      for (const PlannerParamInfo& candidate : infos) known.push_back(candidate.name);
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "planner_params: unknown parameter '%s' for %s; known: %s", name,
+          std::string(PlannerAlgorithmName(algorithm)), absl::StrJoin(known, ", ")));
+    }
+    if (!std::isfinite(value) || value < info->min_value || value > info->max_value) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("planner_params['%s'] has value %g; it must be finite and in [%g, %g]",
+                          name, value, info->min_value, info->max_value));
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
+                                             const MapRegistry& registry,
+                                             const RequestLimits& limits) {
+  PlanSpec spec;
+  absl::StatusOr<PlannerAlgorithm> algorithm = AlgorithmFromProto(request.algorithm());
+  if (!algorithm.ok()) return algorithm.status();
+  spec.algorithm = *algorithm;
+
+  absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(registry, request.map());
+  if (!map.ok()) return map.status();
+  spec.map = *std::move(map);
+
+  if (!request.has_start()) return absl::InvalidArgumentError("start is required");
+  if (!request.has_goal()) return absl::InvalidArgumentError("goal is required");
+  absl::StatusOr<Pose> start = PoseFromProto(request.start(), "start");
+  if (!start.ok()) return start.status();
+  absl::StatusOr<Pose> goal = PoseFromProto(request.goal(), "goal");
+  if (!goal.ok()) return goal.status();
+  if (absl::Status s = CheckInsideMap(*spec.map, *start, "start"); !s.ok()) return s;
+  if (absl::Status s = CheckInsideMap(*spec.map, *goal, "goal"); !s.ok()) return s;
+  spec.start = *start;
+  spec.goal = *goal;
+
+  const int64_t time_ms = request.budget().time_ms();
+  const int64_t iterations = request.budget().iterations();
+  if (time_ms < 0 || time_ms > limits.max_plan_time_ms) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("budget.time_ms has value %d; it must be in [0, %d] (0: no time limit)",
+                        time_ms, limits.max_plan_time_ms));
+  }
+  if (iterations < 0 || iterations > limits.max_iterations) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "budget.iterations has value %d; it must be in [0, %d] (0: no iteration limit)", iterations,
+        limits.max_iterations));
+  }
+  // Every plan ends in bounded wall time, whatever its iteration budget.
+  int64_t effective_ms = time_ms;
+  if (time_ms == 0)
+    effective_ms = iterations == 0 ? limits.default_plan_time_ms : limits.max_plan_time_ms;
+  spec.options.budget.max_time_s = static_cast<double>(effective_ms) / 1000.0;
+  spec.options.budget.max_iterations = iterations;
+  spec.options.seed = request.seed();
+  spec.options.record_tree = request.include_tree();
+
+  absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
+  if (!params.ok()) return params.status();
+  spec.params = *params;
+
+  if (absl::Status s = CheckPlannerParams(spec.algorithm, request.planner_params()); !s.ok()) {
+    return s;
+  }
+  spec.options.params.insert(request.planner_params().begin(), request.planner_params().end());
+
+  const int64_t interval_ms = request.min_update_interval_ms();
+  if (interval_ms < 0 || interval_ms > limits.max_update_interval_ms) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("min_update_interval_ms has value %d; it must be in [0, %d]", interval_ms,
+                        limits.max_update_interval_ms));
+  }
+  spec.min_update_interval = absl::Milliseconds(interval_ms);
+
+  const double step = request.display_step_m();
+  if (step != 0.0 && !(std::isfinite(step) && step >= 1.0 && step <= 1000.0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "display_step_m has value %g; it must be finite and in [1, 1000] (0: 25 m)", step));
+  }
+  spec.display_step_m = step == 0.0 ? 25.0 : step;
+  return spec;
+}
+
+absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskRequest& request,
+                                                     const MapRegistry& registry,
+                                                     const RequestLimits& limits) {
+  EvaluateSpec spec;
+  absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(registry, request.map());
+  if (!map.ok()) return map.status();
+  spec.map = *std::move(map);
+
+  switch (request.trajectory_case()) {
+    case v1::EvaluateRiskRequest::kWaypoints: {
+      const auto& poses = request.waypoints().poses();
+      if (poses.size() < 2 || static_cast<size_t>(poses.size()) > limits.max_waypoints) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("waypoints.poses has %d poses; it must have 2 to %d", poses.size(),
+                            limits.max_waypoints));
+      }
+      spec.waypoints.reserve(poses.size());
+      for (int i = 0; i < poses.size(); ++i) {
+        absl::StatusOr<Pose> pose =
+            PoseFromProto(poses[i], absl::StrFormat("waypoints.poses[%d]", i));
+        if (!pose.ok()) return pose.status();
+        spec.waypoints.push_back(*pose);
+      }
+      break;
+    }
+    case v1::EvaluateRiskRequest::kPolyline: {
+      const auto& points = request.polyline().points();
+      if (points.size() < 2 || static_cast<size_t>(points.size()) > limits.max_waypoints) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("polyline.points has %d points; it must have 2 to %d", points.size(),
+                            limits.max_waypoints));
+      }
+      spec.polyline.reserve(points.size());
+      for (int i = 0; i < points.size(); ++i) {
+        const v1::Point3& p = points[i];
+        const std::string field = absl::StrFormat("polyline.points[%d]", i);
+        if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
+        if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
+        if (absl::Status s = CheckFinite(p.z(), field + ".z"); !s.ok()) return s;
+        spec.polyline.push_back(Point3{p.x(), p.y(), p.z()});
+      }
+      break;
+    }
+    default:
+      return absl::InvalidArgumentError(
+          "trajectory is required: set waypoints (poses) or polyline (points)");
+  }
+
+  absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
+  if (!params.ok()) return params.status();
+  spec.params = *params;
+  spec.include_samples = request.include_samples();
+  return spec;
+}
+
+absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_step_m,
+                              bool include_samples, const RequestLimits& limits) {
+  if (samples > limits.max_eval_samples) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "trajectory has %d samples (length %.1f m at sample_step_m %g); the limit is %d", samples,
+        length_m, sample_step_m, limits.max_eval_samples));
+  }
+  if (include_samples && samples > limits.max_response_samples) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "include_samples: trajectory has %d samples (length %.1f m at sample_step_m %g); at "
+        "most %d can be returned",
+        samples, length_m, sample_step_m, limits.max_response_samples));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace riskplan::server

@@ -1,0 +1,105 @@
+// Validation at the RPC edge: API messages in, checked domain values out.
+//
+// Every error is an absl::Status whose message names the offending field (as
+// a path into the request, e.g. "start.z" or "model_params.mass_kg") and its
+// value, so a client can fix the request without reading server logs. Codes:
+//   INVALID_ARGUMENT  a value is missing, not finite, out of range, or unknown
+//                     (algorithm, parameter name), or a pose lies outside the
+//                     map, or there are too many points;
+//   NOT_FOUND         the map name is not one the server serves.
+// Admissibility of the start and goal needs a risk model and is checked later
+// (CheckEndpoints, also INVALID_ARGUMENT).
+#ifndef RISKPLAN_SERVER_REQUEST_VALIDATION_H_
+#define RISKPLAN_SERVER_REQUEST_VALIDATION_H_
+
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "core/geometry.h"
+#include "core/model_params.h"
+#include "core/planner.h"
+#include "core/risk_map.h"
+#include "riskplan/v1/planner.pb.h"
+#include "server/map_registry.h"
+
+namespace riskplan::server {
+
+// Limits the server enforces on requests (set from its flags).
+struct RequestLimits {
+  int64_t max_plan_time_ms = 600000;    // largest PlanRequest.budget.time_ms; also the cap
+  int64_t default_plan_time_ms = 1000;  // when the budget sets neither limit
+  int64_t max_iterations = 1000000000;
+  int64_t max_update_interval_ms = 60000;
+  size_t max_waypoints = 10000;           // EvaluateRisk points
+  int64_t max_eval_samples = 2000000;     // midpoint samples of one EvaluateRisk
+  int64_t max_response_samples = 200000;  // samples returned with include_samples
+};
+
+// Converts the overrides onto the defaults and validates the result
+// (ValidateModelParams); errors name "model_params.<field>".
+absl::StatusOr<ModelParams> ModelParamsFromProto(const v1::ModelParameters& proto);
+
+// Checks that the four numbers are finite; `field` names the pose in errors.
+absl::StatusOr<Pose> PoseFromProto(const v1::Pose& pose, std::string_view field);
+
+// Looks `name` up: INVALID_ARGUMENT when empty, NOT_FOUND when not served;
+// both messages list the served maps.
+absl::StatusOr<std::shared_ptr<const RiskMap>> FindMap(const MapRegistry& registry,
+                                                       std::string_view name);
+
+// INVALID_ARGUMENT when (x, y) of `pose` lies outside `map`.
+absl::Status CheckInsideMap(const RiskMap& map, const Pose& pose, std::string_view field);
+
+// A validated PlanRequest.
+struct PlanSpec {
+  std::shared_ptr<const RiskMap> map;
+  ModelParams params;
+  PlannerAlgorithm algorithm = PlannerAlgorithm::kRiskRrtStar;
+  Pose start;
+  Pose goal;
+  PlanOptions options;  // budget (capped), seed, planner params, record_tree
+  absl::Duration min_update_interval;
+  double display_step_m = 25.0;
+};
+
+absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
+                                             const MapRegistry& registry,
+                                             const RequestLimits& limits);
+
+// Checks planner parameters by name against PlannerParams(algorithm): known
+// name, finite, inside [min, max]. Errors name "planner_params['name']".
+absl::Status CheckPlannerParams(PlannerAlgorithm algorithm,
+                                const google::protobuf::Map<std::string, double>& params);
+
+// A validated EvaluateRiskRequest; exactly one of waypoints and polyline is
+// non-empty.
+struct EvaluateSpec {
+  std::shared_ptr<const RiskMap> map;
+  ModelParams params;
+  std::vector<Pose> waypoints;
+  std::vector<Point3> polyline;
+  bool include_samples = false;
+};
+
+absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskRequest& request,
+                                                     const MapRegistry& registry,
+                                                     const RequestLimits& limits);
+
+// Checks the number of midpoint samples of a trajectory (the sum of its
+// pieces' PartCount) against the limits, so that the evaluation and the
+// response stay bounded however long the trajectory. `length_m` and
+// `sample_step_m` only explain the count in the message.
+absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_step_m,
+                              bool include_samples, const RequestLimits& limits);
+
+// The algorithm of a request: ALGORITHM_UNSPECIFIED and RISK_RRT_STAR give
+// kRiskRrtStar; anything else is INVALID_ARGUMENT.
+absl::StatusOr<PlannerAlgorithm> AlgorithmFromProto(int algorithm);
+
+}  // namespace riskplan::server
+
+#endif  // RISKPLAN_SERVER_REQUEST_VALIDATION_H_

@@ -1,0 +1,37 @@
+// Structured logs: one JSON line per finished RPC on stderr, e.g.
+//   {"ts":"2024-05-01T10:00:00.123Z","event":"rpc","method":"EvaluateRisk",
+//    "code":"OK","duration_ms":1.84,"peer":"ipv4:127.0.0.1:51234","map":"demo-city"}
+// plus "detail" (the status message, or a plan's end reason and counts).
+// Lines are written whole (one write per line) so concurrent RPCs never
+// interleave. Thread-safe.
+#ifndef RISKPLAN_SERVER_RPC_LOG_H_
+#define RISKPLAN_SERVER_RPC_LOG_H_
+
+#include <string>
+#include <string_view>
+
+#include "absl/time/time.h"
+#include "grpcpp/support/status.h"
+
+namespace riskplan::server {
+
+struct RpcLogRecord {
+  std::string_view method;
+  grpc::Status status;
+  absl::Duration duration;
+  std::string peer;
+  std::string map;     // may be empty
+  std::string detail;  // may be empty
+};
+
+// Turns RPC logging on or off (on by default).
+void SetRpcLogEnabled(bool enabled);
+
+void LogRpc(const RpcLogRecord& record);
+
+// A server event that is not an RPC: {"ts":...,"event":EVENT,"detail":DETAIL}.
+void LogEvent(std::string_view event, std::string_view detail);
+
+}  // namespace riskplan::server
+
+#endif  // RISKPLAN_SERVER_RPC_LOG_H_

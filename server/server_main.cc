@@ -1,0 +1,214 @@
+// riskplan-server: the riskplan.v1.Planner gRPC service.
+//
+// Loads its maps once, serves until SIGTERM or SIGINT, then drains: health
+// turns NOT_SERVING, new calls get UNAVAILABLE, running plans end with their
+// best trajectory within --grace_period_ms, and the process exits 0.
+#include <signal.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
+#include "grpcpp/ext/proto_server_reflection_plugin.h"
+#include "grpcpp/grpcpp.h"
+#include "grpcpp/health_check_service_interface.h"
+#include "server/map_registry.h"
+#include "server/metrics.h"
+#include "server/model_cache.h"
+#include "server/planner_service.h"
+#include "server/rpc_log.h"
+
+ABSL_FLAG(std::string, listen, "0.0.0.0:50051",
+          "Address to serve on, HOST:PORT. Port 0 picks a free port; the line "
+          "'riskplan-server listening on HOST:PORT' on stdout gives the real one.");
+ABSL_FLAG(std::string, maps, "",
+          "Directory whose sub-directories are map bundles (docs/map-bundle.md); every bundle "
+          "is loaded at start-up. Empty: the built-in demo-city.");
+ABSL_FLAG(double, demo_city_size_m, 8000.0,
+          "Side of the built-in demo-city when --maps is empty, m (smaller: faster start, "
+          "same layout scaled down)");
+ABSL_FLAG(int, plan_threads, 0, "Planners running at once (0: one per CPU core)");
+ABSL_FLAG(int, max_running_plans, 0,
+          "Plans admitted at once, planning or waiting for a planning thread; one more gets "
+          "RESOURCE_EXHAUSTED at once (0: twice --plan_threads)");
+ABSL_FLAG(int, eval_threads, 0, "EvaluateRisk and GetMapLayer workers (0: one per CPU core)");
+ABSL_FLAG(int, max_queued_evals, 1024,
+          "Evaluations waiting for a worker; one more gets RESOURCE_EXHAUSTED");
+ABSL_FLAG(int64_t, max_plan_time_ms, 600000,
+          "Largest PlanRequest.budget.time_ms, and the wall-time cap of every plan");
+ABSL_FLAG(int64_t, default_plan_time_ms, 1000,
+          "Time budget of a plan whose budget sets neither time_ms nor iterations");
+ABSL_FLAG(int, max_waypoints, 10000, "Most points of an EvaluateRisk trajectory");
+ABSL_FLAG(int64_t, max_eval_samples, 2000000,
+          "Most samples (length / sample_step_m) of one EvaluateRisk trajectory");
+ABSL_FLAG(int64_t, max_response_samples, 200000,
+          "Most samples an EvaluateRisk response returns with include_samples");
+ABSL_FLAG(int, max_request_bytes, 4 << 20,
+          "Largest request message, bytes; larger ones get RESOURCE_EXHAUSTED from gRPC");
+ABSL_FLAG(int, model_cache_size, 4,
+          "Risk models kept for overridden model parameters (each about 25 MB on an 8 km map)");
+ABSL_FLAG(int64_t, grace_period_ms, 10000,
+          "On SIGTERM/SIGINT: time running plans get to finish; the last second of it (or "
+          "its last half, if shorter) is left for stopping them and sending their best "
+          "trajectory");
+ABSL_FLAG(int64_t, max_connection_age_ms, 0,
+          "Close client connections after this age so that load rebalances across replicas "
+          "(0: never)");
+ABSL_FLAG(std::string, metrics_listen, "",
+          "Serve Prometheus metrics at http://HOST:PORT/metrics (empty: off)");
+ABSL_FLAG(bool, rpc_log, true, "Log one JSON line per RPC on stderr");
+
+namespace riskplan::server {
+namespace {
+
+constexpr char kUsage[] =
+    "riskplan-server: risk-aware UAV trajectory planning over gRPC (riskplan.v1.Planner).\n"
+    "\n"
+    "  riskplan-server --listen=HOST:PORT [--maps=DIR] [flags]\n"
+    "\n"
+    "Serves PlanTrajectory, EvaluateRisk, ListMaps, GetMapLayer and Ping, plus\n"
+    "grpc.health.v1.Health and server reflection. Prints\n"
+    "'riskplan-server listening on HOST:PORT' on stdout once it serves. On SIGTERM or\n"
+    "SIGINT it drains (see --grace_period_ms) and exits 0. Exit code 1: cannot start\n"
+    "(bad map bundle, address in use); 2: bad flags. See docs/api.md.";
+
+int Fail(int code, const std::string& message) {
+  std::fprintf(stderr, "riskplan-server: %s\n", message.c_str());
+  return code;
+}
+
+int Main() {
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  ServiceOptions options;
+  options.plan_threads = absl::GetFlag(FLAGS_plan_threads);
+  if (options.plan_threads == 0) options.plan_threads = static_cast<int>(cores);
+  options.max_running_plans = absl::GetFlag(FLAGS_max_running_plans);
+  if (options.max_running_plans == 0) options.max_running_plans = 2 * options.plan_threads;
+  options.eval_threads = absl::GetFlag(FLAGS_eval_threads);
+  if (options.eval_threads == 0) options.eval_threads = static_cast<int>(cores);
+  options.max_queued_evals =
+      static_cast<size_t>(std::max(1, absl::GetFlag(FLAGS_max_queued_evals)));
+  options.limits.max_plan_time_ms = absl::GetFlag(FLAGS_max_plan_time_ms);
+  options.limits.default_plan_time_ms = absl::GetFlag(FLAGS_default_plan_time_ms);
+  options.limits.max_waypoints =
+      static_cast<size_t>(std::max(2, absl::GetFlag(FLAGS_max_waypoints)));
+  options.limits.max_eval_samples = absl::GetFlag(FLAGS_max_eval_samples);
+  options.limits.max_response_samples = absl::GetFlag(FLAGS_max_response_samples);
+  const int64_t grace_ms = absl::GetFlag(FLAGS_grace_period_ms);
+  if (options.plan_threads < 1 || options.max_running_plans < 1 || options.eval_threads < 1) {
+    return Fail(2, "--plan_threads, --max_running_plans and --eval_threads must be >= 0");
+  }
+  if (options.limits.max_plan_time_ms < 1 || options.limits.default_plan_time_ms < 1 ||
+      options.limits.default_plan_time_ms > options.limits.max_plan_time_ms) {
+    return Fail(2, "need 1 <= --default_plan_time_ms <= --max_plan_time_ms");
+  }
+  if (grace_ms < 0 || absl::GetFlag(FLAGS_max_request_bytes) < 1024 ||
+      absl::GetFlag(FLAGS_model_cache_size) < 0) {
+    return Fail(2,
+                "--grace_period_ms and --model_cache_size must be >= 0, "
+                "--max_request_bytes >= 1024");
+  }
+  SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
+
+  // Every thread created from here on inherits the blocked signals, so that
+  // only sigwait() below sees SIGTERM and SIGINT.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGTERM);
+  sigaddset(&stop_signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  const absl::Time load_start = absl::Now();
+  const std::string maps_dir = absl::GetFlag(FLAGS_maps);
+  absl::StatusOr<std::unique_ptr<MapRegistry>> maps =
+      maps_dir.empty()
+          ? MapRegistry::DemoCity(DemoCityOptions{.size_m = absl::GetFlag(FLAGS_demo_city_size_m)})
+          : MapRegistry::LoadDirectory(maps_dir);
+  if (!maps.ok()) return Fail(1, absl::StrFormat("cannot start: %s", maps.status().message()));
+  absl::StatusOr<std::unique_ptr<RiskModelCache>> models =
+      RiskModelCache::Create(**maps, static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)));
+  if (!models.ok()) {
+    return Fail(1, absl::StrFormat("cannot start: %s", models.status().message()));
+  }
+  LogEvent("maps_loaded", absl::StrFormat("maps=[%s] bytes=%d seconds=%.2f", (*maps)->NameList(),
+                                          (*maps)->MemoryBytes(),
+                                          absl::ToDoubleSeconds(absl::Now() - load_start)));
+
+  ServerMetrics metrics;
+  if (const std::string address = absl::GetFlag(FLAGS_metrics_listen); !address.empty()) {
+    absl::StatusOr<std::string> bound = metrics.Expose(address);
+    if (!bound.ok()) return Fail(1, std::string(bound.status().message()));
+    LogEvent("metrics_listening", *bound);
+  }
+
+  PlannerService service(**maps, **models, metrics, options);
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  const std::string listen = absl::GetFlag(FLAGS_listen);
+  int port = 0;
+  builder.AddListeningPort(listen, grpc::InsecureServerCredentials(), &port);
+  builder.SetMaxReceiveMessageSize(absl::GetFlag(FLAGS_max_request_bytes));
+  builder.SetMaxSendMessageSize(64 << 20);
+  if (const int64_t age_ms = absl::GetFlag(FLAGS_max_connection_age_ms); age_ms > 0) {
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_MS, static_cast<int>(age_ms));
+  }
+  builder.RegisterService(&service);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (server == nullptr || port == 0) {
+    return Fail(1, absl::StrFormat("cannot start: cannot listen on --listen=%s", listen));
+  }
+  grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
+  health->SetServingStatus("", true);
+  health->SetServingStatus("riskplan.v1.Planner", true);
+
+  const std::string host = listen.substr(0, listen.rfind(':'));
+  std::printf("riskplan-server listening on %s:%d\n", host.c_str(), port);
+  std::fflush(stdout);
+  LogEvent(
+      "serving",
+      absl::StrFormat("address=%s:%d plan_threads=%d max_running_plans=%d eval_threads=%d", host,
+                      port, options.plan_threads, options.max_running_plans, options.eval_threads));
+
+  int signal_number = 0;
+  sigwait(&stop_signals, &signal_number);
+
+  // Drain: refuse new work, let running plans use the grace period, then stop
+  // them so that they send their best trajectory before the server stops.
+  const absl::Time drain_start = absl::Now();
+  const absl::Duration grace = absl::Milliseconds(grace_ms);
+  const absl::Duration stop_margin = std::min(absl::Seconds(1), grace / 2);
+  health->SetServingStatus(false);
+  service.StartDraining();
+  LogEvent("draining", absl::StrFormat("signal=%d running_plans=%d grace_ms=%d", signal_number,
+                                       service.active_plans().running(), grace_ms));
+  if (!service.active_plans().WaitUntilIdle(drain_start + grace - stop_margin)) {
+    LogEvent("stopping_plans",
+             absl::StrFormat("running_plans=%d", service.active_plans().running()));
+    service.active_plans().StopAll();
+    service.active_plans().WaitUntilIdle(drain_start + grace);
+  }
+  // Final messages still in flight get what is left of the grace period
+  // (at least a moment); calls still open after it are cancelled.
+  server->Shutdown(
+      absl::ToChronoTime(std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
+  LogEvent("stopped",
+           absl::StrFormat("seconds=%.3f", absl::ToDoubleSeconds(absl::Now() - drain_start)));
+  return 0;
+}
+
+}  // namespace
+}  // namespace riskplan::server
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(riskplan::server::kUsage);
+  absl::ParseCommandLine(argc, argv);
+  return riskplan::server::Main();
+}

@@ -1,0 +1,50 @@
+#include "server/thread_pool.h"
+
+#include <utility>
+
+namespace riskplan::server {
+
+ThreadPool::ThreadPool(int threads, size_t max_queued) : max_queued_(max_queued) {
+  if (threads < 1) threads = 1;
+  workers_.reserve(threads);
+  for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { WorkerLoop(); });
+}
+
+ThreadPool::~ThreadPool() {
+  {
+    absl::MutexLock lock(&mu_);
+    stopping_ = true;
+  }
+  for (std::thread& t : workers_) t.join();
+}
+
+bool ThreadPool::TrySubmit(std::function<void()> task) {
+  absl::MutexLock lock(&mu_);
+  if (stopping_ || (max_queued_ > 0 && queue_.size() >= max_queued_)) return false;
+  queue_.push_back(std::move(task));
+  return true;
+}
+
+size_t ThreadPool::queued() const {
+  absl::MutexLock lock(&mu_);
+  return queue_.size();
+}
+
+bool ThreadPool::HasWorkOrStopping() const { return stopping_ || !queue_.empty(); }
+
+void ThreadPool::WorkerLoop() {
+  while (true) {
+    std::function<void()> task;
+    {
+      absl::MutexLock lock(&mu_);
+      mu_.Await(absl::Condition(this, &ThreadPool::HasWorkOrStopping));
+      // Drain the queue before stopping: every accepted task runs.
+      if (queue_.empty()) return;
+      task = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    task();
+  }
+}
+
+}  // namespace riskplan::server

@@ -1,0 +1,153 @@
+#include "server/proto_convert.h"
+
+#include <cmath>
+
+#include "gtest/gtest.h"
+#include "server/model_cache.h"
+#include "tests/core/test_maps.h"
+
+namespace riskplan::server {
+namespace {
+
+std::shared_ptr<const RiskMap> SmallMap() {
+  // 10 x 6 cells of 10 m; density rises with the column, no-fly at (9, 5).
+  MapHeader header;
+  header.name = "small";
+  header.res = 10.0;
+  header.nx = 10;
+  header.ny = 6;
+  header.x0 = 1000.0;
+  header.y0 = 2000.0;
+  MapLayers layers;
+  for (int j = 0; j < 6; ++j) {
+    for (int i = 0; i < 10; ++i) {
+      layers.density.push_back(static_cast<float>(i));
+      layers.shelter.push_back(1.0f);
+      layers.terrain.push_back(static_cast<float>(100 + j));
+      layers.nofly.push_back(i == 9 && j == 5 ? 1 : 0);
+    }
+  }
+  layers.landing_sites = {{"field", 2, 3}};
+  auto map = RiskMap::Create(header, layers);
+  EXPECT_TRUE(map.ok()) << map.status();
+  return *map;
+}
+
+TEST(ProtoConvertTest, DownsampleAveragesBlocksAndKeepsPartialEdges) {
+  auto map = SmallMap();
+  v1::GetMapLayerResponse r = DownsampleLayer(*map, v1::POPULATION_DENSITY, 4);
+  EXPECT_EQ(r.factor(), 3);  // ceil(10 / 4)
+  EXPECT_EQ(r.nx(), 4);      // ceil(10 / 3)
+  EXPECT_EQ(r.ny(), 2);      // ceil(6 / 3)
+  EXPECT_DOUBLE_EQ(r.cell_m(), 30.0);
+  EXPECT_DOUBLE_EQ(r.x0_m(), 1000.0);
+  ASSERT_EQ(r.values_size(), 8);
+  EXPECT_FLOAT_EQ(r.values(0), 1.0f);  // columns 0..2
+  EXPECT_FLOAT_EQ(r.values(1), 4.0f);  // columns 3..5
+  EXPECT_FLOAT_EQ(r.values(3), 9.0f);  // column 9 alone (partial block)
+
+  v1::GetMapLayerResponse nofly = DownsampleLayer(*map, v1::NO_FLY, 4);
+  EXPECT_FLOAT_EQ(nofly.values(7), 1.0f);  // the block holding (9, 5)
+  EXPECT_FLOAT_EQ(nofly.values(3), 0.0f);
+
+  v1::GetMapLayerResponse terrain = DownsampleLayer(*map, v1::TERRAIN, 100);
+  EXPECT_EQ(terrain.factor(), 1);
+  EXPECT_FLOAT_EQ(terrain.values(5 * 10 + 0), 105.0f);
+}
+
+TEST(ProtoConvertTest, MapInfo) {
+  auto map = SmallMap();
+  v1::MapInfo info = MapInfoFromMap(*map);
+  EXPECT_EQ(info.name(), "small");
+  EXPECT_EQ(info.nx(), 10);
+  EXPECT_EQ(info.ny(), 6);
+  EXPECT_DOUBLE_EQ(info.width_m(), 100.0);
+  EXPECT_DOUBLE_EQ(info.height_m(), 60.0);
+  EXPECT_DOUBLE_EQ(info.terrain_min_m(), 100.0);
+  EXPECT_DOUBLE_EQ(info.terrain_max_m(), 105.0);
+  ASSERT_EQ(info.landing_sites_size(), 1);
+  EXPECT_EQ(info.landing_sites(0).name(), "field");
+  EXPECT_DOUBLE_EQ(info.landing_sites(0).x(), 1025.0);
+  EXPECT_DOUBLE_EQ(info.landing_sites(0).y(), 2035.0);
+  EXPECT_DOUBLE_EQ(info.landing_sites(0).terrain_m(), 103.0);
+  EXPECT_EQ(info.memory_bytes(), static_cast<int64_t>(map->MemoryBytes()));
+}
+
+TEST(ProtoConvertTest, TrajectoryPathIsSampledAndEndsAtTheGoal) {
+  PlanImprovement improvement;
+  improvement.waypoints = {{0, 0, 200, 0}, {1000, 0, 200, 0}, {2000, 500, 210, 0.5}};
+  improvement.risk = 1e-7;
+  improvement.length_m = 1234.0;
+  improvement.iterations = 42;
+  v1::Trajectory t;
+  ASSERT_TRUE(TrajectoryToProto(improvement, ModelParams{}, 25.0, &t).ok());
+  EXPECT_EQ(t.waypoints_size(), 3);
+  EXPECT_EQ(t.risk(), 1e-7);
+  EXPECT_EQ(t.found_at_iteration(), 42);
+  ASSERT_GE(t.path_size(), 2);
+  EXPECT_DOUBLE_EQ(t.path(0).x(), 0.0);
+  const v1::Pose& last = t.path(t.path_size() - 1);
+  EXPECT_NEAR(last.x(), 2000.0, 1e-6);
+  EXPECT_NEAR(last.y(), 500.0, 1e-6);
+  EXPECT_NEAR(last.z(), 210.0, 1e-6);
+  // About one pose per 25 m of a path a little over 2 km.
+  EXPECT_GT(t.path_size(), 2000 / 25);
+  EXPECT_LT(t.path_size(), 3000 / 25);
+  for (int i = 1; i + 1 < t.path_size(); ++i) {
+    const double step =
+        std::hypot(t.path(i).x() - t.path(i - 1).x(), t.path(i).y() - t.path(i - 1).y());
+    EXPECT_LE(step, 25.0 + 1e-6);
+  }
+}
+
+TEST(ProtoConvertTest, EndReasons) {
+  EXPECT_EQ(EndReasonToProto(StopReason::kBudgetExhausted, false), v1::BUDGET_EXHAUSTED);
+  EXPECT_EQ(EndReasonToProto(StopReason::kConverged, true), v1::CONVERGED);
+  EXPECT_EQ(EndReasonToProto(StopReason::kCancelled, false), v1::CANCELLED);
+  EXPECT_EQ(EndReasonToProto(StopReason::kCancelled, true), v1::SHUTDOWN);
+  EXPECT_EQ(EndReasonToProto(StopReason::kNoSolution, false), v1::NO_SOLUTION);
+  EXPECT_EQ(EndReasonToProto(StopReason::kNoSolution, true), v1::SHUTDOWN);
+}
+
+TEST(ModelCacheTest, DefaultModelIsSharedAndOverridesAreCachedWithLruBound) {
+  auto registry = MapRegistry::FromMaps({SmallMap()});
+  ASSERT_TRUE(registry.ok());
+  auto cache = RiskModelCache::Create(**registry, /*max_overridden=*/2);
+  ASSERT_TRUE(cache.ok()) << cache.status();
+  const RiskMap& map = *(*registry)->maps().front();
+
+  auto def = (*cache)->Get(map, ModelParams{});
+  ASSERT_TRUE(def.ok());
+  EXPECT_EQ(*def, (*cache)->Default(map));
+  EXPECT_EQ((*cache)->Peek(map, ModelParams{}), *def);
+
+  ModelParams a;
+  a.min_agl_m = 40;  // same impact table as the default
+  EXPECT_EQ((*cache)->Peek(map, a), nullptr);
+  auto model_a = (*cache)->Get(map, a);
+  ASSERT_TRUE(model_a.ok());
+  EXPECT_NE(*model_a, *def);
+  EXPECT_EQ((*model_a)->table_ptr(), (*def)->table_ptr());  // shared, not rebuilt
+  EXPECT_EQ((*cache)->Peek(map, a), *model_a);
+
+  ModelParams b;
+  b.mass_kg = 5;  // a new impact table
+  auto model_b = (*cache)->Get(map, b);
+  ASSERT_TRUE(model_b.ok());
+  EXPECT_NE((*model_b)->table_ptr(), (*def)->table_ptr());
+  EXPECT_EQ((*cache)->Get(map, b).value(), *model_b);
+
+  ModelParams c;
+  c.mass_kg = 6;
+  ASSERT_TRUE((*cache)->Get(map, c).ok());
+  // Three overrides, room for two: the least recently used (a) is gone.
+  EXPECT_EQ((*cache)->Peek(map, a), nullptr);
+  EXPECT_NE((*cache)->Peek(map, b), nullptr);
+  RiskModelCache::Stats stats = (*cache)->stats();
+  EXPECT_EQ(stats.builds, 3u);
+  EXPECT_EQ(stats.evictions, 1u);
+  EXPECT_EQ(stats.overridden_cached, 2u);
+}
+
+}  // namespace
+}  // namespace riskplan::server

@@ -1,0 +1,260 @@
+// Validation at the edge: every bad input gets its code and a message naming
+// the field and the value.
+#include "server/request_validation.h"
+
+#include <cmath>
+#include <limits>
+
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "tests/core/test_maps.h"
+
+namespace riskplan::server {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+class RequestValidationTest : public ::testing::Test {
+ protected:
+  RequestValidationTest() {
+    // 2 km x 2 km, flat terrain at 100 m AMSL.
+    auto registry = MapRegistry::FromMaps(
+        {testing_maps::UniformMap(200, 200, 10.0, 0.001f, 2.0f, 100.0f, {}, "test-city")});
+    EXPECT_TRUE(registry.ok()) << registry.status();
+    registry_ = *std::move(registry);
+  }
+
+  v1::PlanRequest GoodPlan() const {
+    v1::PlanRequest r;
+    r.set_map("test-city");
+    r.mutable_start()->set_x(200);
+    r.mutable_start()->set_y(200);
+    r.mutable_start()->set_z(180);
+    r.mutable_goal()->set_x(1800);
+    r.mutable_goal()->set_y(1800);
+    r.mutable_goal()->set_z(180);
+    r.mutable_goal()->set_theta(-kPi / 2);
+    r.mutable_budget()->set_time_ms(500);
+    return r;
+  }
+
+  v1::EvaluateRiskRequest GoodEval() const {
+    v1::EvaluateRiskRequest r;
+    r.set_map("test-city");
+    for (double x : {100.0, 1000.0, 1900.0}) {
+      v1::Point3* p = r.mutable_polyline()->add_points();
+      p->set_x(x);
+      p->set_y(500);
+      p->set_z(180);
+    }
+    return r;
+  }
+
+  void ExpectPlanError(const v1::PlanRequest& r, absl::StatusCode code,
+                       const std::string& message_part) {
+    absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(r, *registry_, limits_);
+    ASSERT_FALSE(spec.ok());
+    EXPECT_EQ(spec.status().code(), code) << spec.status();
+    EXPECT_THAT(std::string(spec.status().message()), HasSubstr(message_part));
+  }
+
+  void ExpectEvalError(const v1::EvaluateRiskRequest& r, absl::StatusCode code,
+                       const std::string& message_part) {
+    absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(r, *registry_, limits_);
+    ASSERT_FALSE(spec.ok());
+    EXPECT_EQ(spec.status().code(), code) << spec.status();
+    EXPECT_THAT(std::string(spec.status().message()), HasSubstr(message_part));
+  }
+
+  std::unique_ptr<MapRegistry> registry_;
+  RequestLimits limits_;
+};
+
+TEST_F(RequestValidationTest, GoodPlanRequest) {
+  absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(GoodPlan(), *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->map->name(), "test-city");
+  EXPECT_EQ(spec->algorithm, PlannerAlgorithm::kRiskRrtStar);
+  EXPECT_DOUBLE_EQ(spec->options.budget.max_time_s, 0.5);
+  EXPECT_EQ(spec->options.budget.max_iterations, 0);
+  // Headings are normalised into [0, 2 pi).
+  EXPECT_DOUBLE_EQ(spec->goal.theta, 1.5 * kPi);
+  EXPECT_DOUBLE_EQ(spec->display_step_m, 25.0);
+  EXPECT_EQ(spec->min_update_interval, absl::ZeroDuration());
+}
+
+TEST_F(RequestValidationTest, BudgetDefaultsAndCaps) {
+  v1::PlanRequest r = GoodPlan();
+  r.clear_budget();
+  absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok());
+  EXPECT_DOUBLE_EQ(spec->options.budget.max_time_s, 1.0);  // default_plan_time_ms
+  r.mutable_budget()->set_iterations(5000);
+  spec = ValidatePlanRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok());
+  EXPECT_EQ(spec->options.budget.max_iterations, 5000);
+  EXPECT_DOUBLE_EQ(spec->options.budget.max_time_s, 600.0);  // the wall-time cap
+}
+
+TEST_F(RequestValidationTest, UnknownMapIsNotFound) {
+  v1::PlanRequest r = GoodPlan();
+  r.set_map("atlantis");
+  ExpectPlanError(r, absl::StatusCode::kNotFound,
+                  "map 'atlantis' is not served; served maps: test-city");
+  r.set_map("");
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "map is required");
+}
+
+TEST_F(RequestValidationTest, NonFinitePoseNamesTheField) {
+  v1::PlanRequest r = GoodPlan();
+  r.mutable_start()->set_z(kNaN);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "start.z has value nan");
+  r = GoodPlan();
+  r.mutable_goal()->set_theta(kInf);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "goal.theta has value inf");
+  r = GoodPlan();
+  r.clear_goal();
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "goal is required");
+}
+
+TEST_F(RequestValidationTest, PoseOutsideTheMap) {
+  v1::PlanRequest r = GoodPlan();
+  r.mutable_goal()->set_x(2500);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "goal (x, y) = (2500, 1800) is outside map 'test-city', which covers x in "
+                  "[0, 2000), y in [0, 2000)");
+}
+
+TEST_F(RequestValidationTest, UnknownAlgorithm) {
+  v1::PlanRequest r = GoodPlan();
+  r.set_algorithm(static_cast<v1::Algorithm>(7));
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "algorithm has value 7");
+}
+
+TEST_F(RequestValidationTest, BudgetOutOfRange) {
+  v1::PlanRequest r = GoodPlan();
+  r.mutable_budget()->set_time_ms(-1);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "budget.time_ms has value -1");
+  r.mutable_budget()->set_time_ms(600001);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "budget.time_ms has value 600001; it must be in [0, 600000]");
+  r = GoodPlan();
+  r.mutable_budget()->set_iterations(-5);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "budget.iterations has value -5");
+}
+
+TEST_F(RequestValidationTest, ModelParamsOutOfRange) {
+  v1::PlanRequest r = GoodPlan();
+  r.mutable_model_params()->set_mass_kg(-3);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "model_params: parameter 'mass_kg' has value -3");
+  r = GoodPlan();
+  r.mutable_model_params()->set_airspeed_mps(kNaN);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "model_params: parameter 'airspeed_mps' has value nan");
+  r = GoodPlan();
+  r.mutable_model_params()->set_heading_bins(0);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "'heading_bins' has value 0");
+}
+
+TEST_F(RequestValidationTest, PlannerParams) {
+  v1::PlanRequest r = GoodPlan();
+  (*r.mutable_planner_params())["no_such_param"] = 1.0;
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "planner_params: unknown parameter 'no_such_param' for RISK_RRT_STAR");
+  const PlannerParamInfo& first = PlannerParams(PlannerAlgorithm::kRiskRrtStar).front();
+  r = GoodPlan();
+  (*r.mutable_planner_params())[first.name] = first.max_value + 1.0;
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "planner_params['" + first.name + "'] has value");
+  r = GoodPlan();
+  (*r.mutable_planner_params())[first.name] = first.default_value;
+  absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->options.params.at(first.name), first.default_value);
+}
+
+TEST_F(RequestValidationTest, IntervalAndDisplayStep) {
+  v1::PlanRequest r = GoodPlan();
+  r.set_min_update_interval_ms(-10);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "min_update_interval_ms has value -10");
+  r = GoodPlan();
+  r.set_display_step_m(0.5);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "display_step_m has value 0.5");
+}
+
+TEST_F(RequestValidationTest, GoodEvaluateRequest) {
+  absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(GoodEval(), *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->polyline.size(), 3u);
+  EXPECT_TRUE(spec->waypoints.empty());
+}
+
+TEST_F(RequestValidationTest, EvaluateErrors) {
+  v1::EvaluateRiskRequest r = GoodEval();
+  r.mutable_polyline()->mutable_points(1)->set_y(kNaN);
+  ExpectEvalError(r, absl::StatusCode::kInvalidArgument, "polyline.points[1].y has value nan");
+
+  r = GoodEval();
+  r.clear_polyline();
+  ExpectEvalError(r, absl::StatusCode::kInvalidArgument, "trajectory is required");
+
+  r = GoodEval();
+  r.mutable_polyline()->mutable_points()->DeleteSubrange(1, 2);
+  ExpectEvalError(r, absl::StatusCode::kInvalidArgument,
+                  "polyline.points has 1 points; it must have 2 to 10000");
+
+  r = GoodEval();
+  limits_.max_waypoints = 4;
+  for (int i = 0; i < 5; ++i) {
+    v1::Pose* p = r.mutable_waypoints()->add_poses();
+    p->set_x(100 + 100 * i);
+    p->set_y(100);
+    p->set_z(180);
+  }
+  ExpectEvalError(r, absl::StatusCode::kInvalidArgument,
+                  "waypoints.poses has 5 poses; it must have 2 to 4");
+
+  r = GoodEval();
+  r.set_map("nowhere");
+  ExpectEvalError(r, absl::StatusCode::kNotFound, "map 'nowhere' is not served");
+}
+
+TEST_F(RequestValidationTest, SampleCountLimits) {
+  EXPECT_TRUE(CheckSampleCount(1000, 5000, 5, true, limits_).ok());
+  absl::Status s = CheckSampleCount(3000000, 15e6, 5, false, limits_);
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(s.message()), HasSubstr("trajectory has 3000000 samples"));
+  s = CheckSampleCount(300000, 1.5e6, 5, true, limits_);
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(s.message()), HasSubstr("include_samples"));
+}
+
+// The API's ModelParameters and core's ModelParams have the same field names,
+// so that an override set in one reaches the other.
+TEST(ModelParametersTest, ProtoFieldsMatchModelParamNames) {
+  const google::protobuf::Descriptor* d = v1::ModelParameters::descriptor();
+  ASSERT_EQ(d->field_count(), static_cast<int>(ModelParamNames().size()));
+  for (std::string_view name : ModelParamNames()) {
+    EXPECT_NE(d->FindFieldByName(std::string(name)), nullptr) << name;
+  }
+}
+
+TEST(ModelParametersTest, EveryFieldReachesModelParams) {
+  v1::ModelParameters proto;
+  proto.set_mass_kg(12.5);
+  proto.set_heading_bins(36);
+  proto.set_glide_ratio(8);
+  absl::StatusOr<ModelParams> params = ModelParamsFromProto(proto);
+  ASSERT_TRUE(params.ok()) << params.status();
+  EXPECT_EQ(params->mass_kg, 12.5);
+  EXPECT_EQ(params->heading_bins, 36);
+  EXPECT_EQ(params->glide_ratio, 8.0);
+  EXPECT_EQ(params->airspeed_mps, ModelParams{}.airspeed_mps);  // unset keeps its default
+}
+
+}  // namespace
+}  // namespace riskplan::server

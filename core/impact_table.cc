@@ -22,7 +22,7 @@ double ExposedArea(double impact_angle_rad, const ModelParams& p) {
 }
 
 absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(const ModelParams& params,
-                                                                     double res_m) {
+                                                                      double res_m) {
   if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
   if (!std::isfinite(res_m) || res_m <= 0.0) {
     return absl::InvalidArgumentError(
@@ -50,8 +50,9 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(const Mode
     const double reach = 3.0 * std::max(hb.sigma_along_m, hb.sigma_across_m) / res_m;
     hb.half_width = static_cast<int>(std::min<double>(std::ceil(reach), params.max_half_width));
     hb.exposed_area_m2 = ExposedArea(hb.fall.angle_rad, params);
-    const size_t side = 2 * hb.half_width + 1;
-    total_weights += side * side * n_head;
+    ImpactKernel shape;
+    shape.half_width = hb.half_width;
+    total_weights += static_cast<size_t>(shape.Side()) * shape.Stride() * n_head;
   }
 
   table->weights_.resize(total_weights);
@@ -60,7 +61,10 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(const Mode
   for (int b = 1; b <= n_bins; ++b) {
     const HeightBin& hb = table->bins_[b - 1];
     const int hw = hb.half_width;
-    const int side = 2 * hw + 1;
+    ImpactKernel shape;
+    shape.half_width = hw;
+    const int side = shape.Side();
+    const int stride = shape.Stride();
     const double inv_a2 = 1.0 / (hb.sigma_along_m * hb.sigma_along_m);
     const double inv_c2 = 1.0 / (hb.sigma_across_m * hb.sigma_across_m);
     for (int k = 0; k < n_head; ++k) {
@@ -78,17 +82,18 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(const Mode
           const double across = -s * ox + c * oy;
           // The Gaussian's constant factor cancels in the normalisation below.
           const double value = std::exp(-0.5 * (along * along * inv_a2 + across * across * inv_c2));
-          w[(v + hw) * side + (u + hw)] = value;
+          w[(v + hw) * stride + (u + hw)] = value;
           sum += value;
         }
       }
-      for (int i = 0; i < side * side; ++i) w[i] /= sum;
+      // Padding entries stay exactly 0 (the vector is value-initialised).
+      for (int i = 0; i < side * stride; ++i) w[i] /= sum;
       ImpactKernel& kernel = table->kernels_[static_cast<size_t>(b - 1) * n_head + k];
       kernel.half_width = hw;
       kernel.offset_x_m = hb.fall.distance_m * c;
       kernel.offset_y_m = hb.fall.distance_m * s;
       kernel.weights = w;
-      cursor += static_cast<size_t>(side) * side;
+      cursor += static_cast<size_t>(side) * stride;
     }
   }
   return std::shared_ptr<const ImpactTable>(std::move(table));

@@ -22,18 +22,24 @@ namespace riskplan {
 
 // Everything the risk model needs about one height bin.
 struct HeightBin {
-  double height_m = 0.0;        // h_b = b * Delta h
-  BallisticImpact fall;         // d, t_f, v_h, v_z, E, gamma at h_b
-  double sigma_along_m = 0.0;   // sigma_a
-  double sigma_across_m = 0.0;  // sigma_c
-  int half_width = 0;           // hw (kernel is (2hw+1)^2 cells)
+  double height_m = 0.0;         // h_b = b * Delta h
+  BallisticImpact fall;          // d, t_f, v_h, v_z, E, gamma at h_b
+  double sigma_along_m = 0.0;    // sigma_a
+  double sigma_across_m = 0.0;   // sigma_c
+  int half_width = 0;            // hw (kernel is (2hw+1)^2 cells)
   double exposed_area_m2 = 0.0;  // A_exp
 };
 
 // One (height bin, heading bin) kernel. Weights are row-major with rows running
-// north: weight of offset (u, v) is weights[(v + hw) * (2hw + 1) + (u + hw)].
+// north: weight of offset (u, v) is weights[(v + hw) * Stride() + (u + hw)].
+// Each row is padded with zero weights to a multiple of kKernelLanes entries so
+// that the EWMM loop runs in whole vectors.
+inline constexpr int kKernelLanes = 8;
+
 struct ImpactKernel {
   int half_width = 0;
+  // Entries per stored row: Side() rounded up to a multiple of kKernelLanes.
+  int Stride() const { return (Side() + kKernelLanes - 1) / kKernelLanes * kKernelLanes; }
   double offset_x_m = 0.0;  // d(h_b) * cos(theta_k)
   double offset_y_m = 0.0;  // d(h_b) * sin(theta_k)
   const double* weights = nullptr;
@@ -45,7 +51,7 @@ class ImpactTable {
   // Builds the table for `params` (which must pass ValidateModelParams) and
   // cells of side `res_m`.
   static absl::StatusOr<std::shared_ptr<const ImpactTable>> Build(const ModelParams& params,
-                                                                   double res_m);
+                                                                  double res_m);
 
   const ModelParams& params() const { return params_; }
   double res_m() const { return res_m_; }
@@ -78,8 +84,7 @@ class ImpactTable {
 
 // Casualty probability of spec section 3 step 6, with the spec's limits:
 // S = 0 gives 1 when E > beta else 0; E <= beta gives 0.
-double CasualtyProbability(double energy_j, double expected_shelter, double alpha_j,
-                           double beta_j);
+double CasualtyProbability(double energy_j, double expected_shelter, double alpha_j, double beta_j);
 
 // Exposed area of spec section 3 step 5.
 double ExposedArea(double impact_angle_rad, const ModelParams& params);

@@ -158,9 +158,9 @@ absl::Status ValidateModelParams(const ModelParams& p) {
         p.table_max_height_m, p.height_bin_m));
   }
   if (p.max_agl_m <= p.min_agl_m) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "parameter 'max_agl_m' (%g) must be greater than 'min_agl_m' (%g)", p.max_agl_m,
-        p.min_agl_m));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("parameter 'max_agl_m' (%g) must be greater than 'min_agl_m' (%g)",
+                        p.max_agl_m, p.min_agl_m));
   }
   return absl::OkStatus();
 }
@@ -170,11 +170,11 @@ bool SameImpactTableParams(const ModelParams& a, const ModelParams& b) {
          a.frontal_area_m2 == b.frontal_area_m2 && a.airspeed_mps == b.airspeed_mps &&
          a.uav_radius_m == b.uav_radius_m && a.gravity_mps2 == b.gravity_mps2 &&
          a.air_density_kgpm3 == b.air_density_kgpm3 && a.person_radius_m == b.person_radius_m &&
-         a.person_height_m == b.person_height_m && a.alpha_j == b.alpha_j &&
-         a.beta_j == b.beta_j && a.sigma_pos_m == b.sigma_pos_m &&
-         a.sigma_speed_mps == b.sigma_speed_mps && a.sigma_wind_mps == b.sigma_wind_mps &&
-         a.heading_bins == b.heading_bins && a.height_bin_m == b.height_bin_m &&
-         a.table_max_height_m == b.table_max_height_m && a.max_half_width == b.max_half_width;
+         a.person_height_m == b.person_height_m && a.alpha_j == b.alpha_j && a.beta_j == b.beta_j &&
+         a.sigma_pos_m == b.sigma_pos_m && a.sigma_speed_mps == b.sigma_speed_mps &&
+         a.sigma_wind_mps == b.sigma_wind_mps && a.heading_bins == b.heading_bins &&
+         a.height_bin_m == b.height_bin_m && a.table_max_height_m == b.table_max_height_m &&
+         a.max_half_width == b.max_half_width;
 }
 
 bool SameGlideParams(const ModelParams& a, const ModelParams& b) {

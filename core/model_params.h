@@ -17,13 +17,13 @@ namespace riskplan {
 
 struct ModelParams {
   // Aircraft.
-  double mass_kg = 10.0;                   // m
-  double drag_coefficient = 0.8;           // c_d, ballistic
-  double frontal_area_m2 = 0.2;            // A_f, in ballistic fall
-  double airspeed_mps = 18.0;              // v, cruise (no wind: ground speed)
-  double uav_radius_m = 1.0;               // r_uav
-  double turn_radius_m = 50.0;             // R, minimum turning radius
-  double max_climb_rad = 0.15;             // gamma_max, climb or descent
+  double mass_kg = 10.0;                    // m
+  double drag_coefficient = 0.8;            // c_d, ballistic
+  double frontal_area_m2 = 0.2;             // A_f, in ballistic fall
+  double airspeed_mps = 18.0;               // v, cruise (no wind: ground speed)
+  double uav_radius_m = 1.0;                // r_uav
+  double turn_radius_m = 50.0;              // R, minimum turning radius
+  double max_climb_rad = 0.15;              // gamma_max, climb or descent
   double failure_rate_per_s = 5e-3 / 3600;  // lambda (5e-3 per flight hour)
 
   // Physics.
@@ -42,10 +42,10 @@ struct ModelParams {
   double sigma_wind_mps = 2.0;
 
   // Impact table discretisation.
-  int heading_bins = 72;             // N_theta
-  double height_bin_m = 5.0;         // Delta h
+  int heading_bins = 72;              // N_theta
+  double height_bin_m = 5.0;          // Delta h
   double table_max_height_m = 300.0;  // h_table_max (a multiple of height_bin_m)
-  int max_half_width = 31;           // hw_max: kernel at most 63 x 63 cells
+  int max_half_width = 31;            // hw_max: kernel at most 63 x 63 cells
 
   // Trajectory sampling and flight band.
   double sample_step_m = 5.0;  // d_step
@@ -53,8 +53,8 @@ struct ModelParams {
   double max_agl_m = 150.0;
 
   // Safe-altitude map (emergency glide to a landing site).
-  double glide_ratio = 10.0;         // G
-  double glide_clearance_m = 10.0;   // clearance over terrain during a glide
+  double glide_ratio = 10.0;        // G
+  double glide_clearance_m = 10.0;  // clearance over terrain during a glide
 
   // Number of height bins of the impact table: h_table_max / Delta h.
   int HeightBins() const;

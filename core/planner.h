@@ -53,8 +53,8 @@ struct PlanningProblem {
 };
 
 struct PlannerBudget {
-  double max_time_s = 1.0;      // wall time; 0 means no limit
-  int64_t max_iterations = 0;   // 0 means no limit
+  double max_time_s = 1.0;     // wall time; 0 means no limit
+  int64_t max_iterations = 0;  // 0 means no limit
   // REQUIRES: at least one of the two is set.
 };
 

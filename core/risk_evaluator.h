@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "core/geometry.h"
@@ -43,6 +44,38 @@ class DirectRiskEvaluator final : public RiskEvaluator {
 
  private:
   uint64_t evaluated_ = 0;
+};
+
+// Evaluates on the calling thread like DirectRiskEvaluator, and remembers the
+// EWMM sums of the last kernel sites it saw in a direct-mapped table of
+// 2^log2_entries entries (40 bytes each). M(q) depends on q only through its
+// KernelSite, so a hit returns exactly what a fresh evaluation would: results
+// are bit for bit those of DirectRiskEvaluator. Only valid for one RiskModel
+// at a time (the table is cleared when another model is passed).
+// Thread-compatible.
+class CachingRiskEvaluator final : public RiskEvaluator {
+ public:
+  explicit CachingRiskEvaluator(int log2_entries = 18);
+
+  absl::Status EvaluateBatch(const RiskModel& model, std::span<const Pose> configs,
+                             std::span<ConfigurationRisk> out) override;
+  uint64_t evaluated() const override { return evaluated_; }
+  uint64_t hits() const { return hits_; }
+  size_t MemoryBytes() const { return entries_.size() * sizeof(Entry); }
+
+ private:
+  struct Entry {
+    uint64_t key = ~uint64_t{0};
+    double impact_factor = 0.0;
+    double expected_shelter = 0.0;
+    double casualty_probability = 0.0;
+    double risk = 0.0;
+  };
+  std::vector<Entry> entries_;
+  uint64_t mask_ = 0;
+  const RiskModel* model_ = nullptr;
+  uint64_t evaluated_ = 0;
+  uint64_t hits_ = 0;
 };
 
 }  // namespace riskplan

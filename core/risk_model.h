@@ -42,7 +42,17 @@ struct ConfigurationRisk {
   double exposed_area_m2 = 0.0;       // A_exp
   int height_bin = 0;                 // b
   int heading_bin = 0;                // k
-  bool defined = false;  // false when q is outside the map or at/below the terrain
+  bool defined = false;               // false when q is outside the map or at/below the terrain
+};
+
+// Where a configuration's risk comes from: M(q) depends on q only through its
+// height bin, heading bin and impact cell, so these four numbers are an exact
+// cache key for it.
+struct KernelSite {
+  int height_bin = 0;
+  int heading_bin = 0;
+  int impact_i = 0;  // impact cell (may lie outside the map)
+  int impact_j = 0;
 };
 
 class RiskModel {
@@ -64,6 +74,12 @@ class RiskModel {
   // M(q) of spec section 3. Never fails: `defined` is false where the spec
   // leaves M undefined (outside the map, h <= 0).
   ConfigurationRisk Evaluate(const Pose& q) const;
+
+  // Steps 1-3 of spec section 3: false where M is undefined.
+  bool Locate(const Pose& q, KernelSite* site) const;
+  // Steps 5-7 from the EWMM sums of step 4.
+  ConfigurationRisk FromSums(const KernelSite& site, double impact_factor,
+                             double expected_shelter) const;
 
   // The EWMM sums alone, for a kernel centred on impact cell (ci, cj), which
   // may lie outside the map (out-of-map cells read density 0, shelter 10).

@@ -109,9 +109,9 @@ absl::StatusOr<std::vector<TrajectoryPiece>> PiecesFromPolyline(std::span<const 
 }
 
 std::string Violation::ToString() const {
-  std::string where = absl::StrFormat("%s at (%.1f, %.1f, %.1f) m, arc length %.1f m (piece %d)",
-                                      ViolationKindName(kind), pose.x, pose.y, pose.z,
-                                      arc_length_m, piece);
+  std::string where =
+      absl::StrFormat("%s at (%.1f, %.1f, %.1f) m, arc length %.1f m (piece %d)",
+                      ViolationKindName(kind), pose.x, pose.y, pose.z, arc_length_m, piece);
   switch (kind) {
     case ViolationKind::kTerrainCollision:
       return where + absl::StrFormat(": altitude %.1f m <= terrain %.1f m", pose.z, limit_m);

@@ -23,9 +23,9 @@ absl::StatusOr<std::vector<std::vector<double>>> ParseTuples(absl::string_view t
     for (absl::string_view field : absl::StrSplit(item, ',')) {
       double v = 0.0;
       if (!absl::SimpleAtod(absl::StripAsciiWhitespace(field), &v)) {
-        return absl::InvalidArgumentError(absl::StrFormat(
-            "%s[%d]: '%s' is not a number", what, index,
-            std::string(absl::StripAsciiWhitespace(field))));
+        return absl::InvalidArgumentError(
+            absl::StrFormat("%s[%d]: '%s' is not a number", what, index,
+                            std::string(absl::StripAsciiWhitespace(field))));
       }
       values.push_back(v);
     }
@@ -73,14 +73,15 @@ absl::StatusOr<TrajectoryInput> ParseTrajectoryJson(std::string_view json) {
   const size_t arity = has_waypoints ? 4 : 3;
   const nlohmann::json& list = doc[key];
   if (!list.is_array()) {
-    return absl::InvalidArgumentError(absl::StrFormat("trajectory file: \"%s\" must be a list", key));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("trajectory file: \"%s\" must be a list", key));
   }
   TrajectoryInput out;
   for (size_t i = 0; i < list.size(); ++i) {
     const nlohmann::json& item = list[i];
     if (!item.is_array() || item.size() != arity) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "trajectory file: %s[%d] must be a list of %d numbers", key, i, arity));
+      return absl::InvalidArgumentError(
+          absl::StrFormat("trajectory file: %s[%d] must be a list of %d numbers", key, i, arity));
     }
     double v[4] = {0, 0, 0, 0};
     for (size_t k = 0; k < arity; ++k) {

@@ -74,7 +74,8 @@ absl::StatusOr<ModelParams> ParamsFromFlag() {
       return absl::InvalidArgumentError(
           absl::StrFormat("--params: '%s' is not name=number", std::string(item)));
     }
-    if (absl::Status s = SetModelParam(&params, std::string(absl::StripAsciiWhitespace(kv[0])), value);
+    if (absl::Status s =
+            SetModelParam(&params, std::string(absl::StripAsciiWhitespace(kv[0])), value);
         !s.ok()) {
       return absl::InvalidArgumentError(absl::StrFormat("--params: %s", s.message()));
     }
@@ -131,7 +132,8 @@ void PrintText(const RiskMap& map, const TrajectoryInput& input, const Trajector
   }
   for (size_t p = 0; p < e.pieces.size(); ++p) {
     std::printf("  piece %zu: length %.1f m, %d samples, risk %.6e%s\n", p, e.pieces[p].length_m,
-                e.pieces[p].parts, e.pieces[p].risk, e.pieces[p].admissible ? "" : ", inadmissible");
+                e.pieces[p].parts, e.pieces[p].risk,
+                e.pieces[p].admissible ? "" : ", inadmissible");
   }
   if (samples) {
     std::printf("%5s %10s %10s %10s %8s %8s %14s %12s %8s %8s\n", "piece", "s_m", "x_m", "y_m",

@@ -20,7 +20,8 @@ TEST(BallisticFallTest, DragFreeMatchesClosedForm) {
     EXPECT_NEAR(fall.distance_m, p.airspeed_mps * t, 2e-3) << "h=" << h;
     EXPECT_NEAR(fall.v_horizontal_mps, p.airspeed_mps, 1e-12);
     EXPECT_NEAR(fall.v_vertical_mps, p.gravity_mps2 * t, 1e-3) << "h=" << h;
-    const double energy = 0.5 * p.mass_kg * (p.airspeed_mps * p.airspeed_mps + 2.0 * p.gravity_mps2 * h);
+    const double energy =
+        0.5 * p.mass_kg * (p.airspeed_mps * p.airspeed_mps + 2.0 * p.gravity_mps2 * h);
     EXPECT_NEAR(fall.energy_j, energy, 1e-4 * energy) << "h=" << h;
     EXPECT_NEAR(fall.angle_rad, std::atan2(p.gravity_mps2 * t, p.airspeed_mps), 1e-5);
   }

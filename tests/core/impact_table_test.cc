@@ -18,9 +18,16 @@ TEST(ImpactTableTest, EveryKernelSumsToOne) {
     for (int k = 0; k < (*table)->heading_bins(); ++k) {
       const ImpactKernel& kernel = (*table)->kernel(b, k);
       double sum = 0.0;
-      for (int i = 0; i < kernel.Side() * kernel.Side(); ++i) {
-        ASSERT_GE(kernel.weights[i], 0.0);
-        sum += kernel.weights[i];
+      for (int v = 0; v < kernel.Side(); ++v) {
+        for (int u = 0; u < kernel.Stride(); ++u) {
+          const double w = kernel.weights[v * kernel.Stride() + u];
+          if (u >= kernel.Side()) {
+            ASSERT_EQ(w, 0.0);  // row padding
+          } else {
+            ASSERT_GE(w, 0.0);
+          }
+          sum += w;
+        }
       }
       EXPECT_NEAR(sum, 1.0, 1e-12) << "b=" << b << " k=" << k;
     }
@@ -54,7 +61,7 @@ TEST(ImpactTableTest, KernelIsElongatedAlongTheHeading) {
   // Heading east (k = 0): spread along u (east) is wider than along v (north).
   const ImpactKernel& east = (*table)->kernel(40, 0);
   const int hw = east.half_width;
-  const int side = east.Side();
+  const int side = east.Stride();
   auto w = [&](const ImpactKernel& k, int u, int v) {
     return k.weights[(v + hw) * side + (u + hw)];
   };
@@ -77,9 +84,9 @@ TEST(ImpactTableTest, BinsRoundHalfUpAndClamp) {
   auto table = ImpactTable::Build(p, 5.0);
   ASSERT_TRUE(table.ok());
   const ImpactTable& t = **table;
-  EXPECT_EQ(t.HeightBinOf(0.1), 1);   // clamped up
+  EXPECT_EQ(t.HeightBinOf(0.1), 1);  // clamped up
   EXPECT_EQ(t.HeightBinOf(7.4), 1);
-  EXPECT_EQ(t.HeightBinOf(7.5), 2);   // round half up
+  EXPECT_EQ(t.HeightBinOf(7.5), 2);  // round half up
   EXPECT_EQ(t.HeightBinOf(100.0), 20);
   EXPECT_EQ(t.HeightBinOf(1000.0), 60);  // clamped down
   const double w = kTwoPi / 72;

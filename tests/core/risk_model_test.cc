@@ -30,12 +30,12 @@ double SpecConfigurationRisk(const RiskMap& map, const ModelParams& p, const Pos
   const double sa = std::sqrt(std::pow(p.sigma_pos_m, 2) + std::pow(t * p.sigma_speed_mps, 2) +
                               std::pow(t * p.sigma_wind_mps, 2));
   const double sc = std::sqrt(std::pow(p.sigma_pos_m, 2) + std::pow(t * p.sigma_wind_mps, 2));
-  const int hw = std::min(p.max_half_width,
-                          static_cast<int>(std::ceil(3.0 * std::max(sa, sc) / map.res())));
-  const int ci = static_cast<int>(
-      std::floor((q.x + fall.distance_m * std::cos(th) - map.x0()) / map.res()));
-  const int cj = static_cast<int>(
-      std::floor((q.y + fall.distance_m * std::sin(th) - map.y0()) / map.res()));
+  const int hw =
+      std::min(p.max_half_width, static_cast<int>(std::ceil(3.0 * std::max(sa, sc) / map.res())));
+  const int ci =
+      static_cast<int>(std::floor((q.x + fall.distance_m * std::cos(th) - map.x0()) / map.res()));
+  const int cj =
+      static_cast<int>(std::floor((q.y + fall.distance_m * std::sin(th) - map.y0()) / map.res()));
   double norm = 0.0;
   double rho = 0.0;
   double shelter = 0.0;

@@ -81,8 +81,8 @@ TEST_F(TrajectoryTest, RiskIsTheSumOfItsPieces) {
 
 TEST_F(TrajectoryTest, FirstViolationHasKindPositionAndArcLength) {
   // Climbs out of the band: ceiling is 100 + 150 = 250 m.
-  auto pieces =
-      PiecesFromPolyline(std::vector<Point3>{{500, 1000, 200}, {1500, 1000, 200}, {1500, 1100, 300}});
+  auto pieces = PiecesFromPolyline(
+      std::vector<Point3>{{500, 1000, 200}, {1500, 1000, 200}, {1500, 1100, 300}});
   ASSERT_TRUE(pieces.ok());
   auto eval = EvaluateTrajectory(*model_, *pieces);
   ASSERT_TRUE(eval.ok());

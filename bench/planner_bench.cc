@@ -1,0 +1,138 @@
+// riskplan-bench-planner: anytime behaviour of a planner on the fixed
+// demo-city scenario set (bench/scenarios.h).
+//
+// For every scenario and seed it runs the planner with a wall-time budget on
+// one thread and records each improvement. It reports, per scenario and over
+// all: tree nodes added per second, time to the first solution, and the best
+// risk reached by 0.1, 0.3, 1 and 3 s (medians over seeds).
+//
+//   riskplan-bench-planner [--seeds=5] [--budget_s=3] [--scenarios=5km-a,west-east]
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/str_split.h"
+#include "bench/scenarios.h"
+#include "core/demo_city.h"
+#include "core/planner.h"
+
+ABSL_FLAG(int, seeds, 5, "seeds per scenario");
+ABSL_FLAG(double, budget_s, 3.0, "wall-time budget per run, s");
+ABSL_FLAG(std::string, scenarios, "", "comma-separated scenario names (empty: all)");
+ABSL_FLAG(std::string, params, "", "planner parameters name=value,...");
+
+namespace riskplan {
+namespace {
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct RunStats {
+  double nodes_per_s = 0.0;
+  double configs_per_node = 0.0;
+  double first_solution_s = std::nan("");  // NaN: none
+  std::vector<double> risk_at;             // per checkpoint; +inf: none yet
+};
+
+constexpr double kCheckpoints[] = {0.1, 0.3, 1.0, 3.0};
+
+int Main() {
+  auto map = MakeDemoCity();
+  if (!map.ok()) {
+    std::fprintf(stderr, "%s\n", std::string(map.status().message()).c_str());
+    return 1;
+  }
+  auto model = RiskModel::Create(*map, ModelParams{});
+  if (!model.ok()) return 1;
+  std::vector<bench::Scenario> scenarios = bench::DemoCityScenarios(**model);
+  const std::string wanted = absl::GetFlag(FLAGS_scenarios);
+  if (!wanted.empty()) {
+    std::vector<std::string> names = absl::StrSplit(wanted, ',');
+    std::erase_if(scenarios, [&](const bench::Scenario& s) {
+      return std::find(names.begin(), names.end(), s.name) == names.end();
+    });
+  }
+  std::map<std::string, double> params;
+  for (absl::string_view kv : absl::StrSplit(absl::GetFlag(FLAGS_params), ',', absl::SkipEmpty())) {
+    std::vector<std::string> parts = absl::StrSplit(kv, '=');
+    if (parts.size() == 2) params[parts[0]] = std::stod(parts[1]);
+  }
+  const int seeds = absl::GetFlag(FLAGS_seeds);
+  const double budget = absl::GetFlag(FLAGS_budget_s);
+  std::printf("riskplan-bench-planner: RISK_RRT_STAR, %zu scenarios x %d seeds, %.1f s each\n",
+              scenarios.size(), seeds, budget);
+  std::printf("%-14s %8s %9s %10s %12s %12s %12s %12s %7s\n", "scenario", "nodes/s", "cfg/node",
+              "first_ms", "risk@0.1s", "risk@0.3s", "risk@1s", "risk@3s", "solved");
+  std::vector<double> all_nodes_per_s;
+  std::vector<double> all_first;
+  for (const bench::Scenario& sc : scenarios) {
+    std::vector<RunStats> runs;
+    for (int seed = 1; seed <= seeds; ++seed) {
+      auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar);
+      PlanOptions options;
+      options.budget.max_time_s = budget;
+      options.seed = seed;
+      options.params = params;
+      CancellationToken cancel;
+      std::vector<PlanImprovement> improvements;
+      auto result = (*planner)->Plan({*model, sc.start, sc.goal}, options, cancel,
+                                     [&](const PlanImprovement& i) { improvements.push_back(i); });
+      if (!result.ok()) {
+        std::fprintf(stderr, "%s: %s\n", sc.name, std::string(result.status().message()).c_str());
+        return 1;
+      }
+      RunStats stats;
+      stats.nodes_per_s = result->tree_size / result->elapsed_s;
+      stats.configs_per_node =
+          static_cast<double>(result->configurations_evaluated) / result->tree_size;
+      if (!improvements.empty()) stats.first_solution_s = improvements.front().elapsed_s;
+      for (double t : kCheckpoints) {
+        double best = std::numeric_limits<double>::infinity();
+        for (const PlanImprovement& i : improvements) {
+          if (i.elapsed_s <= t) best = i.risk;
+        }
+        stats.risk_at.push_back(best);
+      }
+      runs.push_back(stats);
+    }
+    std::vector<double> nps, first, cpn;
+    std::vector<std::vector<double>> at(std::size(kCheckpoints));
+    int solved = 0;
+    for (const RunStats& r : runs) {
+      nps.push_back(r.nodes_per_s);
+      cpn.push_back(r.configs_per_node);
+      all_nodes_per_s.push_back(r.nodes_per_s);
+      if (!std::isnan(r.first_solution_s)) {
+        ++solved;
+        first.push_back(r.first_solution_s * 1000.0);
+        all_first.push_back(r.first_solution_s * 1000.0);
+      }
+      for (size_t c = 0; c < at.size(); ++c) at[c].push_back(r.risk_at[c]);
+    }
+    std::printf("%-14s %8.0f %9.0f %10.1f %12.4e %12.4e %12.4e %12.4e %4d/%d\n", sc.name,
+                Median(nps), Median(cpn), Median(first), Median(at[0]), Median(at[1]),
+                Median(at[2]), Median(at[3]), solved, seeds);
+  }
+  std::printf("all scenarios: median nodes/s %.0f, median time to first solution %.1f ms\n",
+              Median(all_nodes_per_s), Median(all_first));
+  return 0;
+}
+
+}  // namespace
+}  // namespace riskplan
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(
+      "riskplan-bench-planner: anytime planner benchmark on demo-city scenarios");
+  absl::ParseCommandLine(argc, argv);
+  return riskplan::Main();
+}

@@ -1,0 +1,567 @@
+#include "core/risk_rrt_star.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "core/dubins.h"
+#include "core/random.h"
+#include "core/spatial_grid.h"
+#include "core/trajectory.h"
+
+namespace riskplan {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct Params {
+  double step_m = 250.0;
+  double goal_bias = 0.05;
+  double path_bias = 0.2;
+  double k_near = 12;
+  double near_radius_m = 0.0;  // 0: 2.5 * step_m
+  double nearest_candidates = 8;
+  double max_nodes = 200000;
+  double risk_cache_log2 = 0;
+};
+
+absl::StatusOr<Params> ParseParams(const std::map<std::string, double>& given) {
+  Params p;
+  const std::vector<PlannerParamInfo>& info = RiskRrtStar::ParamInfo();
+  for (const auto& [name, value] : given) {
+    auto it = std::find_if(info.begin(), info.end(),
+                           [&](const PlannerParamInfo& i) { return i.name == name; });
+    if (it == info.end()) {
+      std::vector<std::string> names;
+      for (const PlannerParamInfo& i : info) names.push_back(i.name);
+      return absl::InvalidArgumentError(
+          absl::StrFormat("unknown planner parameter '%s' for RISK_RRT_STAR; known: %s", name,
+                          absl::StrJoin(names, ", ")));
+    }
+    if (!std::isfinite(value) || value < it->min_value || value > it->max_value) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("planner parameter '%s' has value %g; it must be in [%g, %g]", name,
+                          value, it->min_value, it->max_value));
+    }
+    if (name == "step_m") p.step_m = value;
+    if (name == "goal_bias") p.goal_bias = value;
+    if (name == "path_bias") p.path_bias = value;
+    if (name == "k_near") p.k_near = std::floor(value);
+    if (name == "near_radius_m") p.near_radius_m = value;
+    if (name == "nearest_candidates") p.nearest_candidates = std::floor(value);
+    if (name == "max_nodes") p.max_nodes = std::floor(value);
+    if (name == "risk_cache_log2") p.risk_cache_log2 = std::floor(value);
+  }
+  if (p.near_radius_m == 0.0) p.near_radius_m = 2.5 * p.step_m;
+  if (p.goal_bias + p.path_bias > 0.9) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "planner parameters goal_bias (%g) + path_bias (%g) must not exceed 0.9: uniform "
+        "samples keep the search complete",
+        p.goal_bias, p.path_bias));
+  }
+  return p;
+}
+
+struct Node {
+  Pose pose;
+  int32_t parent = -1;
+  double cost = kInf;       // R(q): risk from here to the goal along the tree
+  double edge_risk = kInf;  // risk of the edge to the parent (a piece risk)
+  std::vector<int32_t> children;
+};
+
+// A candidate edge whose risk is requested in the current batch.
+struct CandidateEdge {
+  int32_t node = -1;  // the tree node at the other end
+  TrajectoryPiece piece;
+  int parts = 0;
+  size_t first_sample = 0;
+  double risk = kInf;
+};
+
+// One planning run: all state of a Plan() call.
+class Run {
+ public:
+  Run(const PlanningProblem& problem, const PlanOptions& options, const Params& params,
+      RiskEvaluator* evaluator, const CancellationToken& cancel,
+      const ImprovementCallback& on_improvement)
+      : problem_(problem),
+        model_(*problem.model),
+        options_(options),
+        params_(params),
+        evaluator_(evaluator),
+        cancel_(cancel),
+        on_improvement_(on_improvement),
+        rng_(options.seed),
+        grid_(model_.map().x0(), model_.map().y0(), model_.map().width_m(), model_.map().height_m(),
+              std::max(50.0, params.near_radius_m / 2.0)) {}
+
+  absl::StatusOr<PlanResult> Execute();
+
+ private:
+  bool Admissible(const Pose& q) const {
+    return model_.CheckConfiguration(q) == ViolationKind::kNone;
+  }
+  double Elapsed() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time_).count();
+  }
+  bool BudgetLeft() const {
+    if (options_.budget.max_iterations > 0 && iterations_ >= options_.budget.max_iterations) {
+      return false;
+    }
+    if (options_.budget.max_time_s > 0.0 && Elapsed() >= options_.budget.max_time_s) return false;
+    return static_cast<double>(nodes_.size()) < params_.max_nodes;
+  }
+  double BestCost() const { return nodes_[kStart].cost; }
+
+  bool SampleUniform(Pose* q);
+  bool SamplePathBiased(Pose* q);
+  Pose Sample(bool* is_start);
+  int32_t NearestNode(const Pose& q) const;
+  std::vector<int32_t> NearCandidates(const Pose& q) const;
+  // Appends an edge (flown from `from` to `to`) to the batch if all its
+  // midpoints are admissible. Returns false if it is not.
+  bool AddCandidate(const Pose& from, const Pose& to, int32_t node,
+                    std::vector<CandidateEdge>* edges);
+  absl::Status EvaluateCandidates(std::vector<CandidateEdge>* edges);
+  void SetParent(int32_t child, int32_t parent, double edge_risk);
+  // The candidate parent of `from` with the least R(n) + R(from -> n) below
+  // `bound`, as (node, edge risk); node -1 when none is admissible or below.
+  absl::Status BestParent(const Pose& from, std::vector<int32_t> candidates, double bound,
+                          int32_t* parent, double* edge_risk);
+  std::vector<int32_t> KNearestFrom(const Pose& from, const std::vector<int32_t>& near,
+                                    double max_cost) const;
+  absl::Status ConnectStart();
+  absl::Status Extend(const Pose& q_new);
+  absl::Status MaybeReport();
+
+  static constexpr size_t kParentRound = 4;
+  static constexpr int32_t kGoal = 0;
+  static constexpr int32_t kStart = 1;
+
+  const PlanningProblem& problem_;
+  const RiskModel& model_;
+  const PlanOptions& options_;
+  const Params params_;
+  RiskEvaluator* evaluator_;
+  const CancellationToken& cancel_;
+  const ImprovementCallback& on_improvement_;
+  Rng rng_;
+  SpatialGrid grid_;
+  std::vector<Node> nodes_;
+  std::chrono::steady_clock::time_point start_time_;
+  int64_t iterations_ = 0;
+  std::optional<PlanImprovement> best_;
+  std::vector<TrajectoryPiece> best_pieces_;
+  // Scratch buffers reused between iterations.
+  std::vector<Pose> batch_poses_;
+  std::vector<ConfigurationRisk> batch_risks_;
+};
+
+bool Run::SampleUniform(Pose* q) {
+  const RiskMap& map = model_.map();
+  // A few tries: most of a city map is flyable; a miss just ends the iteration.
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    const double x = map.x0() + rng_.Uniform() * map.width_m();
+    const double y = map.y0() + rng_.Uniform() * map.height_m();
+    const double theta = rng_.Uniform() * kTwoPi;
+    const double u = rng_.Uniform();
+    int i = 0;
+    int j = 0;
+    if (!map.CellOf(x, y, &i, &j) || map.nofly(i, j)) continue;
+    const double low = model_.SafeAltitude(i, j);
+    const double high = map.terrain(i, j) + model_.params().max_agl_m;
+    if (!(low <= high)) continue;
+    *q = Pose{x, y, low + u * (high - low), theta};
+    return true;
+  }
+  return false;
+}
+
+bool Run::SamplePathBiased(Pose* q) {
+  const double length = best_->length_m;
+  double s = rng_.Uniform() * length;
+  Pose base = best_pieces_.back().End();
+  for (const TrajectoryPiece& piece : best_pieces_) {
+    if (s <= piece.Length()) {
+      base = piece.PoseAt(s);
+      break;
+    }
+    s -= piece.Length();
+  }
+  const double spread = params_.step_m;
+  *q = Pose{base.x + spread * rng_.Normal(), base.y + spread * rng_.Normal(),
+            base.z + 20.0 * rng_.Normal(), NormalizeHeading(base.theta + 0.5 * rng_.Normal())};
+  return Admissible(*q);
+}
+
+Pose Run::Sample(bool* is_start) {
+  *is_start = false;
+  const double u = rng_.Uniform();
+  if (u < params_.goal_bias) {
+    *is_start = true;
+    return problem_.start;
+  }
+  Pose q;
+  if (best_.has_value() && u < params_.goal_bias + params_.path_bias && SamplePathBiased(&q)) {
+    return q;
+  }
+  if (SampleUniform(&q)) return q;
+  *is_start = true;  // a map with almost nothing flyable: head for the start
+  return problem_.start;
+}
+
+int32_t Run::NearestNode(const Pose& q) const {
+  const auto candidates =
+      grid_.Nearest(q.x, q.y, static_cast<size_t>(params_.nearest_candidates) + 1);
+  int32_t best = -1;
+  double best_length = kInf;
+  const ModelParams& mp = model_.params();
+  for (const auto& [d2, id] : candidates) {
+    if (id == kStart) continue;
+    const double length =
+        DubinsAirplanePath(q, nodes_[id].pose, mp.turn_radius_m, mp.max_climb_rad).Length();
+    if (length < best_length) {
+      best_length = length;
+      best = id;
+    }
+  }
+  return best;
+}
+
+std::vector<int32_t> Run::NearCandidates(const Pose& q) const {
+  // Euclidean distance is a lower bound of Dubins-airplane length, so the
+  // Euclidean neighbours within the radius hold every node that is near by
+  // Dubins length; a few times k of them are enough to rank.
+  const size_t want = static_cast<size_t>(3 * params_.k_near);
+  const auto nearest = grid_.Nearest(q.x, q.y, want);
+  std::vector<int32_t> out;
+  const double r2 = params_.near_radius_m * params_.near_radius_m;
+  for (const auto& [d2, id] : nearest) {
+    if (d2 <= r2) out.push_back(id);
+  }
+  return out;
+}
+
+bool Run::AddCandidate(const Pose& from, const Pose& to, int32_t node,
+                       std::vector<CandidateEdge>* edges) {
+  const ModelParams& mp = model_.params();
+  CandidateEdge edge;
+  edge.node = node;
+  edge.piece = TrajectoryPiece::Manoeuvre(from, to, mp.turn_radius_m, mp.max_climb_rad);
+  edge.parts = PartCount(edge.piece.Length(), mp.sample_step_m);
+  edge.first_sample = batch_poses_.size();
+  const double ds = edge.parts > 0 ? edge.piece.Length() / edge.parts : 0.0;
+  for (int i = 0; i < edge.parts; ++i) {
+    const Pose q = edge.piece.PoseAt((i + 0.5) * ds);
+    if (!Admissible(q)) {
+      batch_poses_.resize(edge.first_sample);
+      return false;
+    }
+    batch_poses_.push_back(q);
+  }
+  edges->push_back(std::move(edge));
+  return true;
+}
+
+absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges) {
+  batch_risks_.resize(batch_poses_.size());
+  if (!batch_poses_.empty()) {
+    if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_poses_, batch_risks_); !s.ok()) {
+      return s;
+    }
+  }
+  // Exactly the piece risk of EvaluateTrajectory: (lambda / v) * (sum M) * ds.
+  const ModelParams& mp = model_.params();
+  const double per_metre = mp.failure_rate_per_s / mp.airspeed_mps;
+  for (CandidateEdge& edge : *edges) {
+    double sum = 0.0;
+    for (int i = 0; i < edge.parts; ++i) sum += batch_risks_[edge.first_sample + i].risk;
+    const double ds = edge.parts > 0 ? edge.piece.Length() / edge.parts : 0.0;
+    edge.risk = per_metre * sum * ds;
+  }
+  batch_poses_.clear();
+  return absl::OkStatus();
+}
+
+void Run::SetParent(int32_t child, int32_t parent, double edge_risk) {
+  const double new_cost = nodes_[parent].cost + edge_risk;
+  Node& c = nodes_[child];
+  c.edge_risk = edge_risk;
+  if (c.parent >= 0) {
+    std::vector<int32_t>& siblings = nodes_[c.parent].children;
+    siblings.erase(std::find(siblings.begin(), siblings.end(), child));
+  }
+  c.parent = parent;
+  nodes_[parent].children.push_back(child);
+  const double delta = new_cost - c.cost;
+  c.cost = new_cost;
+  if (!std::isfinite(delta)) return;  // a new node: no descendants yet
+  // Propagate the change to every descendant.
+  std::vector<int32_t> stack(c.children.begin(), c.children.end());
+  while (!stack.empty()) {
+    const int32_t n = stack.back();
+    stack.pop_back();
+    nodes_[n].cost += delta;
+    stack.insert(stack.end(), nodes_[n].children.begin(), nodes_[n].children.end());
+  }
+}
+
+absl::Status Run::BestParent(const Pose& from, std::vector<int32_t> candidates, double bound,
+                             int32_t* parent, double* edge_risk) {
+  *parent = -1;
+  *edge_risk = kInf;
+  // Rounds of a few candidates, cheapest R(n) first. After each round every
+  // candidate whose R(n) alone reaches the best total found is dropped: edge
+  // risks are never negative, so it cannot win. The result is the same as
+  // evaluating every candidate, for a fraction of the risk batches.
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [&](int32_t a, int32_t b) { return nodes_[a].cost < nodes_[b].cost; });
+  double best = bound;
+  size_t next = 0;
+  std::vector<CandidateEdge> edges;
+  while (next < candidates.size()) {
+    edges.clear();
+    const size_t round_end = std::min(candidates.size(), next + kParentRound);
+    for (; next < round_end; ++next) {
+      const int32_t n = candidates[next];
+      if (nodes_[n].cost >= best) {
+        next = candidates.size();
+        break;
+      }
+      AddCandidate(from, nodes_[n].pose, n, &edges);
+    }
+    if (absl::Status s = EvaluateCandidates(&edges); !s.ok()) return s;
+    for (const CandidateEdge& e : edges) {
+      const double total = nodes_[e.node].cost + e.risk;
+      if (total < best) {
+        best = total;
+        *parent = e.node;
+        *edge_risk = e.risk;
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+// The k nearest of `near` by Dubins-airplane length from `from` to them.
+std::vector<int32_t> Run::KNearestFrom(const Pose& from, const std::vector<int32_t>& near,
+                                       double max_cost) const {
+  const ModelParams& mp = model_.params();
+  std::vector<std::pair<double, int32_t>> ranked;
+  for (int32_t id : near) {
+    if (id == kStart || nodes_[id].cost >= max_cost) continue;
+    const double length =
+        DubinsAirplanePath(from, nodes_[id].pose, mp.turn_radius_m, mp.max_climb_rad).Length();
+    ranked.push_back({length, id});
+  }
+  std::sort(ranked.begin(), ranked.end());
+  if (ranked.size() > static_cast<size_t>(params_.k_near)) ranked.resize(params_.k_near);
+  std::vector<int32_t> out;
+  for (const auto& [length, id] : ranked) out.push_back(id);
+  return out;
+}
+
+absl::Status Run::ConnectStart() {
+  const Pose& start = problem_.start;
+  int32_t parent = -1;
+  double edge_risk = kInf;
+  if (absl::Status s = BestParent(start, KNearestFrom(start, NearCandidates(start), BestCost()),
+                                  BestCost(), &parent, &edge_risk);
+      !s.ok()) {
+    return s;
+  }
+  if (parent >= 0) SetParent(kStart, parent, edge_risk);
+  return absl::OkStatus();
+}
+
+absl::Status Run::Extend(const Pose& q_new) {
+  const ModelParams& mp = model_.params();
+  const std::vector<int32_t> near = NearCandidates(q_new);
+
+  // Parent: the k nearest by Dubins length q_new -> n, best by accumulated
+  // risk; branch and bound: a node at or above the best solution is useless.
+  int32_t parent = -1;
+  double edge_risk = kInf;
+  if (absl::Status s =
+          BestParent(q_new, KNearestFrom(q_new, near, BestCost()), BestCost(), &parent, &edge_risk);
+      !s.ok()) {
+    return s;
+  }
+  if (parent < 0) return absl::OkStatus();
+  const double cost = nodes_[parent].cost + edge_risk;
+
+  const int32_t id = static_cast<int32_t>(nodes_.size());
+  nodes_.push_back(Node{q_new, -1, kInf, kInf, {}});
+  SetParent(id, parent, edge_risk);
+  grid_.Insert(id, q_new.x, q_new.y);
+
+  // Rewire: neighbours (the start included) that get cheaper through q_new.
+  std::vector<std::pair<double, int32_t>> ranked;
+  for (int32_t n : near) {
+    if (n == kGoal || n == parent || !(cost < nodes_[n].cost)) continue;
+    const double length =
+        DubinsAirplanePath(nodes_[n].pose, q_new, mp.turn_radius_m, mp.max_climb_rad).Length();
+    ranked.push_back({length, n});
+  }
+  std::sort(ranked.begin(), ranked.end());
+  if (ranked.size() > static_cast<size_t>(params_.k_near)) ranked.resize(params_.k_near);
+  std::vector<CandidateEdge> edges;
+  for (const auto& [length, n] : ranked) AddCandidate(nodes_[n].pose, q_new, n, &edges);
+  if (absl::Status s = EvaluateCandidates(&edges); !s.ok()) return s;
+  for (const CandidateEdge& e : edges) {
+    // Rewiring n cannot change q_new's cost: n costs more than q_new, so it is
+    // not one of q_new's ancestors.
+    if (nodes_[id].cost + e.risk < nodes_[e.node].cost) SetParent(e.node, id, e.risk);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status Run::MaybeReport() {
+  if (!std::isfinite(BestCost())) return absl::OkStatus();
+  if (best_.has_value() && !(BestCost() < best_->risk)) return absl::OkStatus();
+  std::vector<Pose> waypoints;
+  // The trajectory's risk as EvaluateTrajectory computes it: the sum of its
+  // piece risks from start to goal. Each edge risk was computed exactly as
+  // that piece's risk (same manoeuvre, same samples, same formula), so the
+  // total is bit for bit what an independent evaluation gives; the tree's
+  // R(start) may differ from it in the last bits (other order of additions).
+  double risk = 0.0;
+  double length = 0.0;
+  const ModelParams& mp = model_.params();
+  for (int32_t n = kStart; n >= 0; n = nodes_[n].parent) {
+    waypoints.push_back(nodes_[n].pose);
+    if (nodes_[n].parent >= 0) risk += nodes_[n].edge_risk;
+  }
+  if (best_.has_value() && !(risk < best_->risk)) return absl::OkStatus();
+  best_pieces_.clear();
+  for (size_t i = 0; i + 1 < waypoints.size(); ++i) {
+    best_pieces_.push_back(TrajectoryPiece::Manoeuvre(waypoints[i], waypoints[i + 1],
+                                                      mp.turn_radius_m, mp.max_climb_rad));
+    length += best_pieces_.back().Length();
+  }
+  PlanImprovement improvement;
+  improvement.waypoints = std::move(waypoints);
+  improvement.risk = risk;
+  improvement.length_m = length;
+  improvement.iterations = iterations_;
+  improvement.tree_size = static_cast<int64_t>(nodes_.size());
+  improvement.elapsed_s = Elapsed();
+  best_ = improvement;
+  if (on_improvement_) on_improvement_(improvement);
+  return absl::OkStatus();
+}
+
+absl::StatusOr<PlanResult> Run::Execute() {
+  start_time_ = std::chrono::steady_clock::now();
+  nodes_.push_back(Node{problem_.goal, -1, 0.0, 0.0, {}});
+  nodes_.push_back(Node{problem_.start, -1, kInf, kInf, {}});
+  grid_.Insert(kGoal, problem_.goal.x, problem_.goal.y);
+  grid_.Insert(kStart, problem_.start.x, problem_.start.y);
+  const ModelParams& mp = model_.params();
+
+  PlanResult result;
+  result.reason = StopReason::kBudgetExhausted;
+  while (true) {
+    if (cancel_.IsCancelled()) {
+      result.reason = StopReason::kCancelled;
+      break;
+    }
+    if (!BudgetLeft()) break;
+    if (best_.has_value() && best_->risk <= 0.0) {
+      result.reason = StopReason::kConverged;
+      break;
+    }
+    ++iterations_;
+    bool is_start = false;
+    const Pose q_rand = Sample(&is_start);
+    const int32_t near = NearestNode(q_rand);
+    if (near < 0) continue;
+    const DubinsAirplanePath to_near(q_rand, nodes_[near].pose, mp.turn_radius_m, mp.max_climb_rad);
+    absl::Status status;
+    if (is_start && to_near.Length() <= params_.step_m) {
+      status = ConnectStart();
+    } else {
+      // Steer: the configuration step_m before q_near on the way from q_rand.
+      const Pose q_new = to_near.Length() <= params_.step_m
+                             ? q_rand
+                             : to_near.PoseAt(to_near.Length() - params_.step_m);
+      if (!Admissible(q_new)) continue;
+      status = Extend(q_new);
+    }
+    if (!status.ok()) return status;
+    if (absl::Status s = MaybeReport(); !s.ok()) return s;
+  }
+  if (!best_.has_value() && result.reason != StopReason::kCancelled) {
+    result.reason = StopReason::kNoSolution;
+  }
+  result.best = best_;
+  result.iterations = iterations_;
+  result.tree_size = static_cast<int64_t>(nodes_.size());
+  result.elapsed_s = Elapsed();
+  result.configurations_evaluated = evaluator_->evaluated();
+  if (options_.record_tree) {
+    for (size_t n = 0; n < nodes_.size(); ++n) {
+      if (nodes_[n].parent >= 0)
+        result.tree.push_back({nodes_[n].pose, nodes_[nodes_[n].parent].pose});
+    }
+  }
+  return result;
+}
+
+}  // namespace
+
+const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
+  static const auto* info = new std::vector<PlannerParamInfo>{
+      {"step_m", 250.0, 10.0, 5000.0, "largest edge added by one extension (Delta_step), m"},
+      {"goal_bias", 0.05, 0.0, 0.9, "share of samples that are the start configuration"},
+      {"path_bias", 0.2, 0.0, 0.9, "share of samples drawn around the best trajectory so far"},
+      {"k_near", 12, 1, 100, "neighbours considered as parents and for rewiring"},
+      {"near_radius_m", 0.0, 0.0, 20000.0, "largest distance of a neighbour, m (0: 2.5 * step_m)"},
+      {"nearest_candidates", 8, 1, 100,
+       "Euclidean candidates ranked by Dubins length to find the nearest node"},
+      {"max_nodes", 200000, 10, 5000000, "largest tree; the run ends when it is reached"},
+      {"risk_cache_log2", 0, 0, 24,
+       "log2 of the entries of the exact configuration-risk cache (40 B each) used when no "
+       "external evaluator is given; 0 turns it off"},
+  };
+  return *info;
+}
+
+absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
+                                             const PlanOptions& options,
+                                             const CancellationToken& cancel,
+                                             const ImprovementCallback& on_improvement) {
+  if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
+  const PlannerBudget& b = options.budget;
+  if (!(b.max_time_s >= 0.0) || !std::isfinite(b.max_time_s) || b.max_iterations < 0 ||
+      (b.max_time_s == 0.0 && b.max_iterations == 0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "budget: max_time_s (%g) and max_iterations (%d) must be >= 0 and not both 0", b.max_time_s,
+        b.max_iterations));
+  }
+  auto params = ParseParams(options.params);
+  if (!params.ok()) return params.status();
+  // Without an evaluator of the caller's: direct evaluation, or on request an
+  // exact cache of kernel sites. (On demo-city about 40 % of the requests of a
+  // run repeat a site, but a table large enough to hold them misses the CPU
+  // caches, and measured no faster than recomputing.)
+  std::unique_ptr<RiskEvaluator> own;
+  RiskEvaluator* evaluator = evaluator_;
+  if (evaluator == nullptr) {
+    if (params->risk_cache_log2 > 0) {
+      own = std::make_unique<CachingRiskEvaluator>(static_cast<int>(params->risk_cache_log2));
+    } else {
+      own = std::make_unique<DirectRiskEvaluator>();
+    }
+    evaluator = own.get();
+  }
+  Run run(problem, options, *params, evaluator, cancel, on_improvement);
+  return run.Execute();
+}
+
+}  // namespace riskplan

@@ -27,6 +27,7 @@ struct Params {
   double nearest_candidates = 8;
   double max_nodes = 200000;
   double risk_cache_log2 = 0;
+  double batch_chunk = 16;
 };
 
 absl::StatusOr<Params> ParseParams(const std::map<std::string, double>& given) {
@@ -55,6 +56,7 @@ absl::StatusOr<Params> ParseParams(const std::map<std::string, double>& given) {
     if (name == "nearest_candidates") p.nearest_candidates = std::floor(value);
     if (name == "max_nodes") p.max_nodes = std::floor(value);
     if (name == "risk_cache_log2") p.risk_cache_log2 = std::floor(value);
+    if (name == "batch_chunk") p.batch_chunk = std::floor(value);
   }
   if (p.near_radius_m == 0.0) p.near_radius_m = 2.5 * p.step_m;
   if (p.goal_bias + p.path_bias > 0.9) {
@@ -74,13 +76,20 @@ struct Node {
   std::vector<int32_t> children;
 };
 
-// A candidate edge whose risk is requested in the current batch.
+// A candidate edge, evaluated progressively: its midpoints go to the risk
+// batches a chunk at a time, and it is dropped as soon as base + its partial
+// risk reaches its limit (risk only grows as samples are added).
 struct CandidateEdge {
   int32_t node = -1;  // the tree node at the other end
   TrajectoryPiece piece;
-  int parts = 0;
-  size_t first_sample = 0;
-  double risk = kInf;
+  std::vector<Pose> samples;  // midpoints, in order
+  double ds = 0.0;            // length of one part
+  double base = 0.0;          // risk added to the edge's own: R of its far end
+  double limit = kInf;        // drop when base + partial risk >= limit
+  double sum = 0.0;           // sum of M over samples[0, done), in order
+  size_t done = 0;
+  bool alive = true;
+  double risk = kInf;  // set when complete: exactly the piece risk of EvaluateTrajectory
 };
 
 // One planning run: all state of a Plan() call.
@@ -125,13 +134,20 @@ class Run {
   std::vector<int32_t> NearCandidates(const Pose& q) const;
   // Appends an edge (flown from `from` to `to`) to the batch if all its
   // midpoints are admissible. Returns false if it is not.
-  bool AddCandidate(const Pose& from, const Pose& to, int32_t node,
+  // Appends the edge flown from `from` to `to` if all its midpoints are
+  // admissible (returns false if not).
+  bool AddCandidate(const Pose& from, const Pose& to, int32_t node, double base, double limit,
                     std::vector<CandidateEdge>* edges);
-  absl::Status EvaluateCandidates(std::vector<CandidateEdge>* edges);
+  // Evaluates the edges progressively, dropping each as soon as base + partial
+  // risk reaches its limit; with `shared_limit` the limit is the best total
+  // base + risk completed so far (starting at the edges' limit), and *winner is
+  // the index of the edge that set it (-1: none).
+  absl::Status EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
+                                  int32_t* winner);
   void SetParent(int32_t child, int32_t parent, double edge_risk);
   // The candidate parent of `from` with the least R(n) + R(from -> n) below
   // `bound`, as (node, edge risk); node -1 when none is admissible or below.
-  absl::Status BestParent(const Pose& from, std::vector<int32_t> candidates, double bound,
+  absl::Status BestParent(const Pose& from, const std::vector<int32_t>& candidates, double bound,
                           int32_t* parent, double* edge_risk);
   std::vector<int32_t> KNearestFrom(const Pose& from, const std::vector<int32_t>& near,
                                     double max_cost) const;
@@ -139,7 +155,6 @@ class Run {
   absl::Status Extend(const Pose& q_new);
   absl::Status MaybeReport();
 
-  static constexpr size_t kParentRound = 4;
   static constexpr int32_t kGoal = 0;
   static constexpr int32_t kStart = 1;
 
@@ -247,44 +262,77 @@ std::vector<int32_t> Run::NearCandidates(const Pose& q) const {
   return out;
 }
 
-bool Run::AddCandidate(const Pose& from, const Pose& to, int32_t node,
+bool Run::AddCandidate(const Pose& from, const Pose& to, int32_t node, double base, double limit,
                        std::vector<CandidateEdge>* edges) {
   const ModelParams& mp = model_.params();
   CandidateEdge edge;
   edge.node = node;
+  edge.base = base;
+  edge.limit = limit;
   edge.piece = TrajectoryPiece::Manoeuvre(from, to, mp.turn_radius_m, mp.max_climb_rad);
-  edge.parts = PartCount(edge.piece.Length(), mp.sample_step_m);
-  edge.first_sample = batch_poses_.size();
-  const double ds = edge.parts > 0 ? edge.piece.Length() / edge.parts : 0.0;
-  for (int i = 0; i < edge.parts; ++i) {
-    const Pose q = edge.piece.PoseAt((i + 0.5) * ds);
-    if (!Admissible(q)) {
-      batch_poses_.resize(edge.first_sample);
-      return false;
-    }
-    batch_poses_.push_back(q);
+  const int parts = PartCount(edge.piece.Length(), mp.sample_step_m);
+  edge.ds = parts > 0 ? edge.piece.Length() / parts : 0.0;
+  edge.samples.reserve(parts);
+  for (int i = 0; i < parts; ++i) {
+    const Pose q = edge.piece.PoseAt((i + 0.5) * edge.ds);
+    if (!Admissible(q)) return false;
+    edge.samples.push_back(q);
   }
   edges->push_back(std::move(edge));
   return true;
 }
 
-absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges) {
-  batch_risks_.resize(batch_poses_.size());
-  if (!batch_poses_.empty()) {
-    if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_poses_, batch_risks_); !s.ok()) {
-      return s;
-    }
-  }
-  // Exactly the piece risk of EvaluateTrajectory: (lambda / v) * (sum M) * ds.
+absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
+                                     int32_t* winner) {
   const ModelParams& mp = model_.params();
   const double per_metre = mp.failure_rate_per_s / mp.airspeed_mps;
-  for (CandidateEdge& edge : *edges) {
-    double sum = 0.0;
-    for (int i = 0; i < edge.parts; ++i) sum += batch_risks_[edge.first_sample + i].risk;
-    const double ds = edge.parts > 0 ? edge.piece.Length() / edge.parts : 0.0;
-    edge.risk = per_metre * sum * ds;
+  const size_t chunk = params_.batch_chunk > 0 ? static_cast<size_t>(params_.batch_chunk)
+                                               : std::numeric_limits<size_t>::max();
+  double best = kInf;
+  for (const CandidateEdge& e : *edges) best = std::min(best, e.limit);
+  if (winner != nullptr) *winner = -1;
+  while (true) {
+    // One risk batch: the next chunk of every live, unfinished edge.
+    batch_poses_.clear();
+    for (CandidateEdge& e : *edges) {
+      if (!e.alive || e.done == e.samples.size()) continue;
+      const size_t end = std::min(e.samples.size(), e.done + chunk);
+      batch_poses_.insert(batch_poses_.end(), e.samples.begin() + e.done, e.samples.begin() + end);
+    }
+    batch_risks_.resize(batch_poses_.size());
+    if (!batch_poses_.empty()) {
+      if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_poses_, batch_risks_);
+          !s.ok()) {
+        return s;
+      }
+    }
+    size_t cursor = 0;
+    bool pending = false;
+    for (size_t n = 0; n < edges->size(); ++n) {
+      CandidateEdge& e = (*edges)[n];
+      if (!e.alive) continue;
+      const size_t end = std::min(e.samples.size(), e.done + chunk);
+      // Same order of additions as EvaluateTrajectory's single pass.
+      for (; e.done < end; ++e.done) e.sum += batch_risks_[cursor++].risk;
+      const double limit = shared_limit ? best : e.limit;
+      // (lambda / v) * (sum M) * ds: exactly the piece risk of EvaluateTrajectory.
+      const double partial = per_metre * e.sum * e.ds;
+      if (!(e.base + partial < limit)) {
+        e.alive = false;  // risk never decreases with more samples
+        continue;
+      }
+      if (e.done < e.samples.size()) {
+        pending = true;
+        continue;
+      }
+      e.risk = partial;
+      if (shared_limit) {
+        best = e.base + partial;
+        if (winner != nullptr) *winner = static_cast<int32_t>(n);
+      }
+    }
+    if (!pending) break;
   }
-  batch_poses_.clear();
   return absl::OkStatus();
 }
 
@@ -311,39 +359,49 @@ void Run::SetParent(int32_t child, int32_t parent, double edge_risk) {
   }
 }
 
-absl::Status Run::BestParent(const Pose& from, std::vector<int32_t> candidates, double bound,
-                             int32_t* parent, double* edge_risk) {
+absl::Status Run::BestParent(const Pose& from, const std::vector<int32_t>& candidates,
+                             double bound, int32_t* parent, double* edge_risk) {
   *parent = -1;
   *edge_risk = kInf;
-  // Rounds of a few candidates, cheapest R(n) first. After each round every
-  // candidate whose R(n) alone reaches the best total found is dropped: edge
-  // risks are never negative, so it cannot win. The result is the same as
-  // evaluating every candidate, for a fraction of the risk batches.
-  std::stable_sort(candidates.begin(), candidates.end(),
+  // Branch and bound. Candidates go in order of R(n). A candidate whose R(n)
+  // alone reaches the bound cannot win (edge risks are never negative). The
+  // cheapest admissible candidate is evaluated first, in full, to set a bound;
+  // the others are then evaluated chunk by chunk against the best total found
+  // so far, so that a losing edge is dropped as soon as it is known to lose.
+  // The winner is the one a full evaluation of every candidate would choose.
+  std::vector<int32_t> order = candidates;
+  std::stable_sort(order.begin(), order.end(),
                    [&](int32_t a, int32_t b) { return nodes_[a].cost < nodes_[b].cost; });
-  double best = bound;
-  size_t next = 0;
   std::vector<CandidateEdge> edges;
-  while (next < candidates.size()) {
-    edges.clear();
-    const size_t round_end = std::min(candidates.size(), next + kParentRound);
-    for (; next < round_end; ++next) {
-      const int32_t n = candidates[next];
-      if (nodes_[n].cost >= best) {
-        next = candidates.size();
-        break;
-      }
-      AddCandidate(from, nodes_[n].pose, n, &edges);
-    }
-    if (absl::Status s = EvaluateCandidates(&edges); !s.ok()) return s;
-    for (const CandidateEdge& e : edges) {
-      const double total = nodes_[e.node].cost + e.risk;
-      if (total < best) {
-        best = total;
-        *parent = e.node;
-        *edge_risk = e.risk;
-      }
-    }
+  size_t next = 0;
+  double best = bound;
+  // The first admissible candidate, alone (a whole edge in one batch).
+  while (next < order.size() && edges.empty()) {
+    const int32_t n = order[next++];
+    if (nodes_[n].cost >= best) return absl::OkStatus();
+    AddCandidate(from, nodes_[n].pose, n, nodes_[n].cost, best, &edges);
+  }
+  int32_t winner = -1;
+  if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/true, &winner); !s.ok()) {
+    return s;
+  }
+  if (winner >= 0) {
+    *parent = edges[winner].node;
+    *edge_risk = edges[winner].risk;
+    best = nodes_[*parent].cost + *edge_risk;
+  }
+  edges.clear();
+  for (; next < order.size(); ++next) {
+    const int32_t n = order[next];
+    if (nodes_[n].cost >= best) break;
+    AddCandidate(from, nodes_[n].pose, n, nodes_[n].cost, best, &edges);
+  }
+  if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/true, &winner); !s.ok()) {
+    return s;
+  }
+  if (winner >= 0) {
+    *parent = edges[winner].node;
+    *edge_risk = edges[winner].risk;
   }
   return absl::OkStatus();
 }
@@ -411,12 +469,16 @@ absl::Status Run::Extend(const Pose& q_new) {
   std::sort(ranked.begin(), ranked.end());
   if (ranked.size() > static_cast<size_t>(params_.k_near)) ranked.resize(params_.k_near);
   std::vector<CandidateEdge> edges;
-  for (const auto& [length, n] : ranked) AddCandidate(nodes_[n].pose, q_new, n, &edges);
-  if (absl::Status s = EvaluateCandidates(&edges); !s.ok()) return s;
+  for (const auto& [length, n] : ranked) {
+    AddCandidate(nodes_[n].pose, q_new, n, cost, nodes_[n].cost, &edges);
+  }
+  if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/false, nullptr); !s.ok()) {
+    return s;
+  }
   for (const CandidateEdge& e : edges) {
     // Rewiring n cannot change q_new's cost: n costs more than q_new, so it is
     // not one of q_new's ancestors.
-    if (nodes_[id].cost + e.risk < nodes_[e.node].cost) SetParent(e.node, id, e.risk);
+    if (e.alive && nodes_[id].cost + e.risk < nodes_[e.node].cost) SetParent(e.node, id, e.risk);
   }
   return absl::OkStatus();
 }
@@ -525,6 +587,9 @@ const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
       {"nearest_candidates", 8, 1, 100,
        "Euclidean candidates ranked by Dubins length to find the nearest node"},
       {"max_nodes", 200000, 10, 5000000, "largest tree; the run ends when it is reached"},
+      {"batch_chunk", 16, 0, 100000,
+       "midpoints per candidate edge in one risk batch; a losing edge is dropped between "
+       "batches (0: whole edges, one batch per step)"},
       {"risk_cache_log2", 0, 0, 24,
        "log2 of the entries of the exact configuration-risk cache (40 B each) used when no "
        "external evaluator is given; 0 turns it off"},

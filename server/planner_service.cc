@@ -17,8 +17,9 @@ namespace {
 const grpc::Status kDraining(grpc::StatusCode::UNAVAILABLE,
                              "riskplan-server is shutting down; retry on another replica");
 
-// The reactor of every unary RPC: finishes once, then logs the RPC and
-// records its metrics when gRPC is done with it.
+// The reactor of every unary RPC. Complete() logs the RPC and records its
+// metrics before finishing it, so a client that has its answer also finds
+// the log line written.
 class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
   UnaryCall(const char* method, grpc::CallbackServerContext* ctx, ServerMetrics* metrics)
@@ -26,32 +27,24 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
 
   // Ends the call. Call exactly once, from any thread.
   void Complete(const grpc::Status& status, std::string map = "") {
-    status_ = status;
-    map_ = std::move(map);
+    const absl::Duration duration = absl::Now() - started_;
+    metrics_->RecordRpc(method_, status.error_code(), duration);
+    LogRpc({.method = method_,
+            .status = status,
+            .duration = duration,
+            .peer = ctx_->peer(),
+            .map = std::move(map),
+            .detail = ""});
     Finish(status);
   }
 
-  void OnDone() override {
-    const absl::Duration duration = absl::Now() - started_;
-    metrics_->RecordRpc(method_, status_.error_code(), duration);
-    LogRpc({.method = method_,
-            .status = status_,
-            .duration = duration,
-            .peer = ctx_->peer(),
-            .map = map_,
-            .detail = ""});
-    delete this;
-  }
+  void OnDone() override { delete this; }
 
  private:
   const char* const method_;
   const absl::Time started_;
   grpc::CallbackServerContext* const ctx_;
   ServerMetrics* const metrics_;
-  // Written by Complete() before Finish(); read in OnDone(), which gRPC runs
-  // after Finish() (its own synchronisation orders the two).
-  grpc::Status status_;
-  std::string map_;
 };
 
 // Risk of a validated trajectory (runs on the evaluation pool).

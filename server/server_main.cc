@@ -185,8 +185,9 @@ int Main() {
   const absl::Time drain_start = absl::Now();
   const absl::Duration grace = absl::Milliseconds(grace_ms);
   const absl::Duration stop_margin = std::min(absl::Seconds(1), grace / 2);
-  health->SetServingStatus(false);
+  // Draining first: a client that sees NOT_SERVING is sure to be refused.
   service.StartDraining();
+  health->SetServingStatus(false);
   LogEvent("draining", absl::StrFormat("signal=%d running_plans=%d grace_ms=%d", signal_number,
                                        service.active_plans().running(), grace_ms));
   if (!service.active_plans().WaitUntilIdle(drain_start + grace - stop_margin)) {

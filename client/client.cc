@@ -1,0 +1,85 @@
+#include "client/client.h"
+
+#include <utility>
+
+namespace riskplan::client {
+
+std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
+                                           const grpc::ChannelArguments& extra) {
+  grpc::ChannelArguments args = extra;
+  args.SetMaxReceiveMessageSize(kMaxReceiveBytes);
+  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+}
+
+void SetTimeout(grpc::ClientContext* context, absl::Duration timeout) {
+  if (timeout == absl::InfiniteDuration()) return;
+  context->set_deadline(absl::ToChronoTime(absl::Now() + timeout));
+}
+
+RiskplanClient::RiskplanClient(const std::string& address) : RiskplanClient(MakeChannel(address)) {}
+
+RiskplanClient::RiskplanClient(std::shared_ptr<grpc::Channel> channel)
+    : channel_(std::move(channel)),
+      stub_(v1::Planner::NewStub(channel_)),
+      health_(grpc::health::v1::Health::NewStub(channel_)) {}
+
+grpc::Status RiskplanClient::ListMaps(v1::ListMapsResponse* response, absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  return stub_->ListMaps(&context, v1::ListMapsRequest(), response);
+}
+
+grpc::Status RiskplanClient::GetMapLayer(const v1::GetMapLayerRequest& request,
+                                         v1::GetMapLayerResponse* response,
+                                         absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  return stub_->GetMapLayer(&context, request, response);
+}
+
+grpc::Status RiskplanClient::EvaluateRisk(const v1::EvaluateRiskRequest& request,
+                                          v1::EvaluateRiskResponse* response,
+                                          absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  return stub_->EvaluateRisk(&context, request, response);
+}
+
+grpc::Status RiskplanClient::Ping(absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  v1::PingResponse response;
+  return stub_->Ping(&context, v1::PingRequest(), &response);
+}
+
+grpc::Status RiskplanClient::Plan(const v1::PlanRequest& request,
+                                  const PlanUpdateCallback& on_update, absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  std::unique_ptr<grpc::ClientReader<v1::PlanUpdate>> reader =
+      stub_->PlanTrajectory(&context, request);
+  v1::PlanUpdate update;
+  bool cancelled = false;
+  while (reader->Read(&update)) {
+    if (!cancelled && !on_update(update)) {
+      context.TryCancel();
+      cancelled = true;
+    }
+  }
+  return reader->Finish();
+}
+
+grpc::Status RiskplanClient::CheckHealth(
+    const std::string& service, grpc::health::v1::HealthCheckResponse::ServingStatus* status,
+    absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  grpc::health::v1::HealthCheckRequest request;
+  request.set_service(service);
+  grpc::health::v1::HealthCheckResponse response;
+  grpc::Status result = health_->Check(&context, request, &response);
+  if (result.ok()) *status = response.status();
+  return result;
+}
+
+}  // namespace riskplan::client

@@ -1,0 +1,76 @@
+// RiskplanClient: a thin synchronous client of riskplan.v1.Planner and of
+// the standard health service. Depends on the API (proto/) only, never on
+// core/.
+//
+// Thread-safe: one client (one channel) may serve many threads at once.
+#ifndef RISKPLAN_CLIENT_CLIENT_H_
+#define RISKPLAN_CLIENT_CLIENT_H_
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "absl/time/time.h"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "grpcpp/grpcpp.h"
+#include "riskplan/v1/planner.grpc.pb.h"
+
+namespace riskplan::client {
+
+// Largest message the client accepts (a final PlanUpdate with its tree, or an
+// EvaluateRisk response with every sample).
+inline constexpr int kMaxReceiveBytes = 64 << 20;
+
+// Called for every PlanUpdate in order. Return false to cancel the call (the
+// plan then ends with status CANCELLED).
+using PlanUpdateCallback = std::function<bool(const v1::PlanUpdate&)>;
+
+class RiskplanClient {
+ public:
+  // A client of the server at `address` ("host:port"), plaintext. Connects
+  // lazily: errors show up as UNAVAILABLE on the first call.
+  explicit RiskplanClient(const std::string& address);
+  // A client on an existing channel (tests, custom credentials).
+  explicit RiskplanClient(std::shared_ptr<grpc::Channel> channel);
+
+  // Unary calls. `timeout` is the call's deadline (absl::InfiniteDuration():
+  // none).
+  grpc::Status ListMaps(v1::ListMapsResponse* response, absl::Duration timeout = absl::Seconds(10));
+  grpc::Status GetMapLayer(const v1::GetMapLayerRequest& request, v1::GetMapLayerResponse* response,
+                           absl::Duration timeout = absl::Seconds(30));
+  grpc::Status EvaluateRisk(const v1::EvaluateRiskRequest& request,
+                            v1::EvaluateRiskResponse* response,
+                            absl::Duration timeout = absl::Seconds(30));
+  grpc::Status Ping(absl::Duration timeout = absl::Seconds(10));
+
+  // Runs a plan to its end, passing every update to `on_update`. Returns the
+  // call's status: OK after the final message, CANCELLED when `on_update`
+  // returned false, DEADLINE_EXCEEDED past `timeout`, or the server's error.
+  grpc::Status Plan(const v1::PlanRequest& request, const PlanUpdateCallback& on_update,
+                    absl::Duration timeout = absl::InfiniteDuration());
+
+  // grpc.health.v1.Health/Check of `service` ("" for the whole server).
+  grpc::Status CheckHealth(const std::string& service,
+                           grpc::health::v1::HealthCheckResponse::ServingStatus* status,
+                           absl::Duration timeout = absl::Seconds(5));
+
+  const std::shared_ptr<grpc::Channel>& channel() const { return channel_; }
+  v1::Planner::Stub& stub() { return *stub_; }
+
+ private:
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::Planner::Stub> stub_;
+  std::unique_ptr<grpc::health::v1::Health::Stub> health_;
+};
+
+// Sets `context`'s deadline to now + `timeout` (nothing for an infinite one).
+void SetTimeout(grpc::ClientContext* context, absl::Duration timeout);
+
+// The channel the CLI and the load generator use: plaintext, large messages,
+// with `extra` channel arguments applied on top.
+std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
+                                           const grpc::ChannelArguments& extra = {});
+
+}  // namespace riskplan::client
+
+#endif  // RISKPLAN_CLIENT_CLIENT_H_

@@ -1,0 +1,336 @@
+#include "client/commands.h"
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_format.h"
+#include "client/load_generator.h"
+#include "client/picture.h"
+#include "client/trajectory_text.h"
+#include "google/protobuf/util/json_util.h"
+
+namespace riskplan::client {
+namespace {
+
+int Usage(const std::string& message) {
+  std::fprintf(stderr, "riskplan: %s\n", message.c_str());
+  return 2;
+}
+
+int RpcError(const char* method, const grpc::Status& status) {
+  static const char* const kNames[] = {"OK",
+                                       "CANCELLED",
+                                       "UNKNOWN",
+                                       "INVALID_ARGUMENT",
+                                       "DEADLINE_EXCEEDED",
+                                       "NOT_FOUND",
+                                       "ALREADY_EXISTS",
+                                       "PERMISSION_DENIED",
+                                       "RESOURCE_EXHAUSTED",
+                                       "FAILED_PRECONDITION",
+                                       "ABORTED",
+                                       "OUT_OF_RANGE",
+                                       "UNIMPLEMENTED",
+                                       "INTERNAL",
+                                       "UNAVAILABLE",
+                                       "DATA_LOSS",
+                                       "UNAUTHENTICATED"};
+  const int code = static_cast<int>(status.error_code());
+  std::fprintf(stderr, "riskplan: %s failed: %s: %s\n", method,
+               code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN", status.error_message().c_str());
+  return 1;
+}
+
+std::string ToJson(const google::protobuf::Message& message) {
+  std::string out;
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.preserve_proto_field_names = true;
+  (void)google::protobuf::util::MessageToJsonString(message, &out, options);
+  return out;
+}
+
+absl::Duration TimeoutOr(const CliOptions& o, absl::Duration fallback) {
+  return o.timeout > absl::ZeroDuration() ? o.timeout : fallback;
+}
+
+absl::StatusOr<v1::EvaluateRiskRequest> EvalRequest(const CliOptions& o) {
+  v1::EvaluateRiskRequest request;
+  request.set_map(o.map);
+  request.set_include_samples(o.samples);
+  const int given = !o.waypoints.empty() + !o.polyline.empty() + !o.trajectory_file.empty();
+  if (given != 1) {
+    return absl::InvalidArgumentError(
+        "give exactly one of --waypoints, --polyline and --trajectory_file");
+  }
+  if (!o.waypoints.empty()) {
+    absl::StatusOr<v1::Waypoints> w = ParseWaypoints(o.waypoints);
+    if (!w.ok()) return w.status();
+    *request.mutable_waypoints() = *w;
+  } else if (!o.polyline.empty()) {
+    absl::StatusOr<v1::Polyline> p = ParsePolyline(o.polyline);
+    if (!p.ok()) return p.status();
+    *request.mutable_polyline() = *p;
+  } else if (absl::Status s = ReadTrajectoryFile(o.trajectory_file, &request); !s.ok()) {
+    return s;
+  }
+  if (absl::Status s = ParseModelParameters(o.params, request.mutable_model_params()); !s.ok()) {
+    return s;
+  }
+  return request;
+}
+
+absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
+  v1::PlanRequest request;
+  request.set_map(o.map);
+  if (o.start.empty() || o.goal.empty()) {
+    return absl::InvalidArgumentError("--start and --goal are required ('x,y,z,theta')");
+  }
+  absl::StatusOr<v1::Pose> start = ParsePose(o.start);
+  if (!start.ok()) return start.status();
+  absl::StatusOr<v1::Pose> goal = ParsePose(o.goal);
+  if (!goal.ok()) return goal.status();
+  *request.mutable_start() = *start;
+  *request.mutable_goal() = *goal;
+  v1::Algorithm algorithm = v1::ALGORITHM_UNSPECIFIED;
+  if (!v1::Algorithm_Parse(absl::AsciiStrToUpper(o.algorithm), &algorithm)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("--algorithm=%s: unknown; known: RISK_RRT_STAR", o.algorithm));
+  }
+  request.set_algorithm(algorithm);
+  request.mutable_budget()->set_time_ms(o.budget_ms);
+  request.mutable_budget()->set_iterations(o.iterations);
+  request.set_seed(o.seed);
+  request.set_min_update_interval_ms(o.min_update_interval_ms);
+  request.set_display_step_m(o.display_step_m);
+  request.set_include_tree(o.tree);
+  absl::StatusOr<std::map<std::string, double>> planner_params = ParseNameValues(o.planner_params);
+  if (!planner_params.ok()) return planner_params.status();
+  request.mutable_planner_params()->insert(planner_params->begin(), planner_params->end());
+  if (absl::Status s = ParseModelParameters(o.params, request.mutable_model_params()); !s.ok()) {
+    return s;
+  }
+  return request;
+}
+
+std::string PoseText(const v1::Pose& p) {
+  return absl::StrFormat("(%.1f, %.1f, %.1f, %.3f)", p.x(), p.y(), p.z(), p.theta());
+}
+
+}  // namespace
+
+int RunMaps(const CliOptions& o, RiskplanClient& client) {
+  v1::ListMapsResponse response;
+  grpc::Status status = client.ListMaps(&response, TimeoutOr(o, absl::Seconds(10)));
+  if (!status.ok()) return RpcError("ListMaps", status);
+  if (o.json) {
+    std::printf("%s\n", ToJson(response).c_str());
+    return 0;
+  }
+  for (const v1::MapInfo& m : response.maps()) {
+    std::printf(
+        "%s: %.0f x %.0f m (%d x %d cells of %g m), south-west corner (%g, %g), terrain %.1f to "
+        "%.1f m AMSL, %d landing sites, %.1f MB\n",
+        m.name().c_str(), m.width_m(), m.height_m(), m.nx(), m.ny(), m.resolution_m(), m.x0_m(),
+        m.y0_m(), m.terrain_min_m(), m.terrain_max_m(), m.landing_sites_size(),
+        m.memory_bytes() / 1e6);
+    if (!m.provenance().empty()) std::printf("  provenance: %s\n", m.provenance().c_str());
+  }
+  return 0;
+}
+
+int RunEval(const CliOptions& o, RiskplanClient& client) {
+  absl::StatusOr<v1::EvaluateRiskRequest> request = EvalRequest(o);
+  if (!request.ok()) return Usage(std::string(request.status().message()));
+  v1::EvaluateRiskResponse r;
+  grpc::Status status = client.EvaluateRisk(*request, &r, TimeoutOr(o, absl::Seconds(30)));
+  if (!status.ok()) return RpcError("EvaluateRisk", status);
+  if (o.json) {
+    std::printf("%s\n", ToJson(r).c_str());
+    return 0;
+  }
+  std::printf("risk %.9g expected casualties per flight, length %.1f m, %d samples, %s\n", r.risk(),
+              r.length_m(), static_cast<int>(r.sample_count()),
+              r.admissible() ? "admissible" : "NOT admissible");
+  for (int i = 0; i < r.pieces_size(); ++i) {
+    const v1::PieceEvaluation& p = r.pieces(i);
+    std::printf("  piece %d: risk %.9g, length %.1f m, %d parts, %s\n", i, p.risk(), p.length_m(),
+                p.parts(), p.admissible() ? "admissible" : "not admissible");
+  }
+  if (r.has_first_violation()) {
+    std::printf("first violation: %s\n", r.first_violation().message().c_str());
+  }
+  if (o.samples) {
+    std::printf("%10s %10s %8s %6s %10s %5s %12s %12s %8s %8s\n", "x", "y", "z", "theta", "arc_m",
+                "piece", "M", "I", "S", "p_cas");
+    for (const v1::Sample& s : r.samples()) {
+      std::printf("%10.1f %10.1f %8.1f %6.3f %10.1f %5d %12.5g %12.5g %8.3f %8.5f\n", s.x(), s.y(),
+                  s.z(), s.theta(), s.arc_length_m(), s.piece(), s.risk(), s.impact_factor(),
+                  s.expected_shelter(), s.casualty_probability());
+    }
+  }
+  return 0;
+}
+
+int RunPlan(const CliOptions& o, RiskplanClient& client) {
+  absl::StatusOr<v1::PlanRequest> request = PlanRequest(o);
+  if (!request.ok()) return Usage(std::string(request.status().message()));
+  if (!o.picture.empty() && !o.picture.ends_with(".svg") && !o.picture.ends_with(".png")) {
+    return Usage("--picture must name a .svg or .png file");
+  }
+  std::printf("plan on %s: start %s -> goal %s, %s, budget %d ms%s, seed %d\n", o.map.c_str(),
+              PoseText(request->start()).c_str(), PoseText(request->goal()).c_str(),
+              v1::Algorithm_Name(request->algorithm()).c_str(), static_cast<int>(o.budget_ms),
+              o.iterations > 0 ? absl::StrFormat(" / %d iterations", o.iterations).c_str() : "",
+              static_cast<int>(o.seed));
+  std::printf("%5s %9s %11s %10s %14s %10s\n", "seq", "elapsed_s", "iterations", "tree_size",
+              "best_risk", "length_m");
+  std::fflush(stdout);
+
+  std::vector<v1::Trajectory> improvements;
+  v1::PlanUpdate final_update;
+  const absl::Duration timeout =
+      o.timeout > absl::ZeroDuration() ? o.timeout : absl::InfiniteDuration();
+  grpc::Status status = client.Plan(
+      *request,
+      [&](const v1::PlanUpdate& u) {
+        if (u.has_trajectory() &&
+            (improvements.empty() ||
+             u.trajectory().found_at_iteration() != improvements.back().found_at_iteration() ||
+             u.trajectory().risk() != improvements.back().risk())) {
+          improvements.push_back(u.trajectory());
+        }
+        std::printf(
+            "%5d %9.3f %11d %10d %14.6g %10.1f%s\n", static_cast<int>(u.sequence()), u.elapsed_s(),
+            static_cast<int>(u.iterations()), static_cast<int>(u.tree_size()),
+            u.has_trajectory() ? u.trajectory().risk() : 0.0,
+            u.has_trajectory() ? u.trajectory().length_m() : 0.0, u.final() ? "  (final)" : "");
+        std::fflush(stdout);
+        if (u.final()) final_update = u;
+        return true;
+      },
+      timeout);
+  if (!status.ok()) return RpcError("PlanTrajectory", status);
+
+  std::printf(
+      "ended: %s after %.2f s, %d iterations, tree of %d nodes, %d improvements found "
+      "(%d sent)\n",
+      v1::EndReason_Name(final_update.end_reason()).c_str(), final_update.elapsed_s(),
+      static_cast<int>(final_update.iterations()), static_cast<int>(final_update.tree_size()),
+      static_cast<int>(final_update.improvements()), static_cast<int>(improvements.size()));
+  if (final_update.has_trajectory()) {
+    const v1::Trajectory& best = final_update.trajectory();
+    std::printf("best: risk %.9g expected casualties per flight, length %.1f m, %d waypoints\n",
+                best.risk(), best.length_m(), best.waypoints_size());
+    if (!o.trajectory_out.empty()) {
+      std::ofstream out(o.trajectory_out);
+      out << WaypointsToJson(best.waypoints());
+      if (!out) return Usage(absl::StrFormat("cannot write --trajectory_out=%s", o.trajectory_out));
+      std::printf("trajectory: %s\n", o.trajectory_out.c_str());
+    }
+  } else {
+    std::printf("no admissible trajectory was found\n");
+  }
+
+  if (!o.picture.empty()) {
+    PictureInput picture;
+    v1::ListMapsResponse maps;
+    if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError("ListMaps", s);
+    for (const v1::MapInfo& m : maps.maps()) {
+      if (m.name() == o.map) picture.map = m;
+    }
+    v1::GetMapLayerRequest layer;
+    layer.set_map(o.map);
+    layer.set_max_side_cells(o.picture_size);
+    layer.set_layer(v1::POPULATION_DENSITY);
+    if (grpc::Status s = client.GetMapLayer(layer, &picture.density); !s.ok()) {
+      return RpcError("GetMapLayer", s);
+    }
+    layer.set_layer(v1::NO_FLY);
+    if (grpc::Status s = client.GetMapLayer(layer, &picture.nofly); !s.ok()) {
+      return RpcError("GetMapLayer", s);
+    }
+    picture.improvements = improvements;
+    picture.tree.assign(final_update.tree_edges().begin(), final_update.tree_edges().end());
+    picture.start = request->start();
+    picture.goal = request->goal();
+    picture.caption = absl::StrFormat(
+        "%s, %s: %d improvements, best risk %.4g, length %.0f m, %d iterations (%s)", o.map,
+        v1::Algorithm_Name(request->algorithm()), static_cast<int>(improvements.size()),
+        final_update.trajectory().risk(), final_update.trajectory().length_m(),
+        static_cast<int>(final_update.iterations()), v1::EndReason_Name(final_update.end_reason()));
+    if (absl::Status s = WritePicture(o.picture, picture); !s.ok()) {
+      std::fprintf(stderr, "riskplan: %s\n", std::string(s.message()).c_str());
+      return 1;
+    }
+    std::printf("picture: %s\n", o.picture.c_str());
+  }
+  return final_update.has_trajectory() ? 0 : 3;
+}
+
+int RunLoad(const CliOptions& o, RiskplanClient& client) {
+  LoadOptions load;
+  if (o.rpc == "eval") {
+    load.rpc = LoadRpc::kEvaluateRisk;
+    absl::StatusOr<v1::EvaluateRiskRequest> request = EvalRequest(o);
+    if (!request.ok()) return Usage(std::string(request.status().message()));
+    load.eval_request = *request;
+  } else if (o.rpc == "plan") {
+    load.rpc = LoadRpc::kPlanTrajectory;
+    absl::StatusOr<v1::PlanRequest> request = PlanRequest(o);
+    if (!request.ok()) return Usage(std::string(request.status().message()));
+    load.plan_request = *request;
+  } else if (o.rpc == "ping") {
+    load.rpc = LoadRpc::kPing;
+  } else {
+    return Usage(absl::StrFormat("--rpc=%s: must be eval, plan or ping", o.rpc));
+  }
+  if (o.mode != "closed" && o.mode != "open") {
+    return Usage(absl::StrFormat("--mode=%s: must be closed or open", o.mode));
+  }
+  load.mode = o.mode == "closed" ? LoadMode::kClosed : LoadMode::kOpen;
+  if (o.concurrency < 1 || !(o.rate > 0) || !(o.duration_s > 0) || o.max_outstanding < 1) {
+    return Usage("--concurrency, --rate, --duration_s and --max_outstanding must be > 0");
+  }
+  load.concurrency = o.concurrency;
+  load.rate_per_s = o.rate;
+  load.duration = absl::Seconds(o.duration_s);
+  load.timeout = TimeoutOr(o, absl::Seconds(30));
+  load.max_outstanding = o.max_outstanding;
+
+  auto progress = [](const LoadProgress& p) {
+    std::printf(
+        "  t=%6.1fs sent %8d done %8d errors %6d in flight %5d | %9.1f calls/s, p50 %8.3f "
+        "ms, p99 %8.3f ms\n",
+        p.elapsed_s, static_cast<int>(p.sent), static_cast<int>(p.completed),
+        static_cast<int>(p.errors), static_cast<int>(p.outstanding), p.interval_rps,
+        p.interval_p50_s * 1e3, p.interval_p99_s * 1e3);
+    std::fflush(stdout);
+  };
+  std::optional<LoadReport> ceiling;
+  if (o.ceiling && load.rpc != LoadRpc::kPing) {
+    LoadOptions ping = load;
+    ping.rpc = LoadRpc::kPing;
+    std::printf("load: no-op ceiling (Ping), %s loop, %.1f s\n", o.mode.c_str(), o.duration_s);
+    ceiling = RunLoad(client.channel(), ping, progress);
+  }
+  std::printf("load: %s, %s loop, %.1f s\n", LoadRpcName(load.rpc).c_str(), o.mode.c_str(),
+              o.duration_s);
+  LoadReport report = RunLoad(client.channel(), load, progress);
+  const LoadReport* ceiling_ptr = ceiling.has_value() ? &*ceiling : nullptr;
+  std::printf("\n%s", LoadReportText(report, ceiling_ptr).c_str());
+  if (!o.report_json.empty()) {
+    std::ofstream out(o.report_json);
+    out << LoadReportJson(report, ceiling_ptr);
+    if (!out) return Usage(absl::StrFormat("cannot write --report_json=%s", o.report_json));
+    std::printf("report: %s\n", o.report_json.c_str());
+  }
+  return 0;
+}
+
+}  // namespace riskplan::client

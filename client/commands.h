@@ -1,0 +1,65 @@
+// The `riskplan` CLI's commands, with their options already parsed from flags
+// (riskplan_main.cc). Each prints to stdout (results, progress) and stderr
+// (errors), and returns the process exit code:
+//   0  success;
+//   1  the RPC failed (the status code and message are printed);
+//   2  bad command-line input;
+//   3  `plan` only: the plan ended without a trajectory (NO_SOLUTION, SHUTDOWN).
+#ifndef RISKPLAN_CLIENT_COMMANDS_H_
+#define RISKPLAN_CLIENT_COMMANDS_H_
+
+#include <cstdint>
+#include <string>
+
+#include "absl/time/time.h"
+#include "client/client.h"
+
+namespace riskplan::client {
+
+struct CliOptions {
+  std::string server;
+  std::string map = "demo-city";
+  absl::Duration timeout = absl::ZeroDuration();  // zero: the command's default
+  bool json = false;
+
+  // Trajectory input (eval, load --rpc=eval).
+  std::string waypoints;
+  std::string polyline;
+  std::string trajectory_file;
+  bool samples = false;
+  std::string params;  // model parameters "name=value,..."
+
+  // Planning (plan, load --rpc=plan).
+  std::string start;
+  std::string goal;
+  std::string algorithm = "RISK_RRT_STAR";
+  int64_t budget_ms = 5000;
+  int64_t iterations = 0;
+  uint64_t seed = 1;
+  std::string planner_params;  // "name=value,..."
+  int64_t min_update_interval_ms = 100;
+  double display_step_m = 25.0;
+  bool tree = false;
+  std::string picture;         // .svg or .png
+  int picture_size = 800;      // largest side, pixels (map cells after downsampling)
+  std::string trajectory_out;  // JSON of the best trajectory's waypoints
+
+  // Load.
+  std::string rpc = "eval";     // eval | plan | ping
+  std::string mode = "closed";  // closed | open
+  int concurrency = 8;
+  double rate = 100.0;
+  double duration_s = 10.0;
+  int max_outstanding = 10000;
+  bool ceiling = false;
+  std::string report_json;
+};
+
+int RunMaps(const CliOptions& options, RiskplanClient& client);
+int RunEval(const CliOptions& options, RiskplanClient& client);
+int RunPlan(const CliOptions& options, RiskplanClient& client);
+int RunLoad(const CliOptions& options, RiskplanClient& client);
+
+}  // namespace riskplan::client
+
+#endif  // RISKPLAN_CLIENT_COMMANDS_H_

@@ -1,0 +1,53 @@
+// Pictures of a plan: the map's population density (log colour scale), its
+// no-fly zones and landing sites, the planner's tree, every improved
+// trajectory (older ones lighter), and the start and goal.
+//
+// Written as SVG (the density raster embedded as a PNG, the trajectories as
+// vector paths) or as a plain PNG, chosen by the file name's extension.
+#ifndef RISKPLAN_CLIENT_PICTURE_H_
+#define RISKPLAN_CLIENT_PICTURE_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "riskplan/v1/planner.pb.h"
+
+namespace riskplan::client {
+
+struct PictureInput {
+  v1::MapInfo map;                           // landing sites
+  v1::GetMapLayerResponse density;           // POPULATION_DENSITY, sets the picture's grid
+  v1::GetMapLayerResponse nofly;             // NO_FLY on the same grid (may be empty)
+  std::vector<v1::Trajectory> improvements;  // in the order found; the last is drawn boldest
+  std::vector<v1::TreeEdge> tree;            // may be empty
+  v1::Pose start;
+  v1::Pose goal;
+  std::string caption;  // one line of text above the map (SVG only)
+};
+
+// An RGBA image, row 0 at the top.
+struct RgbaImage {
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> pixels;  // width * height * 4
+};
+
+// Encodes `image` as PNG.
+absl::StatusOr<std::string> EncodePng(const RgbaImage& image);
+
+// The map layers alone: density colours with the no-fly zones tinted violet.
+RgbaImage RenderMapRaster(const PictureInput& input);
+
+// The SVG document.
+std::string RenderSvg(const PictureInput& input);
+
+// Writes `input` to `path`: SVG when it ends in ".svg", PNG when it ends in
+// ".png"; InvalidArgument otherwise.
+absl::Status WritePicture(const std::string& path, const PictureInput& input);
+
+}  // namespace riskplan::client
+
+#endif  // RISKPLAN_CLIENT_PICTURE_H_

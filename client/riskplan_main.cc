@@ -1,0 +1,130 @@
+// riskplan: the command-line client of riskplan-server.
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "client/commands.h"
+
+ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server address, HOST:PORT");
+ABSL_FLAG(std::string, map, "demo-city", "Map name (see `riskplan maps`)");
+ABSL_FLAG(int64_t, timeout_ms, 0,
+          "Deadline of each call, ms (0: 10 s for maps, 30 s for eval and load calls, none for "
+          "plan)");
+ABSL_FLAG(bool, json, false, "maps, eval: print the response as JSON");
+ABSL_FLAG(std::string, waypoints, "",
+          "eval, load: waypoints 'x,y,z,theta;...' (m, m, m AMSL, rad), joined by "
+          "Dubins-airplane manoeuvres");
+ABSL_FLAG(std::string, polyline, "", "eval, load: polyline 'x,y,z;...' of straight segments");
+ABSL_FLAG(std::string, trajectory_file, "",
+          "eval, load: JSON file {\"waypoints\": [[x,y,z,theta],...]} or {\"polyline\": "
+          "[[x,y,z],...]}");
+ABSL_FLAG(bool, samples, false, "eval: also print every sample's configuration risk");
+ABSL_FLAG(std::string, params, "",
+          "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
+          "mass_kg=12,airspeed_mps=20)");
+ABSL_FLAG(std::string, start, "", "plan: start pose 'x,y,z,theta'");
+ABSL_FLAG(std::string, goal, "", "plan: goal pose 'x,y,z,theta'");
+ABSL_FLAG(std::string, algorithm, "RISK_RRT_STAR", "plan: planner algorithm");
+ABSL_FLAG(int64_t, budget_ms, 5000, "plan: time budget, ms (0: none; then --iterations)");
+ABSL_FLAG(int64_t, iterations, 0, "plan: iteration budget (0: none)");
+ABSL_FLAG(uint64_t, seed, 1, "plan: planner seed");
+ABSL_FLAG(std::string, planner_params, "",
+          "plan: planner parameters 'name=value,...' (listed by `riskplan-server --help`)");
+ABSL_FLAG(int64_t, min_update_interval_ms, 100, "plan: least time between streamed updates, ms");
+ABSL_FLAG(double, display_step_m, 25.0, "plan: spacing of the streamed display path, m");
+ABSL_FLAG(bool, tree, false, "plan: draw the planner's final tree in the picture");
+ABSL_FLAG(std::string, picture, "", "plan: write a picture of the plan (.svg or .png)");
+ABSL_FLAG(int, picture_size, 800, "plan: largest side of the picture, pixels");
+ABSL_FLAG(std::string, trajectory_out, "",
+          "plan: write the best trajectory as JSON waypoints (readable by --trajectory_file)");
+ABSL_FLAG(std::string, rpc, "eval", "load: the RPC to load, eval | plan | ping");
+ABSL_FLAG(std::string, mode, "closed",
+          "load: closed (--concurrency callers back to back) or open (--rate calls per second, "
+          "latency from the intended send time)");
+ABSL_FLAG(int, concurrency, 8, "load: callers in closed loop");
+ABSL_FLAG(double, rate, 100.0, "load: calls per second in open loop");
+ABSL_FLAG(double, duration_s, 10.0, "load: length of the run, s");
+ABSL_FLAG(int, max_outstanding, 10000,
+          "load, open loop: calls in flight at most (more count as CLIENT_OVERLOADED)");
+ABSL_FLAG(bool, ceiling, false,
+          "load: first run Ping (a no-op RPC) with the same settings, and report the ratio");
+ABSL_FLAG(std::string, report_json, "", "load: also write the report as JSON to this file");
+
+namespace {
+
+constexpr char kUsage[] =
+    "riskplan: client of riskplan-server.\n"
+    "\n"
+    "  riskplan --server=HOST:PORT <command> [flags]\n"
+    "\n"
+    "Commands:\n"
+    "  maps   the server's maps\n"
+    "  eval   risk, length and admissibility of a trajectory\n"
+    "  plan   plan a trajectory, showing each improvement as it streams; --picture=F.svg\n"
+    "  load   load test: --rpc=eval|plan|ping, --mode=closed|open, --ceiling, --report_json\n"
+    "\n"
+    "Examples:\n"
+    "  riskplan maps\n"
+    "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'\n"
+    "  riskplan plan --start=1200,1500,250,0.785 --goal=6800,6500,250,0.785 "
+    "--budget_ms=5000 --picture=plan.svg\n"
+    "  riskplan load --rpc=eval --polyline='1000,1000,250;2000,1000,250' --concurrency=4 "
+    "--ceiling\n"
+    "\n"
+    "Exit codes: 0 success, 1 the RPC failed, 2 bad input, 3 plan found no trajectory.\n"
+    "Units: metres, metres above mean sea level, radians counter-clockwise from east.";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(kUsage);
+  std::vector<char*> positional = absl::ParseCommandLine(argc, argv);
+  if (positional.size() != 2) {
+    std::fprintf(stderr, "riskplan: give one command (maps, eval, plan, load); see --help\n");
+    return 2;
+  }
+  const std::string command = positional[1];
+
+  riskplan::client::CliOptions o;
+  o.server = absl::GetFlag(FLAGS_server);
+  o.map = absl::GetFlag(FLAGS_map);
+  o.timeout = absl::Milliseconds(absl::GetFlag(FLAGS_timeout_ms));
+  o.json = absl::GetFlag(FLAGS_json);
+  o.waypoints = absl::GetFlag(FLAGS_waypoints);
+  o.polyline = absl::GetFlag(FLAGS_polyline);
+  o.trajectory_file = absl::GetFlag(FLAGS_trajectory_file);
+  o.samples = absl::GetFlag(FLAGS_samples);
+  o.params = absl::GetFlag(FLAGS_params);
+  o.start = absl::GetFlag(FLAGS_start);
+  o.goal = absl::GetFlag(FLAGS_goal);
+  o.algorithm = absl::GetFlag(FLAGS_algorithm);
+  o.budget_ms = absl::GetFlag(FLAGS_budget_ms);
+  o.iterations = absl::GetFlag(FLAGS_iterations);
+  o.seed = absl::GetFlag(FLAGS_seed);
+  o.planner_params = absl::GetFlag(FLAGS_planner_params);
+  o.min_update_interval_ms = absl::GetFlag(FLAGS_min_update_interval_ms);
+  o.display_step_m = absl::GetFlag(FLAGS_display_step_m);
+  o.tree = absl::GetFlag(FLAGS_tree);
+  o.picture = absl::GetFlag(FLAGS_picture);
+  o.picture_size = absl::GetFlag(FLAGS_picture_size);
+  o.trajectory_out = absl::GetFlag(FLAGS_trajectory_out);
+  o.rpc = absl::GetFlag(FLAGS_rpc);
+  o.mode = absl::GetFlag(FLAGS_mode);
+  o.concurrency = absl::GetFlag(FLAGS_concurrency);
+  o.rate = absl::GetFlag(FLAGS_rate);
+  o.duration_s = absl::GetFlag(FLAGS_duration_s);
+  o.max_outstanding = absl::GetFlag(FLAGS_max_outstanding);
+  o.ceiling = absl::GetFlag(FLAGS_ceiling);
+  o.report_json = absl::GetFlag(FLAGS_report_json);
+
+  riskplan::client::RiskplanClient client(o.server);
+  if (command == "maps") return riskplan::client::RunMaps(o, client);
+  if (command == "eval") return riskplan::client::RunEval(o, client);
+  if (command == "plan") return riskplan::client::RunPlan(o, client);
+  if (command == "load") return riskplan::client::RunLoad(o, client);
+  std::fprintf(stderr, "riskplan: unknown command '%s'; see --help\n", command.c_str());
+  return 2;
+}

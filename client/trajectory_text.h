@@ -1,0 +1,45 @@
+// Text forms of poses and trajectories for the CLI, parsed straight into API
+// messages (the client does not depend on core/). Same forms as
+// riskplan-tool:
+//   pose:      "x,y,z,theta"                      (m, m, m AMSL, rad)
+//   waypoints: "x,y,z,theta; x,y,z,theta; ..."
+//   polyline:  "x,y,z; x,y,z; ..."
+//   JSON file: {"waypoints": [[x, y, z, theta], ...]} or
+//              {"polyline": [[x, y, z], ...]}
+// Parsers check the syntax and that every number is finite; ranges and
+// admissibility are the server's business. Errors (InvalidArgument) name the
+// point index and the text at fault.
+#ifndef RISKPLAN_CLIENT_TRAJECTORY_TEXT_H_
+#define RISKPLAN_CLIENT_TRAJECTORY_TEXT_H_
+
+#include <map>
+#include <string>
+#include <string_view>
+
+#include "absl/status/statusor.h"
+#include "riskplan/v1/planner.pb.h"
+
+namespace riskplan::client {
+
+absl::StatusOr<v1::Pose> ParsePose(std::string_view text);
+absl::StatusOr<v1::Waypoints> ParseWaypoints(std::string_view text);
+absl::StatusOr<v1::Polyline> ParsePolyline(std::string_view text);
+
+// Sets the trajectory of `request` (waypoints or polyline) from JSON text.
+absl::Status ParseTrajectoryJson(std::string_view json, v1::EvaluateRiskRequest* request);
+absl::Status ReadTrajectoryFile(const std::string& path, v1::EvaluateRiskRequest* request);
+
+// JSON text {"waypoints": [[x, y, z, theta], ...]} of a trajectory, which
+// ReadTrajectoryFile reads back.
+std::string WaypointsToJson(const google::protobuf::RepeatedPtrField<v1::Pose>& poses);
+
+// "name=value,name=value" into a map (values finite). Empty text: empty map.
+absl::StatusOr<std::map<std::string, double>> ParseNameValues(std::string_view text);
+
+// Applies "name=value,..." to ModelParameters by field name (proto
+// reflection); errors name the unknown field and list the known ones.
+absl::Status ParseModelParameters(std::string_view text, v1::ModelParameters* params);
+
+}  // namespace riskplan::client
+
+#endif  // RISKPLAN_CLIENT_TRAJECTORY_TEXT_H_

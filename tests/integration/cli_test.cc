@@ -1,0 +1,168 @@
+// The `riskplan` CLI against the real server.
+#include <fstream>
+#include <sstream>
+
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "nlohmann/json.hpp"
+#include "tests/integration/server_process.h"
+
+namespace riskplan::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+class CliTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto server = ServerProcess::Start();
+    ASSERT_TRUE(server.ok()) << server.status();
+    server_ = server->release();
+    char dir[] = "/tmp/riskplan-cli-XXXXXX";
+    ASSERT_NE(mkdtemp(dir), nullptr);
+    dir_ = new std::string(dir);
+  }
+  static void TearDownTestSuite() {
+    delete server_;
+    server_ = nullptr;
+    RunCommand("rm -rf " + *dir_);
+    delete dir_;
+  }
+
+  static CommandResult Cli(const std::string& args) {
+    return RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan --server=" + server_->address() +
+                      " " + args + " 2>&1");
+  }
+  static std::string Read(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  }
+
+  static ServerProcess* server_;
+  static std::string* dir_;
+};
+
+ServerProcess* CliTest::server_ = nullptr;
+std::string* CliTest::dir_ = nullptr;
+
+TEST_F(CliTest, Maps) {
+  CommandResult r = Cli("maps");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("demo-city: 2000 x 2000 m (400 x 400 cells of 5 m)"));
+  r = Cli("maps --json");
+  EXPECT_EQ(r.exit_code, 0);
+  nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["maps"][0]["name"], "demo-city");
+  EXPECT_EQ(j["maps"][0]["nx"], 400);
+}
+
+TEST_F(CliTest, EvalFromFlagsAndFromAFile) {
+  CommandResult r = Cli("eval --polyline='300,375,240; 1700,1625,250'");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("expected casualties per flight"));
+  const std::string file = *dir_ + "/traj.json";
+  std::ofstream(file) << R"({"polyline": [[300, 375, 240], [1700, 1625, 250]]})";
+  CommandResult from_file = Cli("eval --trajectory_file=" + file);
+  EXPECT_EQ(from_file.exit_code, 0);
+  EXPECT_EQ(from_file.output, r.output);  // same trajectory, same answer
+  CommandResult json =
+      Cli("eval --json --samples --waypoints='300,375,240,0.785; "
+          "1700,1625,250,0.785'");
+  nlohmann::json j = nlohmann::json::parse(json.output);
+  EXPECT_GT(j["risk"].get<double>(), 0.0);
+  EXPECT_EQ(j["samples"].size(), std::stoul(j["sample_count"].get<std::string>()));
+}
+
+TEST_F(CliTest, EvalErrors) {
+  CommandResult r = Cli("eval --polyline='300,375,nan; 1700,1625,250'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("polyline point 0"));
+  r = Cli("eval --map=nowhere --polyline='300,375,240; 1700,1625,250'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.output, HasSubstr("EvaluateRisk failed: NOT_FOUND: map 'nowhere'"));
+  r = Cli("frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST_F(CliTest, PlanShowsProgressAndWritesPictures) {
+  const std::string svg = *dir_ + "/plan.svg";
+  const std::string png = *dir_ + "/plan.png";
+  const std::string traj = *dir_ + "/best.json";
+  CommandResult r =
+      Cli("plan --start=300,375,240,0.785 --goal=1700,1625,250,0.785 "
+          "--budget_ms=600 --min_update_interval_ms=0 --tree --picture=" +
+          svg + " --trajectory_out=" + traj);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("(final)"));
+  EXPECT_THAT(r.output, HasSubstr("ended: BUDGET_EXHAUSTED"));
+  const std::string picture = Read(svg);
+  EXPECT_THAT(picture, HasSubstr("<svg"));
+  EXPECT_THAT(picture, HasSubstr("data:image/png;base64,"));
+  EXPECT_THAT(picture, HasSubstr("<polyline"));
+  EXPECT_THAT(picture, HasSubstr("<line"));  // the tree
+
+  // The written trajectory evaluates to the risk the plan reported.
+  const size_t at = r.output.find("best: risk ");
+  ASSERT_NE(at, std::string::npos);
+  const double plan_risk = std::stod(r.output.substr(at + 11));
+  CommandResult eval = Cli("eval --json --trajectory_file=" + traj);
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_NEAR(nlohmann::json::parse(eval.output)["risk"].get<double>(), plan_risk,
+              1e-8 * plan_risk);  // printed with 9 significant digits
+
+  r =
+      Cli("plan --start=300,375,240,0.785 --goal=1700,1625,250,0.785 --budget_ms=300 "
+          "--picture=" +
+          png);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Read(png).substr(1, 3), "PNG");
+}
+
+TEST_F(CliTest, PlanWithoutSolutionExitsThree) {
+  CommandResult r =
+      Cli("plan --start=300,375,240,0.785 --goal=1700,1625,250,0.785 "
+          "--budget_ms=0 --iterations=1");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("NO_SOLUTION"));
+}
+
+TEST_F(CliTest, LoadReportsThroughputLatencyAndCodes) {
+  const std::string report = *dir_ + "/load.json";
+  CommandResult r =
+      Cli("load --rpc=eval --polyline='300,375,240; 1700,1625,250' "
+          "--concurrency=2 --duration_s=1 --ceiling --report_json=" +
+          report);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("vs the no-op ceiling"));
+  nlohmann::json j = nlohmann::json::parse(Read(report));
+  EXPECT_EQ(j["rpc"], "EvaluateRisk");
+  EXPECT_EQ(j["mode"], "closed");
+  EXPECT_GT(j["completed"].get<int>(), 10);
+  EXPECT_EQ(j["codes"]["OK"], j["completed"]);
+  EXPECT_GT(j["throughput_rps"].get<double>(), 10.0);
+  EXPECT_GT(j["latency_ms"]["p99"].get<double>(), 0.0);
+  EXPECT_LE(j["latency_ms"]["p50"].get<double>(), j["latency_ms"]["p99.9"].get<double>());
+  EXPECT_EQ(j["ceiling"]["rpc"], "Ping");
+  EXPECT_GT(j["ceiling"]["completed"].get<int>(), 10);
+  EXPECT_GT(j["vs_ceiling"]["throughput"].get<double>(), 0.0);
+
+  // Open loop at a fixed rate: about rate x duration calls, errors counted by code.
+  r =
+      Cli("load --rpc=plan --mode=open --rate=20 --duration_s=1 --budget_ms=0 --iterations=50 "
+          "--start=300,375,240,0.785 --goal=1700,1625,250,0.785 --report_json=" +
+          report);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  j = nlohmann::json::parse(Read(report));
+  EXPECT_EQ(j["rpc"], "PlanTrajectory");
+  EXPECT_EQ(j["sent"], 20);
+  EXPECT_EQ(j["completed"], 20);
+  int64_t by_code = 0;
+  for (const auto& [code, n] : j["codes"].items()) by_code += n.get<int64_t>();
+  EXPECT_EQ(by_code, 20);
+  EXPECT_GT(j["first_update_ms"]["count"].get<int>(), 0);
+}
+
+}  // namespace
+}  // namespace riskplan::testing

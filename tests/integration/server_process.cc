@@ -1,0 +1,150 @@
+#include "tests/integration/server_process.h"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <stdlib.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+
+extern char** environ;
+
+namespace riskplan::testing {
+namespace {
+
+constexpr char kReadyPrefix[] = "riskplan-server listening on ";
+
+int PollMs(absl::Duration left) {
+  return static_cast<int>(std::max<int64_t>(0, absl::ToInt64Milliseconds(left)));
+}
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<std::string> flags,
+                                                                    absl::Duration timeout) {
+  std::unique_ptr<ServerProcess> server(new ServerProcess);
+  char stderr_template[] = "/tmp/riskplan-server-stderr-XXXXXX";
+  const int stderr_fd = mkstemp(stderr_template);
+  if (stderr_fd < 0) return absl::InternalError("mkstemp failed");
+  server->stderr_path_ = stderr_template;
+  int out[2];
+  if (pipe2(out, O_CLOEXEC) != 0) return absl::InternalError("pipe failed");
+
+  std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-server",
+                                   "--listen=127.0.0.1:0"};
+  bool has_maps = false;
+  for (const std::string& f : flags) has_maps = has_maps || absl::StartsWith(f, "--maps=");
+  if (!has_maps) args.push_back(absl::StrCat("--demo_city_size_m=", kSmallCitySizeM));
+  args.insert(args.end(), flags.begin(), flags.end());
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, stderr_fd, STDERR_FILENO);
+  const int rc = posix_spawn(&server->pid_, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(out[1]);
+  close(stderr_fd);
+  if (rc != 0) {
+    close(out[0]);
+    return absl::InternalError(absl::StrFormat("cannot start %s: error %d", argv[0], rc));
+  }
+  server->pidfd_ = static_cast<int>(syscall(SYS_pidfd_open, server->pid_, 0));
+
+  // Read stdout until the readiness line (or EOF: the server failed).
+  std::string text;
+  const absl::Time deadline = absl::Now() + timeout;
+  while (true) {
+    const size_t newline = text.find('\n');
+    if (newline != std::string::npos) {
+      const std::string line = text.substr(0, newline);
+      text.erase(0, newline + 1);
+      if (absl::StartsWith(line, kReadyPrefix)) {
+        server->address_ = line.substr(sizeof(kReadyPrefix) - 1);
+        break;
+      }
+      continue;
+    }
+    pollfd p{out[0], POLLIN, 0};
+    if (poll(&p, 1, PollMs(deadline - absl::Now())) <= 0) {
+      close(out[0]);
+      return absl::DeadlineExceededError(
+          "riskplan-server did not print its readiness line; "
+          "stderr:\n" +
+          server->Stderr());
+    }
+    char buffer[512];
+    const ssize_t n = read(out[0], buffer, sizeof(buffer));
+    if (n <= 0) {
+      close(out[0]);
+      return absl::UnavailableError("riskplan-server exited before serving; stderr:\n" +
+                                    server->Stderr());
+    }
+    text.append(buffer, static_cast<size_t>(n));
+  }
+  // The server prints nothing else on stdout; keep the pipe drained anyway
+  // by closing our end (a later write would get EPIPE, which it never does).
+  close(out[0]);
+  return server;
+}
+
+ServerProcess::~ServerProcess() {
+  if (pid_ > 0 && !reaped_) {
+    kill(pid_, SIGKILL);
+    waitpid(pid_, nullptr, 0);
+  }
+  if (pidfd_ >= 0) close(pidfd_);
+  if (!stderr_path_.empty()) unlink(stderr_path_.c_str());
+}
+
+void ServerProcess::Signal(int signal_number) {
+  if (pid_ > 0 && !reaped_) kill(pid_, signal_number);
+}
+
+std::optional<int> ServerProcess::Wait(absl::Duration timeout) {
+  if (reaped_) return std::nullopt;
+  if (pidfd_ >= 0) {
+    pollfd p{pidfd_, POLLIN, 0};
+    if (poll(&p, 1, PollMs(timeout)) <= 0) return std::nullopt;
+  }
+  int status = 0;
+  if (waitpid(pid_, &status, 0) != pid_) return std::nullopt;
+  reaped_ = true;
+  if (!WIFEXITED(status)) return std::nullopt;
+  return WEXITSTATUS(status);
+}
+
+std::string ServerProcess::Stderr() const {
+  std::ifstream in(stderr_path_);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+CommandResult RunCommand(const std::string& command) {
+  CommandResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  char buffer[4096];
+  size_t n = 0;
+  while ((n = fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.output.append(buffer, n);
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+}  // namespace riskplan::testing

@@ -1,0 +1,65 @@
+// ServerProcess: the real riskplan-server binary, started for a test on
+// 127.0.0.1 port 0. Start() returns once the server has printed its readiness
+// line (the port is read from it); no fixed ports, no sleeps.
+#ifndef RISKPLAN_TESTS_INTEGRATION_SERVER_PROCESS_H_
+#define RISKPLAN_TESTS_INTEGRATION_SERVER_PROCESS_H_
+
+#include <sys/types.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+
+namespace riskplan::testing {
+
+class ServerProcess {
+ public:
+  // Starts RISKPLAN_BIN_DIR/riskplan-server --listen=127.0.0.1:0 with
+  // `flags` (by default a 2 km demo-city, which loads in a fraction of a
+  // second). Fails if the readiness line does not come within `timeout`.
+  static absl::StatusOr<std::unique_ptr<ServerProcess>> Start(
+      std::vector<std::string> flags = {}, absl::Duration timeout = absl::Seconds(60));
+
+  // Kills the server (SIGKILL) if it still runs.
+  ~ServerProcess();
+
+  const std::string& address() const { return address_; }
+  pid_t pid() const { return pid_; }
+
+  void Signal(int signal_number);
+  // Waits for the process to exit; its exit code, or nullopt on timeout (or
+  // when it died of a signal).
+  std::optional<int> Wait(absl::Duration timeout);
+  // Everything the server wrote to stderr so far (its JSON log lines).
+  std::string Stderr() const;
+
+ private:
+  ServerProcess() = default;
+
+  pid_t pid_ = -1;
+  int pidfd_ = -1;
+  bool reaped_ = false;
+  std::string address_;
+  std::string stderr_path_;
+};
+
+// Runs a command line through /bin/sh; returns its exit code and stdout.
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;
+};
+CommandResult RunCommand(const std::string& command);
+
+// The demo-city of 2 km that ServerProcess serves by default, and poses on it
+// that are admissible under the default model parameters.
+inline constexpr double kSmallCitySizeM = 2000.0;
+inline constexpr char kSmallCityStart[] = "300,375,240,0.785";
+inline constexpr char kSmallCityGoal[] = "1700,1625,250,0.785";
+
+}  // namespace riskplan::testing
+
+#endif  // RISKPLAN_TESTS_INTEGRATION_SERVER_PROCESS_H_

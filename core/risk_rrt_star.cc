@@ -19,10 +19,10 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 struct Params {
-  double step_m = 250.0;
+  double step_m = 400.0;
   double goal_bias = 0.05;
   double path_bias = 0.2;
-  double k_near = 12;
+  double k_near = 8;
   double near_radius_m = 0.0;  // 0: 2.5 * step_m
   double nearest_candidates = 8;
   double max_nodes = 200000;
@@ -579,10 +579,10 @@ absl::StatusOr<PlanResult> Run::Execute() {
 
 const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
-      {"step_m", 250.0, 10.0, 5000.0, "largest edge added by one extension (Delta_step), m"},
+      {"step_m", 400.0, 10.0, 5000.0, "largest edge added by one extension (Delta_step), m"},
       {"goal_bias", 0.05, 0.0, 0.9, "share of samples that are the start configuration"},
       {"path_bias", 0.2, 0.0, 0.9, "share of samples drawn around the best trajectory so far"},
-      {"k_near", 12, 1, 100, "neighbours considered as parents and for rewiring"},
+      {"k_near", 8, 1, 100, "neighbours considered as parents and for rewiring"},
       {"near_radius_m", 0.0, 0.0, 20000.0, "largest distance of a neighbour, m (0: 2.5 * step_m)"},
       {"nearest_candidates", 8, 1, 100,
        "Euclidean candidates ranked by Dubins length to find the nearest node"},

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Runs riskplan's benchmark programs and prints their reports. Results and the
+# commands that produced them are recorded in docs/benchmarks.md.
+#
+#   bash scripts/bench.sh [planner|kernel|all]   (default: all)
+#
+# Benchmarks are measurements, not tests: run them on a quiet machine and quote
+# medians. Extra variables: SEEDS (planner seeds, default 5), BUDGET_S (3).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/build.sh -DRISKPLAN_BUILD_BENCH=ON >&2
+BIN=${BUILD_DIR:-build}/bin
+what=${1:-all}
+if [ "$what" = kernel ] || [ "$what" = all ]; then
+  echo "== configuration-risk kernel (bench/risk_kernel_bench.cc) =="
+  "$BIN/riskplan-bench-risk" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+fi
+if [ "$what" = planner ] || [ "$what" = all ]; then
+  echo "== RISK_RRT_STAR on the demo-city scenarios (bench/planner_bench.cc) =="
+  "$BIN/riskplan-bench-planner" --seeds="${SEEDS:-5}" --budget_s="${BUDGET_S:-3}"
+fi

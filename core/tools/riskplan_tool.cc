@@ -4,6 +4,9 @@
 //                          [--samples] [--json] [--params=name=value,...]
 //   riskplan-tool write-map --out=DIR [--seed=N] [--size_m=M] [--res_m=R]
 //   riskplan-tool info [--map=DIR]
+//   riskplan-tool risk-layer [--map=DIR] --out=PREFIX [--agl_m=100] [--heading_deg=0|max]
+//                            [--threads=N] [--stride=1]
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -19,7 +22,9 @@
 #include "absl/time/time.h"
 #include "core/demo_city.h"
 #include "core/map_bundle.h"
+#include "core/risk_layer.h"
 #include "core/risk_model.h"
+#include "core/tools/layer_writers.h"
 #include "core/trajectory.h"
 #include "core/trajectory_io.h"
 #include "nlohmann/json.hpp"
@@ -42,6 +47,12 @@ ABSL_FLAG(std::string, out, "", "write-map: directory to write the bundle into")
 ABSL_FLAG(uint64_t, seed, riskplan::kDemoCitySeed, "write-map: demo-city seed");
 ABSL_FLAG(double, size_m, 8000.0, "write-map: demo-city side in metres");
 ABSL_FLAG(double, res_m, 5.0, "write-map: demo-city cell size in metres");
+ABSL_FLAG(double, agl_m, 100.0, "risk-layer: height above the terrain of every cell, m");
+ABSL_FLAG(std::string, heading_deg, "0",
+          "risk-layer: heading in degrees counter-clockwise from east, or 'max' for the maximum "
+          "over all heading bins");
+ABSL_FLAG(int, threads, 1, "risk-layer: worker threads");
+ABSL_FLAG(int, stride, 1, "risk-layer: compute every stride-th cell in each direction");
 
 namespace riskplan {
 namespace {
@@ -53,11 +64,14 @@ constexpr char kUsage[] =
     "  evaluate   risk, length and admissibility of a trajectory on a map\n"
     "  write-map  write the built-in demo-city as a map bundle (--out=DIR)\n"
     "  info       describe a map\n"
+    "  risk-layer configuration risk of every cell at a height above ground, as a PNG\n"
+    "             heat map (PREFIX.png) and an ESRI ASCII grid (PREFIX.asc)\n"
     "\n"
     "Examples:\n"
     "  riskplan-tool evaluate --waypoints='1000,1000,250,0; 7000,7000,250,1.57'\n"
     "  riskplan-tool evaluate --map=maps/demo-city --polyline='0,0,200;100,0,200' --samples\n"
-    "  riskplan-tool write-map --out=maps/demo-city\n";
+    "  riskplan-tool write-map --out=maps/demo-city\n"
+    "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2\n";
 
 int Fail(const absl::Status& status) {
   std::fprintf(stderr, "riskplan-tool: %s\n", std::string(status.message()).c_str());
@@ -243,6 +257,48 @@ int Info() {
   return 0;
 }
 
+int RiskLayerCommand() {
+  const std::string out = absl::GetFlag(FLAGS_out);
+  if (out.empty()) return Fail(absl::InvalidArgumentError("risk-layer: --out=PREFIX is required"));
+  auto params = ParamsFromFlag();
+  if (!params.ok()) return Fail(params.status());
+  RiskLayerOptions options;
+  options.height_agl_m = absl::GetFlag(FLAGS_agl_m);
+  options.threads = absl::GetFlag(FLAGS_threads);
+  options.stride = absl::GetFlag(FLAGS_stride);
+  const std::string heading = absl::GetFlag(FLAGS_heading_deg);
+  double degrees = 0.0;
+  if (heading == "max") {
+    options.heading_rad = std::nan("");
+  } else if (absl::SimpleAtod(heading, &degrees) && std::isfinite(degrees)) {
+    options.heading_rad = NormalizeHeading(degrees * kPi / 180.0);
+  } else {
+    return Fail(absl::InvalidArgumentError(absl::StrFormat(
+        "risk-layer: --heading_deg='%s' is neither a number of degrees nor 'max'", heading)));
+  }
+  auto map = LoadMap(*params);
+  if (!map.ok()) return Fail(map.status());
+  auto model = RiskModel::Create(*map, *params);
+  if (!model.ok()) return Fail(model.status());
+  const absl::Time start = absl::Now();
+  auto layer = ComputeRiskLayer(**model, options);
+  if (!layer.ok()) return Fail(layer.status());
+  const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  if (absl::Status s = WriteHeatMapPng(*layer, out + ".png"); !s.ok()) return Fail(s);
+  if (absl::Status s = WriteAsciiGrid(*layer, out + ".asc"); !s.ok()) return Fail(s);
+  const int64_t cells = static_cast<int64_t>(layer->nx) * layer->ny;
+  std::printf("risk layer of %s: %d x %d cells at %.0f m AGL, heading %s\n", (*map)->name().c_str(),
+              layer->nx, layer->ny, options.height_agl_m,
+              heading == "max" ? "max over bins" : (heading + " deg").c_str());
+  std::printf(
+      "computed %lld configuration risks in %.3f s on %d thread(s): %.0f cells/s, "
+      "%.0f risks/s per thread\n",
+      static_cast<long long>(layer->evaluations), seconds, options.threads, cells / seconds,
+      layer->evaluations / seconds / options.threads);
+  std::printf("wrote %s.png and %s.asc\n", out.c_str(), out.c_str());
+  return 0;
+}
+
 }  // namespace
 }  // namespace riskplan
 
@@ -258,6 +314,7 @@ int main(int argc, char** argv) {
   if (command == "evaluate") return riskplan::Evaluate();
   if (command == "write-map") return riskplan::WriteMap();
   if (command == "info") return riskplan::Info();
+  if (command == "risk-layer") return riskplan::RiskLayerCommand();
   std::fprintf(stderr, "riskplan-tool: unknown command '%s' (see --help)\n", command.c_str());
   return 2;
 }

@@ -1,0 +1,89 @@
+#include "core/tools/layer_writers.h"
+
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "absl/strings/str_format.h"
+
+namespace riskplan {
+
+absl::Status WriteAsciiGrid(const RiskLayer& layer, const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
+  if (f == nullptr) return absl::InternalError(absl::StrFormat("cannot write '%s'", path));
+  std::fprintf(f.get(), "ncols %d\nnrows %d\nxllcorner %.6f\nyllcorner %.6f\ncellsize %.6f\n",
+               layer.nx, layer.ny, layer.x0, layer.y0, layer.res_m);
+  std::fprintf(f.get(), "NODATA_value -9999\n");
+  // ESRI ASCII grids list the northernmost row first.
+  for (int r = layer.ny - 1; r >= 0; --r) {
+    for (int c = 0; c < layer.nx; ++c) {
+      const double m = layer.risk[static_cast<size_t>(r) * layer.nx + c];
+      std::fprintf(f.get(), c == 0 ? "%.9g" : " %.9g", std::isnan(m) ? -9999.0 : m);
+    }
+    std::fputc('\n', f.get());
+  }
+  if (std::ferror(f.get())) return absl::InternalError(absl::StrFormat("error writing '%s'", path));
+  return absl::OkStatus();
+}
+
+absl::Status WriteHeatMapPng(const RiskLayer& layer, const std::string& path) {
+  std::vector<double> positive;
+  for (double m : layer.risk) {
+    if (m > 0.0) positive.push_back(std::log10(m));
+  }
+  double lo = 0.0;
+  double hi = 1.0;
+  if (!positive.empty()) {
+    std::sort(positive.begin(), positive.end());
+    lo = positive[static_cast<size_t>(0.01 * (positive.size() - 1))];
+    hi = positive[static_cast<size_t>(0.999 * (positive.size() - 1))];
+    if (!(hi > lo)) hi = lo + 1.0;
+  }
+  std::vector<png_byte> rgb(static_cast<size_t>(layer.nx) * layer.ny * 3);
+  for (int r = 0; r < layer.ny; ++r) {
+    const int row = layer.ny - 1 - r;  // north up
+    for (int c = 0; c < layer.nx; ++c) {
+      const double m = layer.risk[static_cast<size_t>(r) * layer.nx + c];
+      png_byte* px = &rgb[(static_cast<size_t>(row) * layer.nx + c) * 3];
+      if (!(m > 0.0)) {
+        px[0] = 10;
+        px[1] = 20;
+        px[2] = 60;
+        continue;
+      }
+      const double t = std::clamp((std::log10(m) - lo) / (hi - lo), 0.0, 1.0);
+      // Black -> red -> yellow -> white.
+      px[0] = static_cast<png_byte>(255.0 * std::min(1.0, 3.0 * t));
+      px[1] = static_cast<png_byte>(255.0 * std::clamp(3.0 * t - 1.0, 0.0, 1.0));
+      px[2] = static_cast<png_byte>(255.0 * std::clamp(3.0 * t - 2.0, 0.0, 1.0));
+    }
+  }
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "wb"), &std::fclose);
+  if (f == nullptr) return absl::InternalError(absl::StrFormat("cannot write '%s'", path));
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
+  if (png == nullptr || info == nullptr) {
+    png_destroy_write_struct(&png, &info);
+    return absl::InternalError("libpng: cannot create a writer");
+  }
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    return absl::InternalError(absl::StrFormat("libpng: error writing '%s'", path));
+  }
+  png_init_io(png, f.get());
+  png_set_IHDR(png, info, layer.nx, layer.ny, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  for (int row = 0; row < layer.ny; ++row) {
+    png_write_row(png, &rgb[static_cast<size_t>(row) * layer.nx * 3]);
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return absl::OkStatus();
+}
+
+}  // namespace riskplan

@@ -3,7 +3,10 @@
 #include <cmath>
 
 #include "absl/strings/str_format.h"
+#include "core/genetic_planner.h"
+#include "core/harmonic_planner.h"
 #include "core/risk_rrt_star.h"
+#include "core/rrt_planner.h"
 #include "core/trajectory.h"
 
 namespace riskplan {
@@ -12,6 +15,12 @@ std::string_view PlannerAlgorithmName(PlannerAlgorithm algorithm) {
   switch (algorithm) {
     case PlannerAlgorithm::kRiskRrtStar:
       return "RISK_RRT_STAR";
+    case PlannerAlgorithm::kRrt:
+      return "RRT";
+    case PlannerAlgorithm::kGenetic:
+      return "GENETIC";
+    case PlannerAlgorithm::kHarmonic:
+      return "HARMONIC";
   }
   return "UNKNOWN";
 }
@@ -35,6 +44,12 @@ absl::StatusOr<std::unique_ptr<Planner>> MakePlanner(PlannerAlgorithm algorithm,
   switch (algorithm) {
     case PlannerAlgorithm::kRiskRrtStar:
       return std::unique_ptr<Planner>(new RiskRrtStar(evaluator));
+    case PlannerAlgorithm::kRrt:
+      return std::unique_ptr<Planner>(new RrtPlanner(evaluator));
+    case PlannerAlgorithm::kGenetic:
+      return std::unique_ptr<Planner>(new GeneticPlanner(evaluator));
+    case PlannerAlgorithm::kHarmonic:
+      return std::unique_ptr<Planner>(new HarmonicPlanner(evaluator));
   }
   return absl::InvalidArgumentError(
       absl::StrFormat("unknown planner algorithm %d", static_cast<int>(algorithm)));
@@ -44,6 +59,12 @@ const std::vector<PlannerParamInfo>& PlannerParams(PlannerAlgorithm algorithm) {
   switch (algorithm) {
     case PlannerAlgorithm::kRiskRrtStar:
       return RiskRrtStar::ParamInfo();
+    case PlannerAlgorithm::kRrt:
+      return RrtPlanner::ParamInfo();
+    case PlannerAlgorithm::kGenetic:
+      return GeneticPlanner::ParamInfo();
+    case PlannerAlgorithm::kHarmonic:
+      return HarmonicPlanner::ParamInfo();
   }
   static const auto* empty = new std::vector<PlannerParamInfo>;
   return *empty;
@@ -80,6 +101,53 @@ absl::Status CheckEndpoints(const PlanningProblem& problem) {
   if (problem.model == nullptr) return absl::InvalidArgumentError("planning problem has no model");
   if (absl::Status s = CheckEndpoint(*problem.model, problem.start, "start"); !s.ok()) return s;
   return CheckEndpoint(*problem.model, problem.goal, "goal");
+}
+
+absl::Status CheckRequestObstacles(PlannerAlgorithm algorithm, const PlanOptions& options) {
+  const std::string_view name = PlannerAlgorithmName(algorithm);
+  if (!options.obstacle_points.empty() && algorithm == PlannerAlgorithm::kRiskRrtStar) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("obstacle_points: %s does not take request obstacles; RRT, GENETIC and "
+                        "HARMONIC do",
+                        name));
+  }
+  if (!options.dynamic_obstacles.empty() && algorithm != PlannerAlgorithm::kHarmonic) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "dynamic_obstacles: %s does not take obstacles that appear while it runs; HARMONIC does",
+        name));
+  }
+  if (options.obstacle_points.size() > kMaxObstaclePoints) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("obstacle_points: %d given; at most %d are accepted",
+                        options.obstacle_points.size(), kMaxObstaclePoints));
+  }
+  if (options.dynamic_obstacles.size() > kMaxDynamicObstacles) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("dynamic_obstacles: %d given; at most %d are accepted",
+                        options.dynamic_obstacles.size(), kMaxDynamicObstacles));
+  }
+  for (size_t k = 0; k < options.obstacle_points.size(); ++k) {
+    const Point2& p = options.obstacle_points[k];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "obstacle_points[%d] is (%g, %g); coordinates must be finite", k, p.x, p.y));
+    }
+  }
+  for (size_t k = 0; k < options.dynamic_obstacles.size(); ++k) {
+    const DynamicObstacle& d = options.dynamic_obstacles[k];
+    if (!std::isfinite(d.x0_m) || !std::isfinite(d.y0_m) || !std::isfinite(d.x1_m) ||
+        !std::isfinite(d.y1_m) || !(d.x0_m < d.x1_m) || !(d.y0_m < d.y1_m)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "dynamic_obstacles[%d] is [%g, %g) x [%g, %g); it must be finite with x0 < x1 and "
+          "y0 < y1",
+          k, d.x0_m, d.x1_m, d.y0_m, d.y1_m));
+    }
+    if (d.at_iteration < 0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "dynamic_obstacles[%d].at_iteration is %d; it must be >= 0", k, d.at_iteration));
+    }
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace riskplan

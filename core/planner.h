@@ -30,9 +30,13 @@
 namespace riskplan {
 
 enum class PlannerAlgorithm {
-  kRiskRrtStar = 0,
+  kRiskRrtStar = 0,  // core/risk_rrt_star.h
+  kRrt = 1,          // core/rrt_planner.h (seed 004)
+  kGenetic = 2,      // core/genetic_planner.h (seed 003)
+  kHarmonic = 3,     // core/harmonic_planner.h (seed 002)
 };
 
+// "RISK_RRT_STAR", "RRT", "GENETIC", "HARMONIC".
 std::string_view PlannerAlgorithmName(PlannerAlgorithm algorithm);
 
 // Cooperative cancellation, shared between the caller and the planner.
@@ -58,6 +62,28 @@ struct PlannerBudget {
   // REQUIRES: at least one of the two is set.
 };
 
+// A point of the horizontal plane, map metres.
+struct Point2 {
+  double x = 0.0;
+  double y = 0.0;
+};
+
+// An area that becomes an obstacle while a plan runs (seed 002's "obstacles
+// discovered during computation"): from relaxation sweep `at_iteration` on,
+// [x0_m, x1_m) x [y0_m, y1_m) in map metres is closed to flight. Deterministic
+// because it is tied to the planner's iteration count, not to wall time.
+struct DynamicObstacle {
+  int64_t at_iteration = 0;  // >= 0; 0: present from the start
+  double x0_m = 0.0;         // x0_m < x1_m
+  double y0_m = 0.0;         // y0_m < y1_m
+  double x1_m = 0.0;
+  double y1_m = 0.0;
+};
+
+// Largest numbers of request-carried obstacles (CheckRequestObstacles).
+inline constexpr size_t kMaxObstaclePoints = 100000;
+inline constexpr size_t kMaxDynamicObstacles = 1000;
+
 struct PlanOptions {
   PlannerBudget budget;
   uint64_t seed = 1;
@@ -66,6 +92,13 @@ struct PlanOptions {
   std::map<std::string, double> params;
   // Keep the final tree (edges as polylines) in the result, for pictures.
   bool record_tree = false;
+  // Obstacles carried by the request, on top of the map's own (no-fly cells,
+  // terrain). Each point is a vertical column of unlimited height at (x, y):
+  // the RRT, GENETIC and HARMONIC planners keep every edge or trajectory
+  // sample farther than their parameter `clearance_m` from it horizontally.
+  std::vector<Point2> obstacle_points;
+  // Areas closed while the plan runs: HARMONIC only (see DynamicObstacle).
+  std::vector<DynamicObstacle> dynamic_obstacles;
 };
 
 enum class StopReason {
@@ -85,6 +118,10 @@ struct PlanImprovement {
   int64_t iterations = 0;
   int64_t tree_size = 0;
   double elapsed_s = 0.0;
+  // True when the problem changed since the previous improvement (HARMONIC:
+  // a dynamic obstacle appeared), so this trajectory replaces the previous
+  // one whatever its risk: the order of decreasing risk starts again here.
+  bool replanned = false;
 };
 
 struct TreeEdge {
@@ -102,8 +139,11 @@ struct PlanResult {
   std::vector<TreeEdge> tree;  // only with PlanOptions::record_tree
 };
 
-// Called on the planner's thread for every improvement, in order of
-// decreasing risk. Must not block for long: the planner waits for it.
+// Called on the planner's thread for every improvement, in order of strictly
+// decreasing risk (a `replanned` improvement starts the order again), except
+// GENETIC, whose improvements are in order of decreasing fitness (a weighted
+// sum of length and sampled risk: its risk may rise where the length falls
+// more; docs/planners.md). Must not block for long: the planner waits for it.
 using ImprovementCallback = std::function<void(const PlanImprovement&)>;
 
 class Planner {
@@ -137,6 +177,16 @@ const std::vector<PlannerParamInfo>& PlannerParams(PlannerAlgorithm algorithm);
 // Checks the start and goal of a problem: finite, and admissible under spec
 // section 6. InvalidArgument naming "start" or "goal" and the violation.
 absl::Status CheckEndpoints(const PlanningProblem& problem);
+
+// Checks the request-carried obstacles of `options` for `algorithm`: finite
+// coordinates, x0_m < x1_m and y0_m < y1_m, at_iteration >= 0, at most
+// kMaxObstaclePoints points and kMaxDynamicObstacles areas, and support:
+// RRT, GENETIC and HARMONIC take obstacle points, HARMONIC alone takes
+// dynamic obstacles, RISK_RRT_STAR takes neither. InvalidArgument naming the
+// field and its index. The planners that take obstacles call it themselves;
+// a caller that may pass obstacles to RISK_RRT_STAR must call it first
+// (RISK_RRT_STAR does not look at them).
+absl::Status CheckRequestObstacles(PlannerAlgorithm algorithm, const PlanOptions& options);
 
 }  // namespace riskplan
 

@@ -1,6 +1,7 @@
 #include "core/two_tier_feasibility.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -11,17 +12,24 @@ namespace {
 
 constexpr float kFloatInf = std::numeric_limits<float>::infinity();
 
+// The next float above (below) a finite f, by its bits: much cheaper than
+// std::nextafter in the per-cell loops.
+float NextUp(float f) {
+  if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
+  const uint32_t bits = std::bit_cast<uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
+}
+float NextDown(float f) { return -NextUp(-f); }
+
 // The float nearest to d that is >= d (<= d): rounding limits outwards keeps
 // the float comparison at least as strict as the double one.
 float RoundUp(double d) {
-  float f = static_cast<float>(d);
-  if (static_cast<double>(f) < d) f = std::nextafter(f, kFloatInf);
-  return f;
+  const float f = static_cast<float>(d);
+  return static_cast<double>(f) < d && std::isfinite(f) ? NextUp(f) : f;
 }
 float RoundDown(double d) {
-  float f = static_cast<float>(d);
-  if (static_cast<double>(f) > d) f = std::nextafter(f, -kFloatInf);
-  return f;
+  const float f = static_cast<float>(d);
+  return static_cast<double>(f) > d && std::isfinite(f) ? NextDown(f) : f;
 }
 
 // Altitudes of a segment inside a cell are compared with a tolerance this
@@ -71,9 +79,9 @@ TwoTierFeasibility::TwoTierFeasibility(const RiskModel& model, TwoTierOptions op
   for (int j = 0; j < map.ny(); ++j) {
     for (int i = 0; i < map.nx(); ++i) {
       const int64_t k = map.Index(i, j);
-      const double terrain = map.terrain(i, j);
+      const float terrain_f = map.terrain(i, j);
       if (!band) {
-        detailed_.floor[k] = map.terrain(i, j);  // exact: the layer is float
+        detailed_.floor[k] = terrain_f;  // exact: the layer is float
         continue;
       }
       if (map.nofly(i, j)) {
@@ -82,10 +90,13 @@ TwoTierFeasibility::TwoTierFeasibility(const RiskModel& model, TwoTierOptions op
         continue;
       }
       // z <= terrain or z < safe altitude <=> z < max(next double above
-      // terrain, safe altitude).
+      // terrain, safe altitude); the safe altitude is above the terrain
+      // unless min_agl is 0.
+      const double terrain = terrain_f;
+      const double safe = model.SafeAltitude(i, j);
       const double floor_d =
-          std::max(std::nextafter(terrain, std::numeric_limits<double>::infinity()),
-                   model.SafeAltitude(i, j));
+          safe > terrain ? safe
+                         : std::nextafter(terrain, std::numeric_limits<double>::infinity());
       detailed_.floor[k] = std::isinf(floor_d) ? kFloatInf : RoundUp(floor_d);
       detailed_.ceiling[k] = RoundDown(terrain + max_agl);
     }
@@ -98,11 +109,21 @@ TwoTierFeasibility::TwoTierFeasibility(const RiskModel& model, TwoTierOptions op
   coarse_.floor.assign(static_cast<size_t>(coarse_.nx) * coarse_.ny, -kFloatInf);
   if (band) coarse_.ceiling.assign(coarse_.floor.size(), kFloatInf);
   for (int j = 0; j < map.ny(); ++j) {
-    for (int i = 0; i < map.nx(); ++i) {
-      const size_t c = static_cast<size_t>(j / b) * coarse_.nx + i / b;
-      const int64_t k = map.Index(i, j);
-      coarse_.floor[c] = std::max(coarse_.floor[c], detailed_.floor[k]);
-      if (band) coarse_.ceiling[c] = std::min(coarse_.ceiling[c], detailed_.ceiling[k]);
+    float* floor_row = coarse_.floor.data() + static_cast<size_t>(j / b) * coarse_.nx;
+    float* ceiling_row =
+        band ? coarse_.ceiling.data() + static_cast<size_t>(j / b) * coarse_.nx : nullptr;
+    const float* detailed_floor = detailed_.floor.data() + map.Index(0, j);
+    const float* detailed_ceiling = band ? detailed_.ceiling.data() + map.Index(0, j) : nullptr;
+    for (int i0 = 0, c = 0; i0 < map.nx(); i0 += b, ++c) {
+      const int i1 = std::min(i0 + b, map.nx());
+      float f = floor_row[c];
+      for (int i = i0; i < i1; ++i) f = std::max(f, detailed_floor[i]);
+      floor_row[c] = f;
+      if (band) {
+        float g = ceiling_row[c];
+        for (int i = i0; i < i1; ++i) g = std::min(g, detailed_ceiling[i]);
+        ceiling_row[c] = g;
+      }
     }
   }
 }

@@ -8,6 +8,9 @@ std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
                                            const grpc::ChannelArguments& extra) {
   grpc::ChannelArguments args = extra;
   args.SetMaxReceiveMessageSize(kMaxReceiveBytes);
+  // Spreads calls over every address a name resolves to (e.g. the pods of a
+  // headless Kubernetes Service); the same as pick_first for one address.
+  args.SetLoadBalancingPolicyName("round_robin");
   return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
 }
 

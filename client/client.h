@@ -67,7 +67,8 @@ class RiskplanClient {
 void SetTimeout(grpc::ClientContext* context, absl::Duration timeout);
 
 // The channel the CLI and the load generator use: plaintext, large messages,
-// with `extra` channel arguments applied on top.
+// round-robin over every address the target resolves to, with `extra`
+// channel arguments applied on top.
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
                                            const grpc::ChannelArguments& extra = {});
 

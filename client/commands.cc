@@ -99,8 +99,8 @@ absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
   *request.mutable_goal() = *goal;
   v1::Algorithm algorithm = v1::ALGORITHM_UNSPECIFIED;
   if (!v1::Algorithm_Parse(absl::AsciiStrToUpper(o.algorithm), &algorithm)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("--algorithm=%s: unknown; known: RISK_RRT_STAR", o.algorithm));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--algorithm=%s: unknown; known: RISK_RRT_STAR, RRT, GENETIC, HARMONIC", o.algorithm));
   }
   request.set_algorithm(algorithm);
   request.mutable_budget()->set_time_ms(o.budget_ms);
@@ -115,6 +115,9 @@ absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
   if (absl::Status s = ParseModelParameters(o.params, request.mutable_model_params()); !s.ok()) {
     return s;
   }
+  absl::StatusOr<std::vector<v1::Point2>> obstacles = ParsePoints2(o.obstacles);
+  if (!obstacles.ok()) return obstacles.status();
+  request.mutable_obstacle_points()->Assign(obstacles->begin(), obstacles->end());
   return request;
 }
 

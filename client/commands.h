@@ -37,6 +37,7 @@ struct CliOptions {
   int64_t iterations = 0;
   uint64_t seed = 1;
   std::string planner_params;  // "name=value,..."
+  std::string obstacles;       // point obstacles "x,y; x,y; ..."
   int64_t min_update_interval_ms = 100;
   double display_step_m = 25.0;
   bool tree = false;

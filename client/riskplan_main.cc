@@ -27,12 +27,16 @@ ABSL_FLAG(std::string, params, "",
           "mass_kg=12,airspeed_mps=20)");
 ABSL_FLAG(std::string, start, "", "plan: start pose 'x,y,z,theta'");
 ABSL_FLAG(std::string, goal, "", "plan: goal pose 'x,y,z,theta'");
-ABSL_FLAG(std::string, algorithm, "RISK_RRT_STAR", "plan: planner algorithm");
+ABSL_FLAG(std::string, algorithm, "RISK_RRT_STAR",
+          "plan: RISK_RRT_STAR, RRT, GENETIC or HARMONIC (docs/planners.md)");
 ABSL_FLAG(int64_t, budget_ms, 5000, "plan: time budget, ms (0: none; then --iterations)");
 ABSL_FLAG(int64_t, iterations, 0, "plan: iteration budget (0: none)");
 ABSL_FLAG(uint64_t, seed, 1, "plan: planner seed");
 ABSL_FLAG(std::string, planner_params, "",
           "plan: planner parameters 'name=value,...' (listed by `riskplan-server --help`)");
+ABSL_FLAG(std::string, obstacles, "",
+          "plan: point obstacles 'x,y;...' kept at the planner's clearance_m (RRT, GENETIC, "
+          "HARMONIC)");
 ABSL_FLAG(int64_t, min_update_interval_ms, 100, "plan: least time between streamed updates, ms");
 ABSL_FLAG(double, display_step_m, 25.0, "plan: spacing of the streamed display path, m");
 ABSL_FLAG(bool, tree, false, "plan: draw the planner's final tree in the picture");
@@ -105,6 +109,7 @@ int main(int argc, char** argv) {
   o.iterations = absl::GetFlag(FLAGS_iterations);
   o.seed = absl::GetFlag(FLAGS_seed);
   o.planner_params = absl::GetFlag(FLAGS_planner_params);
+  o.obstacles = absl::GetFlag(FLAGS_obstacles);
   o.min_update_interval_ms = absl::GetFlag(FLAGS_min_update_interval_ms);
   o.display_step_m = absl::GetFlag(FLAGS_display_step_m);
   o.tree = absl::GetFlag(FLAGS_tree);

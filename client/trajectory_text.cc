@@ -99,6 +99,20 @@ absl::StatusOr<v1::Polyline> ParsePolyline(std::string_view text) {
   return out;
 }
 
+absl::StatusOr<std::vector<v1::Point2>> ParsePoints2(std::string_view text) {
+  std::vector<v1::Point2> out;
+  const std::vector<std::string> points = Points(text);
+  for (size_t i = 0; i < points.size(); ++i) {
+    absl::StatusOr<std::vector<double>> v =
+        ParseNumbers(points[i], 2, absl::StrFormat("obstacle %d", i));
+    if (!v.ok()) return v.status();
+    v1::Point2& p = out.emplace_back();
+    p.set_x((*v)[0]);
+    p.set_y((*v)[1]);
+  }
+  return out;
+}
+
 absl::Status ParseTrajectoryJson(std::string_view json, v1::EvaluateRiskRequest* request) {
   nlohmann::json doc = nlohmann::json::parse(json, nullptr, /*allow_exceptions=*/false);
   if (doc.is_discarded() || !doc.is_object()) {

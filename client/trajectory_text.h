@@ -15,6 +15,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "riskplan/v1/planner.pb.h"
@@ -24,6 +25,8 @@ namespace riskplan::client {
 absl::StatusOr<v1::Pose> ParsePose(std::string_view text);
 absl::StatusOr<v1::Waypoints> ParseWaypoints(std::string_view text);
 absl::StatusOr<v1::Polyline> ParsePolyline(std::string_view text);
+// "x,y; x,y; ..." (any number of points, none for empty text).
+absl::StatusOr<std::vector<v1::Point2>> ParsePoints2(std::string_view text);
 
 // Sets the trajectory of `request` (waypoints or polyline) from JSON text.
 absl::Status ParseTrajectoryJson(std::string_view json, v1::EvaluateRiskRequest* request);

@@ -93,9 +93,16 @@ absl::StatusOr<PlannerAlgorithm> AlgorithmFromProto(int algorithm) {
     case v1::ALGORITHM_UNSPECIFIED:
     case v1::RISK_RRT_STAR:
       return PlannerAlgorithm::kRiskRrtStar;
+    case v1::RRT:
+      return PlannerAlgorithm::kRrt;
+    case v1::GENETIC:
+      return PlannerAlgorithm::kGenetic;
+    case v1::HARMONIC:
+      return PlannerAlgorithm::kHarmonic;
     default:
       return absl::InvalidArgumentError(absl::StrFormat(
-          "algorithm has value %d, which this server does not offer; known: RISK_RRT_STAR (1)",
+          "algorithm has value %d, which this server does not offer; known: RISK_RRT_STAR (1), "
+          "RRT (2), GENETIC (3), HARMONIC (4)",
           algorithm));
   }
 }
@@ -193,6 +200,42 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
         "display_step_m has value %g; it must be finite and in [1, 1000] (0: 25 m)", step));
   }
   spec.display_step_m = step == 0.0 ? 25.0 : step;
+
+  if (static_cast<size_t>(request.obstacle_points_size()) > limits.max_obstacle_points) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("obstacle_points has %d points; the limit is %d",
+                        request.obstacle_points_size(), limits.max_obstacle_points));
+  }
+  if (static_cast<size_t>(request.dynamic_obstacles_size()) > kMaxDynamicObstacles) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("dynamic_obstacles has %d areas; the limit is %d",
+                        request.dynamic_obstacles_size(), kMaxDynamicObstacles));
+  }
+  for (int i = 0; i < request.obstacle_points_size(); ++i) {
+    const v1::Point2& p = request.obstacle_points(i);
+    const std::string field = absl::StrFormat("obstacle_points[%d]", i);
+    if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
+    if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
+    spec.options.obstacle_points.push_back(Point2{p.x(), p.y()});
+  }
+  for (int i = 0; i < request.dynamic_obstacles_size(); ++i) {
+    const v1::DynamicObstacle& o = request.dynamic_obstacles(i);
+    const std::string field = absl::StrFormat("dynamic_obstacles[%d]", i);
+    for (auto [name, value] : {std::pair{"x0_m", o.x0_m()},
+                               {"y0_m", o.y0_m()},
+                               {"x1_m", o.x1_m()},
+                               {"y1_m", o.y1_m()}}) {
+      if (absl::Status s = CheckFinite(value, field + "." + name); !s.ok()) return s;
+    }
+    if (o.at_iteration() < 0 || !(o.x0_m() < o.x1_m()) || !(o.y0_m() < o.y1_m())) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s is at_iteration %d, [%g, %g] x [%g, %g]; it needs at_iteration >= 0, x0_m < "
+          "x1_m and y0_m < y1_m",
+          field, o.at_iteration(), o.x0_m(), o.x1_m(), o.y0_m(), o.y1_m()));
+    }
+    spec.options.dynamic_obstacles.push_back(
+        DynamicObstacle{o.at_iteration(), o.x0_m(), o.y0_m(), o.x1_m(), o.y1_m()});
+  }
   return spec;
 }
 

@@ -37,6 +37,7 @@ struct RequestLimits {
   size_t max_waypoints = 10000;           // EvaluateRisk points
   int64_t max_eval_samples = 2000000;     // midpoint samples of one EvaluateRisk
   int64_t max_response_samples = 200000;  // samples returned with include_samples
+  size_t max_obstacle_points = 10000;     // PlanRequest.obstacle_points (<= kMaxObstaclePoints)
 };
 
 // Converts the overrides onto the defaults and validates the result
@@ -61,7 +62,7 @@ struct PlanSpec {
   PlannerAlgorithm algorithm = PlannerAlgorithm::kRiskRrtStar;
   Pose start;
   Pose goal;
-  PlanOptions options;  // budget (capped), seed, planner params, record_tree
+  PlanOptions options;  // budget (capped), seed, planner params, record_tree, obstacles
   absl::Duration min_update_interval;
   double display_step_m = 25.0;
 };
@@ -97,7 +98,8 @@ absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_st
                               bool include_samples, const RequestLimits& limits);
 
 // The algorithm of a request: ALGORITHM_UNSPECIFIED and RISK_RRT_STAR give
-// kRiskRrtStar; anything else is INVALID_ARGUMENT.
+// kRiskRrtStar, RRT, GENETIC and HARMONIC their planners; anything else is
+// INVALID_ARGUMENT.
 absl::StatusOr<PlannerAlgorithm> AlgorithmFromProto(int algorithm);
 
 }  // namespace riskplan::server

@@ -16,6 +16,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
+#include "core/planner.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/health_check_service_interface.h"
@@ -46,6 +47,8 @@ ABSL_FLAG(int64_t, max_plan_time_ms, 600000,
 ABSL_FLAG(int64_t, default_plan_time_ms, 1000,
           "Time budget of a plan whose budget sets neither time_ms nor iterations");
 ABSL_FLAG(int, max_waypoints, 10000, "Most points of an EvaluateRisk trajectory");
+ABSL_FLAG(int, max_obstacle_points, 10000,
+          "Most obstacle points of one PlanRequest (at most 100000; dynamic obstacles: 1000)");
 ABSL_FLAG(int64_t, max_eval_samples, 2000000,
           "Most samples (length / sample_step_m) of one EvaluateRisk trajectory");
 ABSL_FLAG(int64_t, max_response_samples, 200000,
@@ -99,6 +102,9 @@ int Main() {
   options.limits.default_plan_time_ms = absl::GetFlag(FLAGS_default_plan_time_ms);
   options.limits.max_waypoints =
       static_cast<size_t>(std::max(2, absl::GetFlag(FLAGS_max_waypoints)));
+  options.limits.max_obstacle_points =
+      std::min(kMaxObstaclePoints,
+               static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_obstacle_points))));
   options.limits.max_eval_samples = absl::GetFlag(FLAGS_max_eval_samples);
   options.limits.max_response_samples = absl::GetFlag(FLAGS_max_response_samples);
   const int64_t grace_ms = absl::GetFlag(FLAGS_grace_period_ms);
@@ -209,7 +215,19 @@ int Main() {
 }  // namespace riskplan::server
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(riskplan::server::kUsage);
+  // The usage lists each algorithm's planner parameters (PlanRequest.planner_params).
+  std::string usage = riskplan::server::kUsage;
+  usage += "\n\nPlanner parameters (PlanRequest.planner_params, `riskplan plan --planner_params`):";
+  for (riskplan::PlannerAlgorithm algorithm :
+       {riskplan::PlannerAlgorithm::kRiskRrtStar, riskplan::PlannerAlgorithm::kRrt,
+        riskplan::PlannerAlgorithm::kGenetic, riskplan::PlannerAlgorithm::kHarmonic}) {
+    usage += absl::StrFormat("\n  %s:", riskplan::PlannerAlgorithmName(algorithm));
+    for (const riskplan::PlannerParamInfo& p : riskplan::PlannerParams(algorithm)) {
+      usage += absl::StrFormat("\n    %-20s default %g, range [%g, %g]: %s", p.name,
+                               p.default_value, p.min_value, p.max_value, p.help);
+    }
+  }
+  absl::SetProgramUsageMessage(usage);
   absl::ParseCommandLine(argc, argv);
   return riskplan::server::Main();
 }

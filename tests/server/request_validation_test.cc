@@ -128,10 +128,43 @@ TEST_F(RequestValidationTest, PoseOutsideTheMap) {
                   "[0, 2000), y in [0, 2000)");
 }
 
-TEST_F(RequestValidationTest, UnknownAlgorithm) {
+TEST_F(RequestValidationTest, Algorithms) {
   v1::PlanRequest r = GoodPlan();
   r.set_algorithm(static_cast<v1::Algorithm>(7));
   ExpectPlanError(r, absl::StatusCode::kInvalidArgument, "algorithm has value 7");
+  const std::pair<v1::Algorithm, PlannerAlgorithm> known[] = {
+      {v1::ALGORITHM_UNSPECIFIED, PlannerAlgorithm::kRiskRrtStar},
+      {v1::RISK_RRT_STAR, PlannerAlgorithm::kRiskRrtStar},
+      {v1::RRT, PlannerAlgorithm::kRrt},
+      {v1::GENETIC, PlannerAlgorithm::kGenetic},
+      {v1::HARMONIC, PlannerAlgorithm::kHarmonic}};
+  for (auto [proto, algorithm] : known) {
+    r.set_algorithm(proto);
+    absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(r, *registry_, limits_);
+    ASSERT_TRUE(spec.ok()) << spec.status();
+    EXPECT_EQ(spec->algorithm, algorithm);
+  }
+}
+
+TEST_F(RequestValidationTest, ObstaclesReachThePlanOptions) {
+  v1::PlanRequest r = GoodPlan();
+  r.add_obstacle_points()->set_x(700);
+  v1::DynamicObstacle* o = r.add_dynamic_obstacles();
+  o->set_at_iteration(50);
+  o->set_x0_m(100);
+  o->set_y0_m(200);
+  o->set_x1_m(300);
+  o->set_y1_m(400);
+  absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  ASSERT_EQ(spec->options.obstacle_points.size(), 1u);
+  EXPECT_EQ(spec->options.obstacle_points[0].x, 700);
+  ASSERT_EQ(spec->options.dynamic_obstacles.size(), 1u);
+  EXPECT_EQ(spec->options.dynamic_obstacles[0].at_iteration, 50);
+  EXPECT_EQ(spec->options.dynamic_obstacles[0].y1_m, 400);
+  limits_.max_obstacle_points = 0;
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "obstacle_points has 1 points; the limit is 0");
 }
 
 TEST_F(RequestValidationTest, BudgetOutOfRange) {

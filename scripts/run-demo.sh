@@ -1,12 +1,66 @@
 #!/usr/bin/env bash
-# The README's main job: builds riskplan if needed, then evaluates a sample
-# trajectory across the built-in demo-city and prints its risk, length and
-# admissibility. Extra arguments are passed to `riskplan-tool evaluate`.
+# The README's main job: builds riskplan if needed, starts riskplan-server on
+# the built-in demo-city (127.0.0.1, a free port), plans a trajectory across
+# the city with the `riskplan` client while showing each streamed improvement,
+# writes a picture of the plan (out/demo-plan.svg), and stops the server.
+# Exits non-zero when any step fails. Extra arguments go to `riskplan plan`
+# (e.g. --budget_ms=20000 --tree --picture=out/plan.png).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh >&2
 BIN=${BUILD_DIR:-build}/bin
-# South-west suburbs to north-east suburbs, 250 m AMSL, through the centre.
-WAYPOINTS=${WAYPOINTS:-"1200,1500,250,0.785; 4000,4000,250,0.785; 6800,6500,250,0.785"}
-echo "== riskplan-tool evaluate on demo-city =="
-"$BIN/riskplan-tool" evaluate --waypoints="$WAYPOINTS" "$@"
+OUT=${OUT_DIR:-out}
+mkdir -p "$OUT"
+
+# South-west suburbs to north-east suburbs at 250 m AMSL (both admissible:
+# inside the 30-150 m AGL band and above the emergency-glide altitude).
+START=${START:-"1200,1500,250,0.785"}
+GOAL=${GOAL:-"6800,6500,250,0.785"}
+BUDGET_MS=${BUDGET_MS:-10000}
+
+workdir=$(mktemp -d)
+server_pid=""
+cleanup() {
+  if [ -n "$server_pid" ] && kill -0 "$server_pid" 2>/dev/null; then
+    kill -TERM "$server_pid" 2>/dev/null || true
+    wait "$server_pid" 2>/dev/null || true
+  fi
+  rm -rf "$workdir"
+}
+trap cleanup EXIT
+
+# The server prints one readiness line on stdout once it serves; read it
+# through a FIFO kept open for the server's lifetime.
+mkfifo "$workdir/ready"
+"$BIN/riskplan-server" --listen=127.0.0.1:0 --rpc_log=false 2>"$OUT/demo-server.log" \
+  >"$workdir/ready" &
+server_pid=$!
+exec 3<"$workdir/ready"
+if ! read -r -t 120 line <&3 || [[ "$line" != "riskplan-server listening on "* ]]; then
+  echo "run-demo: riskplan-server did not start; its log:" >&2
+  cat "$OUT/demo-server.log" >&2
+  exit 1
+fi
+ADDRESS=${line#riskplan-server listening on }
+echo "== riskplan-server on demo-city at $ADDRESS =="
+"$BIN/riskplan" --server="$ADDRESS" maps
+
+echo
+echo "== riskplan plan: streamed improvements =="
+"$BIN/riskplan" --server="$ADDRESS" plan --map=demo-city \
+  --start="$START" --goal="$GOAL" --budget_ms="$BUDGET_MS" --min_update_interval_ms=250 \
+  --picture="$OUT/demo-plan.svg" --trajectory_out="$OUT/demo-plan.json" "$@"
+
+echo
+echo "== riskplan eval of the planned trajectory (same server, same risk) =="
+evaluation=$("$BIN/riskplan" --server="$ADDRESS" eval --map=demo-city \
+  --trajectory_file="$OUT/demo-plan.json")
+echo "${evaluation%%$'\n'*}"
+
+kill -TERM "$server_pid"
+wait "$server_pid"
+server_pid=""
+exec 3<&-
+echo
+echo "picture: $OUT/demo-plan.svg (population density, no-fly zones in violet, landing sites,"
+echo "         every streamed improvement from light to dark blue, start green, goal magenta)"

@@ -158,7 +158,9 @@ Gene Run::RandomGene() {
   Gene g;
   g.x = map.x0() + rng_.Uniform() * map.width_m();
   g.y = map.y0() + rng_.Uniform() * map.height_m();
-  g.band_fraction = rng_.Uniform();
+  // In fixed mode the fraction is unused; a constant keeps identical
+  // chromosomes identical (premature convergence is detected on the genes).
+  g.band_fraction = fixed_mode_ ? 0.5 : rng_.Uniform();
   return g;
 }
 
@@ -291,6 +293,7 @@ void Run::Mutate(int kind, Chromosome* c) {
       break;
     }
   }
+  if (fixed_mode_) c->genes[k].band_fraction = 0.5;
 }
 
 absl::Status Run::MaybeReport() {

@@ -1,0 +1,109 @@
+// The blobs a board keeps: a map's density and shelter layers, and an impact
+// table's kernels, in the canonical byte form that is uploaded and named by
+// its SHA-256 (docs/shim-protocol.md, "Blobs"). The board quantises them to
+// its number format when it installs them.
+//
+//   map blob      "RPMAP001" u32 nx u32 ny f32 density[nx*ny] f32 shelter[nx*ny]
+//   kernels blob  "RPKRN001" u32 height_bins u32 heading_bins
+//                 then per height bin b = 1..H: u32 half_width, and for each
+//                 heading bin k = 0..N-1: f64 weights[side*side]
+//                 (side = 2 hw + 1, rows running north, unpadded)
+// Layers are row-major with row 0 the southernmost, as in RiskMap.
+//
+// BlobCache builds the blobs of the maps and tables in use once and shares
+// them between FPGA workers (thread-safe, bounded by bytes).
+#ifndef RISKPLAN_ACCEL_BLOBS_H_
+#define RISKPLAN_ACCEL_BLOBS_H_
+
+#include <cstdint>
+#include <functional>
+#include <list>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "absl/synchronization/mutex.h"
+#include "accel/fixed_point.h"
+#include "accel/shim_protocol.h"
+#include "core/impact_table.h"
+#include "core/risk_map.h"
+
+namespace riskplan::accel {
+
+// A kernel set as the blob carries it (also what tests and the known-answer
+// probe build by hand).
+struct KernelSet {
+  int height_bins = 0;
+  int heading_bins = 0;
+  std::vector<int> half_width;               // per height bin (index b - 1)
+  std::vector<std::vector<double>> weights;  // per (b, k): index (b-1)*N + k, side*side
+};
+KernelSet KernelSetOf(const ImpactTable& table);
+
+std::string EncodeMapBlob(int nx, int ny, const float* density, const float* shelter);
+std::string EncodeMapBlob(const RiskMap& map);
+std::string EncodeKernelsBlob(const KernelSet& kernels);
+
+// Quantised kernels, as the device holds them; index (b-1)*N + k.
+struct QuantizedKernelTable {
+  uint64_t id = 0;  // unique per installed table (devices cache kernels by it)
+  int height_bins = 0;
+  int heading_bins = 0;
+  std::vector<QuantizedKernel> kernels;
+  const QuantizedKernel& kernel(int b, int k) const {
+    return kernels[static_cast<size_t>(b - 1) * heading_bins + k];
+  }
+  size_t MemoryBytes() const;
+};
+
+// Parse, check the domains (density >= 0, shelter in [0, 10], weights in
+// [0, 1], all finite; sizes consistent; kernel side <= max_side) and quantise.
+// InvalidArgument naming what is wrong.
+absl::StatusOr<QuantizedMap> QuantizeMapBlob(absl::string_view blob, const NumberFormat& format,
+                                             int pad);
+absl::StatusOr<QuantizedKernelTable> QuantizeKernelsBlob(absl::string_view blob,
+                                                         const NumberFormat& format, int max_side);
+
+// A blob ready to upload.
+struct Blob {
+  BlobKind kind = BlobKind::kMap;
+  BlobHash hash{};
+  std::string bytes;
+  double max_density = 0.0;  // map blobs: the largest density (checks results)
+};
+
+class BlobCache {
+ public:
+  explicit BlobCache(size_t budget_bytes) : budget_bytes_(budget_bytes) {}
+
+  // The blob of `map` / `table`, built on first use (tens of milliseconds
+  // for demo-city). Never keeps the map or table alive. Entries beyond the
+  // budget are dropped, least recently used first (the one returned is kept
+  // alive by its shared_ptr).
+  std::shared_ptr<const Blob> MapBlob(const std::shared_ptr<const RiskMap>& map);
+  std::shared_ptr<const Blob> KernelsBlob(const std::shared_ptr<const ImpactTable>& table);
+
+  size_t MemoryBytes() const;
+
+ private:
+  struct Entry {
+    const void* key;
+    std::weak_ptr<const void> owner;
+    std::shared_ptr<const Blob> blob;
+  };
+  std::shared_ptr<const Blob> Get(const std::shared_ptr<const void>& owner,
+                                  const std::function<Blob()>& build);
+
+  const size_t budget_bytes_;
+  absl::Mutex build_mu_ ABSL_ACQUIRED_BEFORE(mu_);
+  mutable absl::Mutex mu_;
+  std::list<Entry> entries_ ABSL_GUARDED_BY(mu_);
+  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
+};
+
+}  // namespace riskplan::accel
+
+#endif  // RISKPLAN_ACCEL_BLOBS_H_

@@ -1,0 +1,67 @@
+// Blocking TCP with deadlines, for the shim protocol on both ends. Every
+// call that waits takes an absolute deadline and fails with
+// DeadlineExceeded when it passes; a closed or reset connection is
+// Unavailable. Sockets are non-blocking underneath and waited on with
+// poll(), so a deadline holds even when the peer never answers.
+#ifndef RISKPLAN_ACCEL_NET_H_
+#define RISKPLAN_ACCEL_NET_H_
+
+#include <cstdint>
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "absl/time/time.h"
+#include "accel/shim_protocol.h"
+
+namespace riskplan::accel {
+
+// Owns a file descriptor; closes it on destruction. Move-only.
+class Socket {
+ public:
+  Socket() = default;
+  explicit Socket(int fd) : fd_(fd) {}
+  Socket(Socket&& other) noexcept : fd_(other.Release()) {}
+  Socket& operator=(Socket&& other) noexcept;
+  Socket(const Socket&) = delete;
+  Socket& operator=(const Socket&) = delete;
+  ~Socket() { Close(); }
+
+  int fd() const { return fd_; }
+  bool valid() const { return fd_ >= 0; }
+  int Release();
+  void Close();
+  // Wakes any thread blocked on this socket (shutdown both ways); the
+  // descriptor stays open until Close(). Thread-safe with respect to I/O.
+  void Shutdown() const;
+
+ private:
+  int fd_ = -1;
+};
+
+// Splits "host:port" ("[v6]:port" for IPv6). InvalidArgument when malformed.
+absl::Status SplitHostPort(absl::string_view host_port, std::string* host, int* port);
+
+// Connects to "host:port" (resolved with getaddrinfo, which does not honour
+// the deadline).
+absl::StatusOr<Socket> ConnectTcp(absl::string_view host_port, absl::Time deadline);
+
+// Listens on "host:port" (port 0 picks one); *bound gets the real
+// "host:port".
+absl::StatusOr<Socket> ListenTcp(absl::string_view host_port, std::string* bound);
+
+// Waits for a connection until `deadline`.
+absl::StatusOr<Socket> Accept(const Socket& listener, absl::Time deadline);
+
+absl::Status SendAll(const Socket& socket, absl::string_view data, absl::Time deadline);
+absl::Status RecvAll(const Socket& socket, void* data, size_t size, absl::Time deadline);
+
+// Reads one frame: header checked (DecodeHeader), payload read and checked
+// against its CRC. The version is left to the caller.
+absl::Status ReadFrame(const Socket& socket, uint32_t max_payload_bytes, absl::Time deadline,
+                       FrameHeader* header, std::string* payload);
+
+}  // namespace riskplan::accel
+
+#endif  // RISKPLAN_ACCEL_NET_H_

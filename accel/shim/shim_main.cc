@@ -1,0 +1,126 @@
+// riskplan-fpga-shim: the daemon that runs on an FPGA board (or beside a
+// model of one) and serves the shim protocol (docs/shim-protocol.md) to
+// riskplan servers' FPGA workers.
+//
+//   riskplan-fpga-shim --listen=HOST:PORT --device=model [--format=board]
+//   riskplan-fpga-shim --listen=0.0.0.0:7070 --device=mmio --mmio_device=/dev/mem
+//                      --mmio_base=0xff200000
+//
+// Once it listens it prints one line, `riskplan-fpga-shim listening on
+// HOST:PORT`, with the real port (port 0 picks one). SIGTERM or SIGINT stop
+// it.
+#include <signal.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/numbers.h"
+#include "accel/shim/component_model.h"
+#include "accel/shim/device.h"
+#include "accel/shim/mmio_device.h"
+#include "accel/shim/register_bus.h"
+#include "accel/shim/shim_server.h"
+
+ABSL_FLAG(std::string, listen, "127.0.0.1:7070", "HOST:PORT to listen on (port 0 picks one)");
+ABSL_FLAG(std::string, device, "model",
+          "device backend: model (the fixed-point datapath in software), mmio (the component's "
+          "registers), verilator (issue 6, not built yet)");
+ABSL_FLAG(std::string, format, "board",
+          "number format of the model backend: board (w32m32a80), precise (w48m48a128) or "
+          "wWmMaA; the mmio backend reads the component's");
+ABSL_FLAG(std::string, mmio_device, "/dev/mem",
+          "mmio: /dev/mem, /dev/uioN, a file, or 'model' for the in-memory component model");
+ABSL_FLAG(std::string, mmio_base, "0xff200000",
+          "mmio: byte address of the component's CSR slave in --mmio_device (0 for UIO)");
+ABSL_FLAG(int, model_lanes, 8, "mmio with --mmio_device=model: lanes of the component model");
+ABSL_FLAG(int, store_mb, 1024, "room for blobs (maps and kernel tables, quantised), MiB");
+ABSL_FLAG(int, max_sites, 65536, "largest EVAL, in sites");
+ABSL_FLAG(int, idle_timeout_s, 600, "close connections idle this long, seconds");
+
+namespace riskplan::accel {
+namespace {
+
+absl::StatusOr<std::unique_ptr<EwmmDevice>> MakeDevice() {
+  const std::string kind = absl::GetFlag(FLAGS_device);
+  absl::StatusOr<NumberFormat> format = NumberFormat::Parse(absl::GetFlag(FLAGS_format));
+  if (!format.ok()) return format.status();
+  if (kind == "model") return std::unique_ptr<EwmmDevice>(new ModelDevice(*format));
+  if (kind == "mmio") {
+    std::unique_ptr<RegisterBus> bus;
+    const std::string path = absl::GetFlag(FLAGS_mmio_device);
+    if (path == "model") {
+      ComponentConfig config;
+      config.format = *format;
+      config.lanes = static_cast<uint32_t>(absl::GetFlag(FLAGS_model_lanes));
+      bus = std::make_unique<ComponentModel>(config);
+    } else {
+      uint64_t base = 0;
+      if (!absl::SimpleHexAtoi(absl::GetFlag(FLAGS_mmio_base), &base)) {
+        return absl::InvalidArgumentError("--mmio_base is not a hexadecimal address");
+      }
+      absl::StatusOr<std::unique_ptr<MappedRegisterBus>> mapped =
+          MappedRegisterBus::Open(path, base, 0x1000);
+      if (!mapped.ok()) return mapped.status();
+      bus = *std::move(mapped);
+    }
+    absl::StatusOr<std::unique_ptr<MmioDevice>> device = MmioDevice::Open(std::move(bus), {});
+    if (!device.ok()) return device.status();
+    return std::unique_ptr<EwmmDevice>(*std::move(device));
+  }
+  if (kind == "verilator") {
+    return absl::UnimplementedError(
+        "--device=verilator: the RTL backend is not part of this build (issue 6)");
+  }
+  return absl::InvalidArgumentError("--device must be model, mmio or verilator");
+}
+
+int Main() {
+  // Block the stop signals before any thread starts, and wait for them here.
+  sigset_t stop;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGTERM);
+  sigaddset(&stop, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &stop, nullptr);
+
+  absl::StatusOr<std::unique_ptr<EwmmDevice>> device = MakeDevice();
+  if (!device.ok()) {
+    std::cerr << "riskplan-fpga-shim: " << device.status().message() << "\n";
+    return 2;
+  }
+  ShimServerOptions options;
+  options.limits.store_bytes = uint64_t(absl::GetFlag(FLAGS_store_mb)) << 20;
+  options.limits.max_sites_per_eval = static_cast<uint32_t>(absl::GetFlag(FLAGS_max_sites));
+  options.idle_timeout = absl::Seconds(absl::GetFlag(FLAGS_idle_timeout_s));
+  const DeviceInfo info = (*device)->info();
+  ShimServer server(*std::move(device), options);
+  absl::StatusOr<std::string> bound = server.Start(absl::GetFlag(FLAGS_listen));
+  if (!bound.ok()) {
+    std::cerr << "riskplan-fpga-shim: " << bound.status().message() << "\n";
+    return 1;
+  }
+  std::cerr << "riskplan-fpga-shim: device " << info.backend << " (" << info.device << ", "
+            << info.firmware << "), format " << info.format.Name() << ", " << info.lanes
+            << " lane(s)\n";
+  std::cout << "riskplan-fpga-shim listening on " << *bound << std::endl;
+  int signal = 0;
+  sigwait(&stop, &signal);
+  server.Stop();
+  return 0;
+}
+
+}  // namespace
+}  // namespace riskplan::accel
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(
+      "the riskplan FPGA shim: serves the shim protocol for one board.\n"
+      "  riskplan-fpga-shim --listen=HOST:PORT --device=<model|mmio|verilator> ...");
+  absl::ParseCommandLine(argc, argv);
+  return riskplan::accel::Main();
+}

@@ -1,0 +1,109 @@
+#include "accel/shim/shim_server.h"
+
+#include <utility>
+
+namespace riskplan::accel {
+
+ShimServer::ShimServer(std::unique_ptr<EwmmDevice> device, const ShimServerOptions& options)
+    : device_(std::move(device)), options_(options) {
+  store_ = std::make_unique<BlobStore>(device_->info().format,
+                                       static_cast<int>(device_->info().max_kernel_side),
+                                       options.limits.store_bytes);
+  context_.device = device_.get();
+  context_.store = store_.get();
+  context_.limits = options.limits;
+}
+
+ShimServer::~ShimServer() { Stop(); }
+
+absl::StatusOr<std::string> ShimServer::Start(const std::string& listen) {
+  std::string bound;
+  absl::StatusOr<Socket> listener = ListenTcp(listen, &bound);
+  if (!listener.ok()) return listener.status();
+  listener_ = *std::move(listener);
+  accept_thread_ = std::thread([this] { AcceptLoop(); });
+  return bound;
+}
+
+void ShimServer::AcceptLoop() {
+  while (true) {
+    {
+      absl::MutexLock lock(&mu_);
+      if (stopping_) return;
+      // Reap finished connections.
+      for (auto it = connections_.begin(); it != connections_.end();) {
+        if (it->finished) {
+          it->thread.join();
+          it = connections_.erase(it);
+        } else {
+          ++it;
+        }
+      }
+    }
+    // Short waits so that Stop() is noticed promptly.
+    absl::StatusOr<Socket> socket = Accept(listener_, absl::Now() + absl::Milliseconds(100));
+    if (!socket.ok()) continue;
+    absl::MutexLock lock(&mu_);
+    if (stopping_) return;
+    if (static_cast<int>(connections_.size()) >= options_.max_connections) continue;
+    ++accepted_;
+    connections_.emplace_back();
+    Connection* c = &connections_.back();
+    c->socket = *std::move(socket);
+    c->thread = std::thread([this, c] { Serve(c); });
+  }
+}
+
+void ShimServer::Serve(Connection* connection) {
+  ShimSession session(&context_);
+  std::string payload;
+  while (true) {
+    FrameHeader header;
+    absl::Status s = ReadFrame(connection->socket, options_.limits.max_payload_bytes,
+                               absl::Now() + options_.idle_timeout, &header, &payload);
+    if (!s.ok()) {
+      if (s.code() == absl::StatusCode::kDataLoss ||
+          s.code() == absl::StatusCode::kResourceExhausted) {
+        SendAll(connection->socket,
+                ShimSession::ErrorFrame(0, ShimErrorCode::kMalformed, s.message()),
+                absl::Now() + absl::Seconds(1))
+            .IgnoreError();
+      }
+      break;
+    }
+    bool close = false;
+    const std::string reply = session.Handle(header, payload, &close);
+    if (!SendAll(connection->socket, reply, absl::Now() + options_.idle_timeout).ok() || close) {
+      break;
+    }
+  }
+  connection->socket.Shutdown();
+  absl::MutexLock lock(&mu_);
+  connection->finished = true;
+}
+
+void ShimServer::Stop() {
+  {
+    absl::MutexLock lock(&mu_);
+    if (stopping_) return;
+    stopping_ = true;
+    for (Connection& c : connections_) c.socket.Shutdown();
+  }
+  if (accept_thread_.joinable()) accept_thread_.join();
+  std::list<Connection> connections;
+  {
+    absl::MutexLock lock(&mu_);
+    connections.swap(connections_);
+  }
+  for (Connection& c : connections) {
+    if (c.thread.joinable()) c.thread.join();
+  }
+  listener_.Close();
+}
+
+uint64_t ShimServer::connections_accepted() const {
+  absl::MutexLock lock(&mu_);
+  return accepted_;
+}
+
+}  // namespace riskplan::accel

@@ -1,0 +1,528 @@
+#include "accel/cpu_kernel.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <utility>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+namespace riskplan::accel {
+namespace {
+
+// Widest kernel the vector loops are specialised for: a side of 64 cells
+// (spec hw_max = 31 gives 63). Wider kernels take RiskModel::Ewmm.
+constexpr int kMaxSide = 64;
+
+// The per-model constants of RiskModel::Locate.
+struct LocateConstants {
+  double x0, y0, res;
+  double nx, ny;
+  int nx_int;
+  const float* terrain;
+  double height_bin_m;
+  int height_bins;
+  double heading_bin_width;
+  int heading_bins;
+};
+
+LocateConstants ConstantsOf(const RiskModel& model) {
+  const RiskMap& m = model.map();
+  const ImpactTable& t = model.table();
+  LocateConstants c;
+  c.x0 = m.x0();
+  c.y0 = m.y0();
+  c.res = m.res();
+  c.nx = m.nx();
+  c.ny = m.ny();
+  c.nx_int = m.nx();
+  c.terrain = m.layers().terrain.data();
+  c.height_bin_m = t.params().height_bin_m;
+  c.height_bins = t.height_bins();
+  // The same expression as ImpactTable::HeadingBinOf, hence the same double.
+  c.heading_bin_width = kTwoPi / t.heading_bins();
+  c.heading_bins = t.heading_bins();
+  return c;
+}
+
+void LocatePortable(const RiskModel& model, std::span<const Pose> configs,
+                    std::span<ConfigurationRisk> out, std::vector<LocatedSite>* sites) {
+  for (size_t n = 0; n < configs.size(); ++n) {
+    LocatedSite s;
+    s.index = static_cast<uint32_t>(n);
+    if (model.Locate(configs[n], &s.site)) {
+      sites->push_back(s);
+    } else {
+      out[n] = ConfigurationRisk{};
+    }
+  }
+}
+
+// M(q) from cached values, with the operations of RiskModel::FromSums.
+ConfigurationRisk FromCached(const RiskModel& model, const KernelSite& site,
+                             const SiteCache::Values& v) {
+  ConfigurationRisk out;
+  out.impact_factor = v.impact_factor;
+  out.expected_shelter = v.expected_shelter;
+  out.casualty_probability = v.casualty_probability;
+  out.exposed_area_m2 = model.table().bin(site.height_bin).exposed_area_m2;
+  out.risk = out.exposed_area_m2 * out.casualty_probability * v.impact_factor;
+  out.height_bin = site.height_bin;
+  out.heading_bin = site.heading_bin;
+  out.defined = true;
+  return out;
+}
+
+// One window: the kernel's weights and the window's first cell in each layer.
+struct Window {
+  const double* weights;
+  const float* density;
+  const float* shelter;
+};
+
+using EwmmFn = void (*)(const Window*, int rows, int weight_stride, int64_t map_stride,
+                        double* impact_factor, double* expected_shelter);
+
+inline double ReduceLanes(const double* a) {
+  return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
+}
+
+#if defined(__x86_64__)
+// std::floor as one instruction (roundsd toward -inf, exceptions suppressed):
+// the same result for every double.
+__attribute__((target("avx2"), always_inline)) inline double FloorAvx2(double x) {
+  const __m128d v = _mm_set_sd(x);
+  return _mm_cvtsd_f64(_mm_round_sd(v, v, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+}
+
+// RiskModel::Locate, operation for operation (this file is built with
+// -ffp-contract=off like core/), without library calls: floor is exact
+// either way, and fmod of an integral double by N is the integer remainder
+// (same sign as the dividend) while the quotient fits in 31 bits.
+__attribute__((target("avx2"), always_inline)) inline bool LocateOneAvx2(const RiskModel& model,
+                                                                         const LocateConstants& c,
+                                                                         const Pose& q,
+                                                                         KernelSite* site) {
+  if (!std::isfinite(q.z) || !std::isfinite(q.theta)) return false;
+  const double fx = FloorAvx2((q.x - c.x0) / c.res);
+  const double fy = FloorAvx2((q.y - c.y0) / c.res);
+  if (!(fx >= 0.0 && fx < c.nx && fy >= 0.0 && fy < c.ny)) return false;
+  const int i = static_cast<int>(fx);
+  const int j = static_cast<int>(fy);
+  const double h = q.z - static_cast<double>(c.terrain[static_cast<int64_t>(j) * c.nx_int + i]);
+  if (!(h > 0.0)) return false;
+  const double bf = FloorAvx2(h / c.height_bin_m + 0.5);
+  int b;
+  if (!(bf >= 1.0)) {
+    b = 1;
+  } else if (bf > c.height_bins) {
+    b = c.height_bins;
+  } else {
+    b = static_cast<int>(bf);
+  }
+  const double kf = FloorAvx2(q.theta / c.heading_bin_width + 0.5);
+  int k;
+  if (kf > -2147483648.0 && kf < 2147483648.0) {
+    const int r = static_cast<int>(static_cast<int64_t>(kf) % c.heading_bins);
+    k = r < 0 ? r + c.heading_bins : r;
+  } else {
+    k = model.table().HeadingBinOf(q.theta);
+  }
+  const ImpactKernel& kernel = model.table().kernel(b, k);
+  site->height_bin = b;
+  site->heading_bin = k;
+  site->impact_i = static_cast<int>(FloorAvx2((q.x + kernel.offset_x_m - c.x0) / c.res));
+  site->impact_j = static_cast<int>(FloorAvx2((q.y + kernel.offset_y_m - c.y0) / c.res));
+  return true;
+}
+
+// Configurations this far ahead have their terrain cell prefetched: at
+// random positions the terrain read is a cache miss.
+constexpr size_t kTerrainPrefetch = 8;
+
+__attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
+                                                std::span<const Pose> configs,
+                                                std::span<ConfigurationRisk> out,
+                                                std::vector<LocatedSite>* sites) {
+  const LocateConstants c = ConstantsOf(model);
+  const size_t n = configs.size();
+  sites->reserve(sites->size() + n);
+  for (size_t a = 0; a < n; ++a) {
+    if (a + kTerrainPrefetch < n) {
+      const Pose& q = configs[a + kTerrainPrefetch];
+      const double fx = FloorAvx2((q.x - c.x0) / c.res);
+      const double fy = FloorAvx2((q.y - c.y0) / c.res);
+      if (fx >= 0.0 && fx < c.nx && fy >= 0.0 && fy < c.ny) {
+        _mm_prefetch(reinterpret_cast<const char*>(c.terrain + static_cast<int64_t>(fy) * c.nx_int +
+                                                   static_cast<int64_t>(fx)),
+                     _MM_HINT_T0);
+      }
+    }
+    LocatedSite s;
+    s.index = static_cast<uint32_t>(a);
+    if (LocateOneAvx2(model, c, configs[a], &s.site)) {
+      sites->push_back(s);
+    } else {
+      out[a] = ConfigurationRisk{};
+    }
+  }
+}
+
+// The EWMM of kN windows of `rows` rows and kHalves four-lane column groups.
+// RiskModel's lane l accumulates columns l, l+8, l+16, ... of every row, rows
+// in order: here lanes 0-3 are the even halves (lo) and lanes 4-7 the odd
+// ones (hi), added in the same order. Columns past the last half only hold
+// zero weights; adding their +0 products to a non-negative sum changes
+// nothing, so they are skipped.
+template <int kHalves, int kN>
+__attribute__((target("avx2"))) void EwmmAvx2(const Window* windows, int rows, int weight_stride,
+                                              int64_t map_stride, double* impact_factor,
+                                              double* expected_shelter) {
+  __m256d rho_lo[kN], rho_hi[kN], sh_lo[kN], sh_hi[kN];
+  const double* w[kN];
+  const float* r[kN];
+  const float* s[kN];
+#pragma GCC unroll 4
+  for (int c = 0; c < kN; ++c) {
+    rho_lo[c] = rho_hi[c] = sh_lo[c] = sh_hi[c] = _mm256_setzero_pd();
+    w[c] = windows[c].weights;
+    r[c] = windows[c].density;
+    s[c] = windows[c].shelter;
+  }
+  for (int v = 0; v < rows; ++v) {
+#pragma GCC unroll 4
+    for (int c = 0; c < kN; ++c) {
+#pragma GCC unroll 16
+      for (int h = 0; h < kHalves; ++h) {
+        const __m256d wv = _mm256_loadu_pd(w[c] + 4 * h);
+        const __m256d pr = _mm256_mul_pd(wv, _mm256_cvtps_pd(_mm_loadu_ps(r[c] + 4 * h)));
+        const __m256d ps = _mm256_mul_pd(wv, _mm256_cvtps_pd(_mm_loadu_ps(s[c] + 4 * h)));
+        if (h % 2 == 0) {
+          rho_lo[c] = _mm256_add_pd(rho_lo[c], pr);
+          sh_lo[c] = _mm256_add_pd(sh_lo[c], ps);
+        } else {
+          rho_hi[c] = _mm256_add_pd(rho_hi[c], pr);
+          sh_hi[c] = _mm256_add_pd(sh_hi[c], ps);
+        }
+      }
+      w[c] += weight_stride;
+      r[c] += map_stride;
+      s[c] += map_stride;
+    }
+  }
+#pragma GCC unroll 4
+  for (int c = 0; c < kN; ++c) {
+    alignas(32) double lanes[8];
+    _mm256_store_pd(lanes, rho_lo[c]);
+    _mm256_store_pd(lanes + 4, rho_hi[c]);
+    impact_factor[c] = ReduceLanes(lanes);
+    _mm256_store_pd(lanes, sh_lo[c]);
+    _mm256_store_pd(lanes + 4, sh_hi[c]);
+    expected_shelter[c] = ReduceLanes(lanes);
+  }
+}
+
+// GCC 12 warns about the undefined upper half _mm512_cvtps_pd starts from.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// The same sums with the eight lanes in one 512-bit register: block b of a
+// row holds columns 8b .. 8b+7, so lane l again sees columns l, l+8, ... in
+// order. Half the instructions of the AVX2 loop, and with 32 registers four
+// windows stay in flight.
+template <int kBlocks, int kN>
+__attribute__((target("avx512f"))) void EwmmAvx512(const Window* windows, int rows,
+                                                   int weight_stride, int64_t map_stride,
+                                                   double* impact_factor,
+                                                   double* expected_shelter) {
+  __m512d rho[kN], sh[kN];
+  const double* w[kN];
+  const float* r[kN];
+  const float* s[kN];
+#pragma GCC unroll 4
+  for (int c = 0; c < kN; ++c) {
+    rho[c] = sh[c] = _mm512_setzero_pd();
+    w[c] = windows[c].weights;
+    r[c] = windows[c].density;
+    s[c] = windows[c].shelter;
+  }
+  for (int v = 0; v < rows; ++v) {
+#pragma GCC unroll 8
+    for (int b = 0; b < kBlocks; ++b) {
+#pragma GCC unroll 4
+      for (int c = 0; c < kN; ++c) {
+        const __m512d wv = _mm512_loadu_pd(w[c] + 8 * b);
+        rho[c] = _mm512_add_pd(rho[c],
+                               _mm512_mul_pd(wv, _mm512_cvtps_pd(_mm256_loadu_ps(r[c] + 8 * b))));
+        sh[c] =
+            _mm512_add_pd(sh[c], _mm512_mul_pd(wv, _mm512_cvtps_pd(_mm256_loadu_ps(s[c] + 8 * b))));
+      }
+    }
+#pragma GCC unroll 4
+    for (int c = 0; c < kN; ++c) {
+      w[c] += weight_stride;
+      r[c] += map_stride;
+      s[c] += map_stride;
+    }
+  }
+#pragma GCC unroll 4
+  for (int c = 0; c < kN; ++c) {
+    alignas(64) double lanes[8];
+    _mm512_store_pd(lanes, rho[c]);
+    impact_factor[c] = ReduceLanes(lanes);
+    _mm512_store_pd(lanes, sh[c]);
+    expected_shelter[c] = ReduceLanes(lanes);
+  }
+}
+
+#pragma GCC diagnostic pop
+
+template <int kN, int... kHalves>
+constexpr std::array<EwmmFn, sizeof...(kHalves)> Avx2Table(std::integer_sequence<int, kHalves...>) {
+  return {&EwmmAvx2<kHalves + 1, kN>...};
+}
+
+template <int kN, int... kBlocks>
+constexpr std::array<EwmmFn, sizeof...(kBlocks)> Avx512Table(
+    std::integer_sequence<int, kBlocks...>) {
+  return {&EwmmAvx512<kBlocks + 1, kN>...};
+}
+
+// The loop for a group of `n` (1, 2 or 4) windows of `side` cells.
+EwmmFn LoopFor(Isa isa, int n, int side) {
+  static constexpr auto avx2_1 = Avx2Table<1>(std::make_integer_sequence<int, kMaxSide / 4>());
+  static constexpr auto avx2_2 = Avx2Table<2>(std::make_integer_sequence<int, kMaxSide / 4>());
+  static constexpr auto avx512_1 = Avx512Table<1>(std::make_integer_sequence<int, kMaxSide / 8>());
+  static constexpr auto avx512_2 = Avx512Table<2>(std::make_integer_sequence<int, kMaxSide / 8>());
+  static constexpr auto avx512_4 = Avx512Table<4>(std::make_integer_sequence<int, kMaxSide / 8>());
+  if (isa == Isa::kAvx512) {
+    const int blocks = (side + 7) / 8;
+    return n == 4 ? avx512_4[blocks - 1] : n == 2 ? avx512_2[blocks - 1] : avx512_1[blocks - 1];
+  }
+  const int halves = (side + 3) / 4;
+  return n >= 2 ? avx2_2[halves - 1] : avx2_1[halves - 1];
+}
+#endif  // __x86_64__
+
+inline void PrefetchWindow(const char* row, int64_t row_bytes, int rows, int window_bytes) {
+  for (int v = 0; v < rows; ++v) {
+    for (int b = 0; b < window_bytes; b += 64) __builtin_prefetch(row + b);
+    __builtin_prefetch(row + window_bytes - 1);
+    row += row_bytes;
+  }
+}
+
+// Whether the window of a site lies inside the padded layers (the condition
+// of RiskModel::Ewmm) and fits the vector loops; if so its kernel and first
+// cell.
+inline bool WindowOf(const RiskModel& model, const KernelSite& s, const ImpactKernel** kernel,
+                     int64_t* first) {
+  const RiskMap& m = model.map();
+  const ImpactKernel& k = model.table().kernel(s.height_bin, s.heading_bin);
+  *kernel = &k;
+  const int hw = k.half_width;
+  if (!(s.impact_i - hw >= -RiskMap::kPad && s.impact_j - hw >= -RiskMap::kPad &&
+        s.impact_i - hw + k.Stride() <= m.nx() + RiskMap::kPad &&
+        s.impact_j + hw < m.ny() + RiskMap::kPad && k.Side() <= kMaxSide)) {
+    return false;
+  }
+  *first = m.PaddedIndex(s.impact_i - hw, s.impact_j - hw);
+  return true;
+}
+
+Isa DetectIsa() {
+#if defined(__x86_64__)
+  if (__builtin_cpu_supports("avx512f")) return Isa::kAvx512;
+  if (__builtin_cpu_supports("avx2")) return Isa::kAvx2;
+#endif
+  return Isa::kPortable;
+}
+
+Isa Resolve(Isa wanted) {
+  static const Isa best = DetectIsa();
+  if (wanted == Isa::kAuto || static_cast<int>(wanted) > static_cast<int>(best)) return best;
+  return wanted;
+}
+
+}  // namespace
+
+CpuRiskKernel::CpuRiskKernel(PreparedMapCache* maps, SiteCache* sites, CpuKernelOptions options)
+    : maps_(maps), site_cache_(sites), options_(options), isa_(Resolve(options.isa)) {}
+
+Isa CpuRiskKernel::BestIsa() { return Resolve(Isa::kAuto); }
+
+void CpuRiskKernel::LocateBatch(const RiskModel& model, std::span<const Pose> configs,
+                                std::span<ConfigurationRisk> out, std::vector<LocatedSite>* sites) {
+#if defined(__x86_64__)
+  if (Resolve(Isa::kAuto) != Isa::kPortable) return LocateAvx2(model, configs, out, sites);
+#endif
+  LocatePortable(model, configs, out, sites);
+}
+
+const float* CpuRiskKernel::DensityFor(const RiskModel& model, const float** shelter) {
+  const std::shared_ptr<const RiskMap>& map = model.map_ptr();
+  if (maps_ != nullptr && last_map_.lock() != map) {
+    last_prepared_ = maps_->Get(map);
+    last_map_ = map;
+  }
+  if (maps_ != nullptr && last_prepared_ != nullptr) {
+    *shelter = last_prepared_->shelter();
+    return last_prepared_->density();
+  }
+  *shelter = model.map().padded_shelter();
+  return model.map().padded_density();
+}
+
+void CpuRiskKernel::Sums(const RiskModel& model, std::span<const LocatedSite> sites,
+                         std::span<double> impact_factor, std::span<double> expected_shelter) {
+  const size_t n = sites.size();
+  stats_.ewmms += n;
+#if defined(__x86_64__)
+  if (isa_ != Isa::kPortable && n > 0) {
+    const float* shelter = nullptr;
+    const float* density = DensityFor(model, &shelter);
+    const int64_t map_stride = model.map().padded_nx();
+    const int64_t row_bytes = map_stride * static_cast<int64_t>(sizeof(float));
+    const int group_max = isa_ == Isa::kAvx512 ? 4 : 2;
+    // Windows far apart: fetch the rows of the next ones early.
+    size_t jumps = 0;
+    for (size_t a = 1; a < n; ++a) {
+      const KernelSite& p = sites[a - 1].site;
+      const KernelSite& q = sites[a].site;
+      jumps += std::abs(p.impact_i - q.impact_i) > 8 || std::abs(p.impact_j - q.impact_j) > 8;
+    }
+    const int distance = 2 * jumps > n ? options_.prefetch_distance : 0;
+    size_t a = 0;
+    while (a < n) {
+      for (int p = 0; distance > 0 && p < group_max && a + distance + p < n; ++p) {
+        const ImpactKernel* k;
+        int64_t first;
+        if (WindowOf(model, sites[a + distance + p].site, &k, &first)) {
+          const int bytes = (k->Side() + 3) / 4 * 4 * static_cast<int>(sizeof(float));
+          PrefetchWindow(reinterpret_cast<const char*>(density + first), row_bytes, k->Side(),
+                         bytes);
+          PrefetchWindow(reinterpret_cast<const char*>(shelter + first), row_bytes, k->Side(),
+                         bytes);
+        }
+      }
+      const ImpactKernel* k0;
+      int64_t first0;
+      if (!WindowOf(model, sites[a].site, &k0, &first0)) {
+        model.Ewmm(*k0, sites[a].site.impact_i, sites[a].site.impact_j, &impact_factor[a],
+                   &expected_shelter[a]);
+        ++a;
+        continue;
+      }
+      // A group of consecutive windows of the same size goes through one loop.
+      Window group[4];
+      group[0] = {k0->weights, density + first0, shelter + first0};
+      int count = 1;
+      while (count < group_max && a + count < n) {
+        const ImpactKernel* k;
+        int64_t first;
+        if (!WindowOf(model, sites[a + count].site, &k, &first) || k->Side() != k0->Side()) break;
+        group[count++] = {k->weights, density + first, shelter + first};
+      }
+      if (count == 3) count = 2;  // loops exist for 1, 2 and 4 windows
+      LoopFor(isa_, count, k0->Side())(group, k0->Side(), k0->Stride(), map_stride,
+                                       &impact_factor[a], &expected_shelter[a]);
+      a += count;
+    }
+    return;
+  }
+#endif
+  const ImpactTable& t = model.table();
+  for (size_t a = 0; a < n; ++a) {
+    const KernelSite& s = sites[a].site;
+    model.Ewmm(t.kernel(s.height_bin, s.heading_bin), s.impact_i, s.impact_j, &impact_factor[a],
+               &expected_shelter[a]);
+  }
+}
+
+void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> configs,
+                             std::span<ConfigurationRisk> out) {
+  stats_.configurations += configs.size();
+  sites_.clear();
+  LocateBatch(model, configs, out, &sites_);
+
+  // Repeated sites from the cache. Lookups go in rounds of kRound so that
+  // the slots prefetched for a round are still near when they are read.
+  SiteCache::Session session;
+  const bool cached = site_cache_ != nullptr && site_cache_->enabled();
+  if (cached) {
+    session = site_cache_->Begin(model);
+    constexpr size_t kRound = 32;
+    keys_.resize(kRound);
+    size_t kept = 0;
+    uint64_t hits = 0;
+    for (size_t first = 0; first < sites_.size(); first += kRound) {
+      const size_t end = std::min(sites_.size(), first + kRound);
+      for (size_t a = first; a < end; ++a) {
+        keys_[a - first] = SiteCache::KeyOf(session, sites_[a].site);
+        site_cache_->Prefetch(keys_[a - first]);
+      }
+      for (size_t a = first; a < end; ++a) {
+        SiteCache::Values values;
+        const uint64_t key = keys_[a - first];
+        if (key != 0 && site_cache_->Lookup(session, key, &values)) {
+          out[sites_[a].index] = FromCached(model, sites_[a].site, values);
+          ++hits;
+        } else {
+          sites_[kept++] = sites_[a];
+        }
+      }
+    }
+    site_cache_->CountLookups(hits, sites_.size() - kept);
+    stats_.cache_hits += hits;
+    sites_.resize(kept);
+  }
+
+  if (options_.sort_min_configs > 0 &&
+      sites_.size() >= static_cast<size_t>(options_.sort_min_configs)) {
+    size_t jumps = 0;
+    for (size_t a = 1; a < sites_.size(); ++a) {
+      jumps += std::abs(sites_[a - 1].site.impact_i - sites_[a].site.impact_i) > 8 ||
+               std::abs(sites_[a - 1].site.impact_j - sites_[a].site.impact_j) > 8;
+    }
+    if (4 * jumps > sites_.size()) {
+      // Two stable counting sorts (column, then row) give row-major order of
+      // the impact cells; cells beyond the padding share the edge buckets.
+      const RiskMap& m = model.map();
+      const int span_i = m.padded_nx();
+      const int span_j = m.padded_ny();
+      const auto counting_sort = [&](const std::vector<LocatedSite>& from,
+                                     std::vector<LocatedSite>* to, int buckets, auto key) {
+        counts_.assign(static_cast<size_t>(buckets) + 1, 0);
+        for (const LocatedSite& s : from) ++counts_[key(s) + 1];
+        for (int b = 0; b < buckets; ++b) counts_[b + 1] += counts_[b];
+        for (const LocatedSite& s : from) (*to)[counts_[key(s)]++] = s;
+      };
+      ordered_.resize(sites_.size());
+      counting_sort(sites_, &ordered_, span_i, [&](const LocatedSite& s) {
+        return std::clamp(s.site.impact_i + RiskMap::kPad, 0, span_i - 1);
+      });
+      counting_sort(ordered_, &sites_, span_j, [&](const LocatedSite& s) {
+        return std::clamp(s.site.impact_j + RiskMap::kPad, 0, span_j - 1);
+      });
+    }
+  }
+
+  impact_.resize(sites_.size());
+  shelter_.resize(sites_.size());
+  Sums(model, sites_, impact_, shelter_);
+  for (size_t a = 0; a < sites_.size(); ++a) {
+    const ConfigurationRisk r = model.FromSums(sites_[a].site, impact_[a], shelter_[a]);
+    out[sites_[a].index] = r;
+    if (cached) {
+      const uint64_t key = SiteCache::KeyOf(session, sites_[a].site);
+      if (key != 0) {
+        site_cache_->Insert(session, key,
+                            {r.impact_factor, r.expected_shelter, r.casualty_probability});
+      }
+    }
+  }
+}
+
+}  // namespace riskplan::accel

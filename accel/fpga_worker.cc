@@ -1,0 +1,298 @@
+#include "accel/fpga_worker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "accel/known_answer.h"
+
+namespace riskplan::accel {
+
+absl::string_view WorkerStateName(WorkerState state) {
+  switch (state) {
+    case WorkerState::kUp:
+      return "up";
+    case WorkerState::kSuspect:
+      return "suspect";
+    case WorkerState::kDown:
+      return "down";
+    case WorkerState::kProbing:
+      return "probing";
+  }
+  return "unknown";
+}
+
+FpgaWorker::FpgaWorker(std::string endpoint, const FpgaWorkerOptions& options, WorkQueue* queue,
+                       BlobCache* blobs, WorkerEventFn on_event)
+    : endpoint_(std::move(endpoint)),
+      name_(absl::StrCat("fpga:", endpoint_)),
+      options_(options),
+      queue_(queue),
+      blobs_(blobs),
+      on_event_(std::move(on_event)),
+      backoff_(options.backoff_initial) {
+  stats_.name = name_;
+  stats_.endpoint = endpoint_;
+  stats_.state = WorkerState::kProbing;
+}
+
+FpgaWorker::~FpgaWorker() { Stop(); }
+
+void FpgaWorker::Start() {
+  thread_ = std::thread([this] { Run(); });
+}
+
+void FpgaWorker::Stop() {
+  {
+    absl::MutexLock lock(&mu_);
+    stop_.store(true);
+    if (client_ != nullptr) client_->Interrupt();
+    stop_changed_.SignalAll();
+  }
+  queue_->Wake();
+  if (thread_.joinable()) thread_.join();
+}
+
+FpgaWorkerStats FpgaWorker::Stats() const {
+  absl::MutexLock lock(&mu_);
+  return stats_;
+}
+
+void FpgaWorker::SetState(WorkerState to, std::string reason) {
+  WorkerEvent event;
+  {
+    absl::MutexLock lock(&mu_);
+    if (stats_.state == to) return;
+    event = WorkerEvent{name_, stats_.state, to, std::move(reason)};
+    stats_.state = to;
+    ++stats_.state_changes;
+    if (to != WorkerState::kUp && !event.reason.empty()) stats_.last_error = event.reason;
+  }
+  // The queue counts the workers that are up: callers without CPU workers
+  // fall back to running chunks themselves when none is.
+  if (to == WorkerState::kUp) queue_->FpgaUpChanged(+1);
+  if (event.from == WorkerState::kUp) queue_->FpgaUpChanged(-1);
+  if (on_event_) on_event_(event);
+}
+
+void FpgaWorker::Sleep(absl::Duration duration) {
+  const absl::Time deadline = absl::Now() + duration;
+  absl::MutexLock lock(&mu_);
+  while (!stop_.load()) {
+    if (stop_changed_.WaitWithDeadline(&mu_, deadline)) return;
+  }
+}
+
+void FpgaWorker::DropClient() {
+  {
+    absl::MutexLock lock(&mu_);
+    client_ = nullptr;
+  }
+  owned_client_.reset();
+}
+
+absl::Status FpgaWorker::Connect() {
+  DropClient();
+  absl::StatusOr<std::unique_ptr<ShimClient>> client =
+      ShimClient::Connect(endpoint_, options_.client);
+  if (!client.ok()) return client.status();
+  owned_client_ = *std::move(client);
+  absl::MutexLock lock(&mu_);
+  if (stop_.load()) owned_client_->Interrupt();
+  client_ = owned_client_.get();
+  stats_.identified = true;
+  stats_.hello = owned_client_->hello();
+  return absl::OkStatus();
+}
+
+absl::Status FpgaWorker::Probe() {
+  if (absl::Status s = Connect(); !s.ok()) return s;
+  return RunKnownAnswer(*owned_client_);
+}
+
+absl::Status FpgaWorker::Recheck() {
+  if (absl::Status s = Connect(); !s.ok()) return s;
+  return owned_client_->Ping();
+}
+
+void FpgaWorker::Run() {
+  std::mt19937_64 jitter(std::hash<std::string>()(endpoint_));
+  while (!stop_.load()) {
+    WorkerState state;
+    {
+      absl::MutexLock lock(&mu_);
+      state = stats_.state;
+    }
+    switch (state) {
+      case WorkerState::kProbing: {
+        absl::Status s = Probe();
+        if (stop_.load()) break;
+        if (s.ok()) {
+          backoff_ = options_.backoff_initial;
+          SetState(WorkerState::kUp, "handshake and known-answer batch passed");
+        } else {
+          DropClient();
+          SetState(WorkerState::kDown, absl::StrCat("probe failed: ", s.message()));
+        }
+        break;
+      }
+      case WorkerState::kDown: {
+        // Back-off with +-20 % jitter so that boards restarted together are
+        // not all probed at once.
+        const double factor = 0.8 + 0.4 * std::uniform_real_distribution<double>()(jitter);
+        Sleep(backoff_ * factor);
+        backoff_ = std::min(backoff_ * 2, options_.backoff_max);
+        if (!stop_.load()) SetState(WorkerState::kProbing, "back-off elapsed");
+        break;
+      }
+      case WorkerState::kSuspect: {
+        absl::Status s = Recheck();
+        if (stop_.load()) break;
+        if (s.ok()) {
+          SetState(WorkerState::kUp, "reconnected and answered a ping");
+        } else {
+          DropClient();
+          SetState(WorkerState::kDown, absl::StrCat("recheck failed: ", s.message()));
+        }
+        break;
+      }
+      case WorkerState::kUp: {
+        Chunk* chunk = queue_->Take(WorkQueue::Taker::kFpga, options_.ping_interval, &stop_);
+        if (chunk == nullptr) {
+          if (stop_.load() || queue_->stopped()) break;
+          if (absl::Status s = owned_client_->Ping(); !s.ok()) {
+            DropClient();
+            SetState(WorkerState::kSuspect, absl::StrCat("idle ping failed: ", s.message()));
+          }
+          break;
+        }
+        const absl::Time start = absl::Now();
+        bool unsupported = false;
+        absl::Status s = RunChunk(chunk, &unsupported);
+        const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
+        if (s.ok()) {
+          {
+            absl::MutexLock lock(&mu_);
+            ++stats_.chunks;
+            stats_.configurations += chunk->count;
+            stats_.busy_seconds += seconds;
+          }
+          queue_->Complete(chunk);
+          break;
+        }
+        {
+          absl::MutexLock lock(&mu_);
+          stats_.busy_seconds += seconds;
+          ++(unsupported ? stats_.unsupported : stats_.failures);
+          stats_.last_error = std::string(s.message());
+        }
+        if (unsupported || ++chunk->fpga_failures >= options_.max_failures_per_chunk) {
+          chunk->cpu_only = true;
+        }
+        queue_->Requeue(chunk);
+        if (!unsupported) {
+          DropClient();
+          if (!stop_.load()) SetState(WorkerState::kSuspect, std::string(s.message()));
+        }
+        break;
+      }
+    }
+  }
+  DropClient();
+  // A stopped worker is no longer up (the queue's count must not keep it).
+  SetState(WorkerState::kDown, "stopped");
+}
+
+absl::StatusOr<EvalReply> FpgaWorker::EvalWithUploads(const Blob& map, const Blob& kernels,
+                                                      std::span<const DeviceSite> sites) {
+  absl::StatusOr<EvalReply> reply = owned_client_->Eval(map.hash, kernels.hash, sites);
+  // At most one upload of each blob per request.
+  for (int upload = 0; upload < 2 && absl::IsNotFound(reply.status()); ++upload) {
+    const BlobHash missing = owned_client_->missing_blob();
+    const Blob* blob = missing == map.hash ? &map : missing == kernels.hash ? &kernels : nullptr;
+    if (blob == nullptr) {
+      return absl::DataLossError(
+          absl::StrCat("shim ", endpoint_, " asked for a blob that was not named"));
+    }
+    if (absl::Status s = owned_client_->PutBlob(blob->kind, blob->hash, blob->bytes); !s.ok()) {
+      return s;
+    }
+    {
+      absl::MutexLock lock(&mu_);
+      ++stats_.uploads;
+    }
+    reply = owned_client_->Eval(map.hash, kernels.hash, sites);
+  }
+  return reply;
+}
+
+absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
+  const RiskModel& model = *chunk->batch->model;
+  const ImpactTable& table = model.table();
+  const HelloReply& hello = owned_client_->hello();
+  *unsupported = true;
+  const int widest = 2 * table.bin(table.height_bins()).half_width + 1;
+  if (widest > static_cast<int>(hello.max_kernel_side) || table.height_bins() > 65535 ||
+      table.heading_bins() > 65535) {
+    return absl::FailedPreconditionError(
+        absl::StrFormat("the board takes kernels up to %d cells wide; this model needs %d",
+                        hello.max_kernel_side, widest));
+  }
+  std::shared_ptr<const Blob> map = blobs_->MapBlob(model.map_ptr());
+  std::shared_ptr<const Blob> kernels = blobs_->KernelsBlob(model.table_ptr());
+  if (map->bytes.size() > hello.store_bytes || kernels->bytes.size() > hello.store_bytes) {
+    return absl::ResourceExhaustedError("the model's blobs exceed the board's store");
+  }
+  *unsupported = false;
+
+  sites_.clear();
+  CpuRiskKernel::LocateBatch(model, chunk->configs(), chunk->out(), &sites_);
+  const NumberFormat& format = hello.format;
+  // The scales the board must report (its exponent rule is part of the
+  // format), and the largest sums the quantised inputs allow.
+  const int impact_scale =
+      format.weight_frac_bits + LayerExponent(map->max_density, format.cell_bits);
+  const int shelter_scale = format.weight_frac_bits + LayerExponent(10.0, format.cell_bits);
+  const double weight_sum_max = 1.0 + kMaxWindowCells * std::ldexp(1.0, -format.weight_frac_bits);
+  const double margin = 1.0 + std::ldexp(1.0, 2 - format.cell_bits);
+  const double impact_max = weight_sum_max * map->max_density * margin;
+  const double shelter_max = weight_sum_max * 10.0 * margin;
+  std::span<ConfigurationRisk> out = chunk->out();
+  const size_t step = hello.max_sites_per_eval;
+  uint64_t cycles = 0;
+  for (size_t first = 0; first < sites_.size(); first += step) {
+    const size_t n = std::min(step, sites_.size() - first);
+    device_sites_.resize(n);
+    for (size_t a = 0; a < n; ++a) {
+      const KernelSite& s = sites_[first + a].site;
+      device_sites_[a] = DeviceSite{static_cast<uint16_t>(s.height_bin),
+                                    static_cast<uint16_t>(s.heading_bin), s.impact_i, s.impact_j};
+    }
+    absl::StatusOr<EvalReply> reply = EvalWithUploads(*map, *kernels, device_sites_);
+    if (!reply.ok()) return reply.status();
+    if (reply->impact_scale != impact_scale || reply->shelter_scale != shelter_scale) {
+      return absl::DataLossError(
+          absl::StrFormat("shim %s: result scales %d/%d, expected %d/%d", endpoint_,
+                          reply->impact_scale, reply->shelter_scale, impact_scale, shelter_scale));
+    }
+    for (size_t a = 0; a < n; ++a) {
+      const double impact = AccumulatorToDouble(reply->impact[a], impact_scale);
+      const double shelter = AccumulatorToDouble(reply->shelter[a], shelter_scale);
+      if (!(impact <= impact_max) || !(shelter <= shelter_max)) {
+        return absl::DataLossError(
+            absl::StrFormat("shim %s: implausible sums I = %g, S = %g (largest possible %g, %g)",
+                            endpoint_, impact, shelter, impact_max, shelter_max));
+      }
+      const LocatedSite& s = sites_[first + a];
+      out[s.index] = model.FromSums(s.site, impact, shelter);
+    }
+    cycles += reply->device_cycles;
+  }
+  absl::MutexLock lock(&mu_);
+  stats_.device_cycles += cycles;
+  return absl::OkStatus();
+}
+
+}  // namespace riskplan::accel

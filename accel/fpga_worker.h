@@ -1,0 +1,133 @@
+// FpgaWorker: a RiskEngine worker that evaluates chunks on one board through
+// its riskplan-fpga-shim. It locates the configurations on the server (steps
+// 1-3 of the spec), sends the kernel sites, gets the board's exact
+// fixed-point EWMM sums, and finishes on the server (FromSums), as the
+// thesis divides the work.
+//
+// States (every change is reported through the event callback and counted):
+//   probing  connect, HELLO (protocol version, number format, limits), then
+//            the known-answer batch; success -> up, failure -> down
+//   up       takes chunks; pings the board when idle for ping_interval;
+//            a failed request -> suspect (the chunk goes back to the queue)
+//   suspect  reconnects once and pings; success -> up, failure -> down
+//   down     waits a back-off (doubling from backoff_initial to backoff_max,
+//            with jitter), then -> probing
+// A chunk whose model the board cannot serve (kernel wider than the board's
+// largest side, too many bins, or blobs too large for its store) goes back
+// to the queue marked CPU-only, and the worker stays up.
+//
+// Thread-safe: the worker runs on its own thread; Stats() and Stop() may be
+// called from any thread.
+#ifndef RISKPLAN_ACCEL_FPGA_WORKER_H_
+#define RISKPLAN_ACCEL_FPGA_WORKER_H_
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/strings/string_view.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "accel/blobs.h"
+#include "accel/cpu_kernel.h"
+#include "accel/shim_client.h"
+#include "accel/work_queue.h"
+
+namespace riskplan::accel {
+
+enum class WorkerState { kUp = 0, kSuspect = 1, kDown = 2, kProbing = 3 };
+absl::string_view WorkerStateName(WorkerState state);  // "up", "suspect", ...
+
+struct WorkerEvent {
+  std::string worker;  // "fpga:HOST:PORT"
+  WorkerState from = WorkerState::kProbing;
+  WorkerState to = WorkerState::kProbing;
+  std::string reason;
+};
+using WorkerEventFn = std::function<void(const WorkerEvent&)>;
+
+struct FpgaWorkerOptions {
+  ShimClientOptions client;
+  absl::Duration backoff_initial = absl::Milliseconds(100);
+  absl::Duration backoff_max = absl::Seconds(10);
+  absl::Duration ping_interval = absl::Seconds(2);
+  // A chunk that failed on FPGA workers this often is left to the CPU.
+  int max_failures_per_chunk = 2;
+};
+
+struct FpgaWorkerStats {
+  std::string name;
+  std::string endpoint;
+  WorkerState state = WorkerState::kProbing;
+  bool identified = false;
+  HelloReply hello;  // valid when identified
+  uint64_t chunks = 0;
+  uint64_t configurations = 0;
+  uint64_t failures = 0;     // failed requests (chunks given back)
+  uint64_t unsupported = 0;  // chunks given back as CPU-only
+  uint64_t state_changes = 0;
+  uint64_t uploads = 0;        // blobs uploaded
+  uint64_t device_cycles = 0;  // as reported by the board
+  double busy_seconds = 0.0;
+  std::string last_error;
+};
+
+class FpgaWorker {
+ public:
+  // `queue`, `blobs` must outlive the worker.
+  FpgaWorker(std::string endpoint, const FpgaWorkerOptions& options, WorkQueue* queue,
+             BlobCache* blobs, WorkerEventFn on_event);
+  ~FpgaWorker();  // Stop() and join
+
+  void Start();
+  // Interrupts the request in flight (its chunk goes back to the queue) and
+  // ends the thread. Returns once the thread has ended; a connection attempt
+  // in progress is waited for (at most the connect timeout).
+  void Stop();
+
+  const std::string& endpoint() const { return endpoint_; }
+  FpgaWorkerStats Stats() const;
+
+ private:
+  void Run();
+  absl::Status Probe();
+  absl::Status Recheck();
+  absl::Status Connect();
+  // Evaluates a chunk; writes its results only on success. `unsupported` is
+  // set when the failure is the model's, not the board's.
+  absl::Status RunChunk(Chunk* chunk, bool* unsupported);
+  absl::StatusOr<EvalReply> EvalWithUploads(const Blob& map, const Blob& kernels,
+                                            std::span<const DeviceSite> sites);
+  void SetState(WorkerState to, std::string reason);
+  // Waits `duration` unless stopped first.
+  void Sleep(absl::Duration duration);
+  void DropClient();
+
+  const std::string endpoint_;
+  const std::string name_;
+  const FpgaWorkerOptions options_;
+  WorkQueue* const queue_;
+  BlobCache* const blobs_;
+  const WorkerEventFn on_event_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  // Worker-thread state.
+  std::unique_ptr<ShimClient> owned_client_;
+  std::vector<LocatedSite> sites_;
+  std::vector<DeviceSite> device_sites_;
+  absl::Duration backoff_;
+
+  mutable absl::Mutex mu_;
+  absl::CondVar stop_changed_;
+  ShimClient* client_ ABSL_GUARDED_BY(mu_) = nullptr;  // for Stop() to interrupt
+  FpgaWorkerStats stats_ ABSL_GUARDED_BY(mu_);
+};
+
+}  // namespace riskplan::accel
+
+#endif  // RISKPLAN_ACCEL_FPGA_WORKER_H_

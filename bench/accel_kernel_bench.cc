@@ -1,0 +1,163 @@
+// Configuration risks per second on one core: the core's RiskModel::Evaluate
+// against accel's CpuRiskKernel (bit for bit the same results), on demo-city
+// at 100 m above ground, for the two access patterns of issue 5:
+//   Along:  samples along 1 km straight legs, 5 m apart (as the planner asks);
+//   Random: configurations uniformly across the map, random headings.
+// Batch sizes: the kernel is handed `batch` configurations at a time (the
+// planner's batches are a few hundred; EvaluateRisk's and the engine's chunks
+// up to tens of thousands). Run side by side in one process so that the
+// machine's load affects both alike; quote medians of repetitions.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <vector>
+
+#include "accel/cpu_kernel.h"
+#include "accel/prepared_map.h"
+#include "benchmark/benchmark.h"
+#include "core/demo_city.h"
+#include "core/random.h"
+#include "core/risk_model.h"
+
+namespace riskplan {
+namespace {
+
+const RiskModel& Model() {
+  static std::shared_ptr<const RiskModel> model = [] {
+    auto map = MakeDemoCity();
+    return *RiskModel::Create(*map, ModelParams{});
+  }();
+  return *model;
+}
+
+Pose At100mAgl(const RiskModel& model, double x, double y, double theta) {
+  int i = 0;
+  int j = 0;
+  model.map().CellOf(x, y, &i, &j);
+  return Pose{x, y, model.map().terrain(i, j) + 100.0, theta};
+}
+
+// The same generators as bench/risk_kernel_bench.cc.
+std::vector<Pose> AlongTrajectories(size_t n) {
+  const RiskModel& model = Model();
+  Rng rng(1);
+  std::vector<Pose> out;
+  while (out.size() < n) {
+    const double theta = rng.Uniform() * 6.283185307179586;
+    double x = 1000.0 + rng.Uniform() * 6000.0;
+    double y = 1000.0 + rng.Uniform() * 6000.0;
+    for (int k = 0; k < 200 && out.size() < n; ++k) {
+      out.push_back(At100mAgl(model, x, y, theta));
+      x += 5.0 * std::cos(theta);
+      y += 5.0 * std::sin(theta);
+    }
+  }
+  return out;
+}
+
+std::vector<Pose> RandomConfigurations(size_t n) {
+  const RiskModel& model = Model();
+  Rng rng(2);
+  std::vector<Pose> out;
+  for (size_t k = 0; k < n; ++k) {
+    out.push_back(At100mAgl(model, 200.0 + rng.Uniform() * 7600.0, 200.0 + rng.Uniform() * 7600.0,
+                            rng.Uniform() * 6.283185307179586));
+  }
+  return out;
+}
+
+const std::vector<Pose>& Along() {
+  static const std::vector<Pose> configs = AlongTrajectories(100000);
+  return configs;
+}
+const std::vector<Pose>& Random() {
+  static const std::vector<Pose> configs = RandomConfigurations(100000);
+  return configs;
+}
+
+accel::PreparedMapCache& Maps() {
+  static accel::PreparedMapCache maps(size_t{1} << 30);
+  return maps;
+}
+
+// Aborts unless the kernel gives RiskModel::Evaluate's results bit for bit.
+void CheckExact(const std::vector<Pose>& configs) {
+  const RiskModel& model = Model();
+  accel::CpuRiskKernel kernel(&Maps(), nullptr);
+  std::vector<ConfigurationRisk> out(configs.size());
+  kernel.Evaluate(model, configs, out);
+  for (size_t n = 0; n < configs.size(); ++n) {
+    const ConfigurationRisk want = model.Evaluate(configs[n]);
+    if (want.defined != out[n].defined || want.risk != out[n].risk ||
+        want.impact_factor != out[n].impact_factor ||
+        want.expected_shelter != out[n].expected_shelter) {
+      std::fprintf(stderr, "kernel differs from RiskModel::Evaluate at %zu\n", n);
+      std::abort();
+    }
+  }
+}
+
+void RunCore(benchmark::State& state, const std::vector<Pose>& configs) {
+  const RiskModel& model = Model();
+  double sink = 0.0;
+  for (auto _ : state) {
+    for (const Pose& q : configs) sink += model.Evaluate(q).risk;
+  }
+  benchmark::DoNotOptimize(sink);
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * configs.size()));
+}
+
+// Args: batch size, instruction set (0 portable, 1 AVX2, 2 AVX-512).
+void RunKernel(benchmark::State& state, const std::vector<Pose>& configs, bool prepared) {
+  static bool checked = [] {
+    CheckExact(Along());
+    CheckExact(Random());
+    return true;
+  }();
+  benchmark::DoNotOptimize(checked);
+  const RiskModel& model = Model();
+  const size_t batch = static_cast<size_t>(state.range(0));
+  accel::PreparedMapCache no_maps(0);
+  accel::CpuKernelOptions options;
+  options.isa = static_cast<accel::Isa>(state.range(1));
+  accel::CpuRiskKernel kernel(prepared ? &Maps() : &no_maps, nullptr, options);
+  if (kernel.isa() != options.isa) {
+    state.SkipWithError("instruction set not available");
+    return;
+  }
+  std::vector<ConfigurationRisk> out(batch);
+  double sink = 0.0;
+  for (auto _ : state) {
+    for (size_t first = 0; first + batch <= configs.size(); first += batch) {
+      kernel.Evaluate(model, std::span<const Pose>(configs).subspan(first, batch), out);
+      sink += out[0].risk;
+    }
+  }
+  benchmark::DoNotOptimize(sink);
+  state.SetItemsProcessed(
+      static_cast<int64_t>(state.iterations() * (configs.size() / batch * batch)));
+}
+
+void BM_Core_Along(benchmark::State& state) { RunCore(state, Along()); }
+void BM_Core_Random(benchmark::State& state) { RunCore(state, Random()); }
+void BM_Kernel_Along(benchmark::State& state) { RunKernel(state, Along(), true); }
+void BM_Kernel_Random(benchmark::State& state) { RunKernel(state, Random(), true); }
+void BM_KernelFloat_Along(benchmark::State& state) { RunKernel(state, Along(), false); }
+void BM_KernelFloat_Random(benchmark::State& state) { RunKernel(state, Random(), false); }
+
+BENCHMARK(BM_Core_Along)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kernel_Along)
+    ->ArgsProduct({{256, 4096, 100000}, {1, 2}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KernelFloat_Along)->ArgsProduct({{100000}, {1, 2}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Core_Random)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Kernel_Random)
+    ->ArgsProduct({{256, 4096, 100000}, {1, 2}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KernelFloat_Random)->ArgsProduct({{100000}, {1, 2}})->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace riskplan
+
+BENCHMARK_MAIN();

@@ -1,0 +1,314 @@
+// Helpers for the accel tests: a small demo-city model, configuration sets,
+// polling with deadlines, the real riskplan-fpga-shim as a child process,
+// in-process shims that misbehave on purpose, and the exact results a
+// fixed-point board must give.
+#ifndef RISKPLAN_TESTS_ACCEL_ACCEL_TEST_UTIL_H_
+#define RISKPLAN_TESTS_ACCEL_ACCEL_TEST_UTIL_H_
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <list>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
+#include "accel/blobs.h"
+#include "accel/fixed_point.h"
+#include "accel/net.h"
+#include "accel/shim/device.h"
+#include "accel/shim/shim_session.h"
+#include "core/demo_city.h"
+#include "core/random.h"
+#include "core/risk_model.h"
+#include "gtest/gtest.h"
+
+namespace riskplan::accel::testing {
+
+// demo-city at 3 km (600 x 600 cells), default parameters. Built once.
+inline std::shared_ptr<const RiskModel> SmallCity() {
+  static const std::shared_ptr<const RiskModel> model = [] {
+    DemoCityOptions options;
+    options.size_m = 3000.0;
+    auto map = MakeDemoCity(options);
+    EXPECT_TRUE(map.ok()) << map.status();
+    auto m = RiskModel::Create(*map, ModelParams{});
+    EXPECT_TRUE(m.ok()) << m.status();
+    return *m;
+  }();
+  return model;
+}
+
+// n configurations: two thirds along straight legs (5 m apart) at 20 to 200 m
+// above ground, the rest uniform over the map, and a few undefined ones
+// (outside the map, below the terrain, NaN).
+inline std::vector<Pose> MixedConfigs(const RiskModel& model, size_t n, uint64_t seed) {
+  const RiskMap& m = model.map();
+  Rng rng(seed);
+  const auto agl = [&](double x, double y, double height) {
+    int i = 0, j = 0;
+    if (!m.CellOf(x, y, &i, &j)) return height;
+    return m.terrain(i, j) + height;
+  };
+  std::vector<Pose> out;
+  while (out.size() < n) {
+    const double r = rng.Uniform();
+    if (r < 0.02) {
+      // Undefined: outside the map, below the terrain, not finite.
+      const int kind = static_cast<int>(rng.Uniform() * 3);
+      if (kind == 0) out.push_back({m.x0() - 10.0, m.y0() + 100.0, 200.0, 0.0});
+      if (kind == 1)
+        out.push_back(
+            {m.x0() + 500.0, m.y0() + 500.0, agl(m.x0() + 500.0, m.y0() + 500.0, -1.0), 1.0});
+      if (kind == 2) out.push_back({m.x0() + 500.0, m.y0() + 500.0, std::nan(""), 1.0});
+      continue;
+    }
+    const double height = 20.0 + 180.0 * rng.Uniform();
+    if (r < 0.35) {
+      out.push_back(Pose{m.x0() + m.width_m() * rng.Uniform(),
+                         m.y0() + m.height_m() * rng.Uniform(), 0.0, kTwoPi * rng.Uniform()});
+      out.back().z = agl(out.back().x, out.back().y, height);
+      continue;
+    }
+    // A leg of up to 60 samples 5 m apart (possibly running off the map).
+    const double theta = kTwoPi * rng.Uniform();
+    double x = m.x0() + m.width_m() * rng.Uniform();
+    double y = m.y0() + m.height_m() * rng.Uniform();
+    for (int k = 0; k < 60 && out.size() < n; ++k) {
+      out.push_back(Pose{x, y, agl(x, y, height), theta});
+      x += 5.0 * std::cos(theta);
+      y += 5.0 * std::sin(theta);
+    }
+  }
+  return out;
+}
+
+// Bitwise equality of every field.
+inline bool SameRisk(const ConfigurationRisk& a, const ConfigurationRisk& b) {
+  const auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof(x)) == 0; };
+  return a.defined == b.defined && same(a.risk, b.risk) && same(a.impact_factor, b.impact_factor) &&
+         same(a.expected_shelter, b.expected_shelter) &&
+         same(a.casualty_probability, b.casualty_probability) &&
+         same(a.exposed_area_m2, b.exposed_area_m2) && a.height_bin == b.height_bin &&
+         a.heading_bin == b.heading_bin;
+}
+
+// Polls `pred` every 2 ms until it holds or `timeout` passes.
+template <typename Pred>
+bool WaitFor(Pred pred, absl::Duration timeout = absl::Seconds(20)) {
+  const absl::Time deadline = absl::Now() + timeout;
+  while (!pred()) {
+    if (absl::Now() > deadline) return false;
+    absl::SleepFor(absl::Milliseconds(2));
+  }
+  return true;
+}
+
+// The real riskplan-fpga-shim (RISKPLAN_BIN_DIR), started with `args` and
+// --listen, and read up to its readiness line.
+class ShimProcess {
+ public:
+  // Null (with a test failure) when the shim does not come up within 20 s.
+  static std::unique_ptr<ShimProcess> Start(const std::vector<std::string>& args,
+                                            const std::string& listen = "127.0.0.1:0") {
+    int out[2];
+    if (pipe2(out, O_CLOEXEC) != 0) return nullptr;
+    const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-fpga-shim";
+    std::vector<std::string> argv_text = {binary, "--listen=" + listen};
+    argv_text.insert(argv_text.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : argv_text) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const pid_t pid = fork();
+    if (pid == 0) {
+      dup2(out[1], STDOUT_FILENO);
+      execv(binary.c_str(), argv.data());
+      _exit(127);
+    }
+    close(out[1]);
+    auto shim = std::unique_ptr<ShimProcess>(new ShimProcess());
+    shim->pid_ = pid;
+    // Read up to the readiness line, with a deadline.
+    std::string text;
+    const absl::Time deadline = absl::Now() + absl::Seconds(20);
+    const std::string marker = "riskplan-fpga-shim listening on ";
+    while (text.find('\n') == std::string::npos && absl::Now() < deadline) {
+      pollfd p{out[0], POLLIN, 0};
+      if (poll(&p, 1, 100) <= 0) continue;
+      char buf[256];
+      const ssize_t got = read(out[0], buf, sizeof(buf));
+      if (got <= 0) break;
+      text.append(buf, static_cast<size_t>(got));
+    }
+    close(out[0]);
+    const size_t at = text.find(marker);
+    const size_t end = text.find('\n');
+    if (at == std::string::npos || end == std::string::npos) {
+      ADD_FAILURE() << "riskplan-fpga-shim did not come up: '" << text << "'";
+      return nullptr;
+    }
+    shim->endpoint_ = text.substr(at + marker.size(), end - at - marker.size());
+    return shim;
+  }
+  ~ShimProcess() { Kill(); }
+  const std::string& endpoint() const { return endpoint_; }
+  // SIGKILL and reap.
+  void Kill() {
+    if (pid_ <= 0) return;
+    kill(pid_, SIGKILL);
+    waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+
+ private:
+  int pid_ = -1;
+  std::string endpoint_;
+};
+
+// What a board with `format` must answer for q: the model's fixed-point
+// sums, converted and finished on the server like FpgaWorker does.
+class FpgaExpectation {
+ public:
+  FpgaExpectation(const RiskModel& model, const NumberFormat& format)
+      : model_(model), format_(format) {
+    map_ = *QuantizeMapBlob(EncodeMapBlob(model.map()), format, 32);
+    kernels_ = *QuantizeKernelsBlob(EncodeKernelsBlob(KernelSetOf(model.table())), format, 63);
+  }
+  ConfigurationRisk Evaluate(const Pose& q) const {
+    KernelSite site;
+    if (!model_.Locate(q, &site)) return ConfigurationRisk{};
+    Accumulator impact = 0, shelter = 0;
+    ModelEwmm(map_, kernels_.kernel(site.height_bin, site.heading_bin), site.impact_i,
+              site.impact_j, &impact, &shelter);
+    return model_.FromSums(
+        site, AccumulatorToDouble(impact, format_.weight_frac_bits + map_.density_exponent),
+        AccumulatorToDouble(shelter, format_.weight_frac_bits + map_.shelter_exponent));
+  }
+
+ private:
+  const RiskModel& model_;
+  NumberFormat format_;
+  QuantizedMap map_;
+  QuantizedKernelTable kernels_;
+};
+
+enum class Misbehaviour {
+  kNone,
+  kHang,           // big EVALs: never answered
+  kCorruptFrame,   // big EVALs: a payload byte flipped (CRC mismatch)
+  kGarbageValues,  // big EVALs: a valid frame with absurd sums
+  kWrongVersion,   // every reply in protocol version 2
+  kCloseOnEval,    // big EVALs: the connection is closed
+};
+
+// An in-process shim serving ShimSession over a ModelDevice, misbehaving as
+// told on "big" EVALs (more sites than the known-answer batch has).
+class FakeShim {
+ public:
+  explicit FakeShim(Misbehaviour misbehaviour, NumberFormat format = NumberFormat::Board())
+      : misbehaviour_(misbehaviour), device_(format, "fake"), store_(format, 63, 1u << 30) {
+    context_.device = &device_;
+    context_.store = &store_;
+    auto listener = ListenTcp("127.0.0.1:0", &endpoint_);
+    EXPECT_TRUE(listener.ok()) << listener.status();
+    listener_ = *std::move(listener);
+    accept_thread_ = std::thread([this] { AcceptLoop(); });
+  }
+  ~FakeShim() {
+    stop_.store(true);
+    accept_thread_.join();
+    std::list<std::thread> threads;
+    {
+      absl::MutexLock lock(&mu_);
+      for (Socket& s : sockets_) s.Shutdown();
+      threads.swap(threads_);
+    }
+    for (std::thread& t : threads) t.join();
+  }
+  const std::string& endpoint() const { return endpoint_; }
+  int misbehaved() const { return misbehaved_.load(); }
+  void set_misbehaviour(Misbehaviour m) { misbehaviour_.store(m); }
+
+ private:
+  // The known-answer batch has fewer sites than this.
+  static constexpr size_t kBigEval = 100;
+
+  void AcceptLoop() {
+    while (!stop_.load()) {
+      auto socket = Accept(listener_, absl::Now() + absl::Milliseconds(20));
+      if (!socket.ok()) continue;
+      absl::MutexLock lock(&mu_);
+      sockets_.push_back(*std::move(socket));
+      Socket* s = &sockets_.back();
+      threads_.emplace_back([this, s] { Serve(s); });
+    }
+  }
+
+  void Serve(Socket* socket) {
+    ShimSession session(&context_);
+    std::string payload;
+    while (!stop_.load()) {
+      FrameHeader header;
+      if (!ReadFrame(*socket, kMaxPayloadBytes, absl::Now() + absl::Seconds(60), &header, &payload)
+               .ok()) {
+        break;
+      }
+      bool close = false;
+      std::string reply = session.Handle(header, payload, &close);
+      const Misbehaviour m = misbehaviour_.load();
+      const bool big = header.type == MessageType::kEval && payload.size() > 68 + 12 * kBigEval;
+      if (m == Misbehaviour::kWrongVersion) {
+        ++misbehaved_;
+        reply = EncodeFrame(static_cast<MessageType>(reply[6] | reply[7] << 8), header.request_id,
+                            absl::string_view(reply).substr(kFrameHeaderBytes), 2);
+      } else if (big && m == Misbehaviour::kHang) {
+        ++misbehaved_;
+        continue;  // never answered; the client times out and hangs up
+      } else if (big && m == Misbehaviour::kCloseOnEval) {
+        ++misbehaved_;
+        break;
+      } else if (big && m == Misbehaviour::kCorruptFrame) {
+        ++misbehaved_;
+        reply[kFrameHeaderBytes + reply.size() / 3] ^= 0x10;
+      } else if (big && m == Misbehaviour::kGarbageValues) {
+        ++misbehaved_;
+        EvalReply r;
+        if (DecodeEvalReply(absl::string_view(reply).substr(kFrameHeaderBytes), &r).ok()) {
+          for (Accumulator& a : r.shelter) a = ~Accumulator{0} >> 1;
+          reply = EncodeFrame(MessageType::kEvalReply, header.request_id, EncodeEvalReply(r));
+        }
+      }
+      if (!SendAll(*socket, reply, absl::Now() + absl::Seconds(10)).ok() || close) break;
+    }
+    socket->Shutdown();
+  }
+
+  std::atomic<Misbehaviour> misbehaviour_;
+  ModelDevice device_;
+  BlobStore store_;
+  ShimContext context_;
+  Socket listener_;
+  std::string endpoint_;
+  std::atomic<bool> stop_{false};
+  std::atomic<int> misbehaved_{0};
+  std::thread accept_thread_;
+  absl::Mutex mu_;
+  std::list<Socket> sockets_ ABSL_GUARDED_BY(mu_);
+  std::list<std::thread> threads_ ABSL_GUARDED_BY(mu_);
+};
+
+}  // namespace riskplan::accel::testing
+
+#endif  // RISKPLAN_TESTS_ACCEL_ACCEL_TEST_UTIL_H_

@@ -1,0 +1,222 @@
+// Fault drills: boards that die, hang, lie, speak another protocol version,
+// or restart. In every drill every request is answered, each result is
+// exactly either the CPU's or the board's (never anything else, never
+// missing), and every configuration is counted exactly once across workers.
+#include <atomic>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "accel/risk_engine.h"
+#include "accel_test_util.h"
+#include "gtest/gtest.h"
+
+namespace riskplan::accel {
+namespace {
+
+using testing::FakeShim;
+using testing::FpgaExpectation;
+using testing::Misbehaviour;
+using testing::MixedConfigs;
+using testing::SameRisk;
+using testing::ShimProcess;
+using testing::SmallCity;
+using testing::WaitFor;
+
+struct Drill {
+  std::unique_ptr<RiskEngine> engine;
+  absl::Mutex mu;
+  std::vector<WorkerEvent> events;
+
+  // CPU fallback only through the calling thread (no CPU workers, callers
+  // do not run chunks while a board is up): every chunk that can go to the
+  // board does.
+  explicit Drill(const std::string& endpoint, int cpu_workers = 0) {
+    RiskEngineOptions options;
+    options.cpu_workers = cpu_workers;
+    options.caller_runs = false;
+    options.min_chunk_configs = 1000;
+    options.max_chunk_configs = 4000;
+    options.fpga_shims = {endpoint};
+    options.fpga.client.eval_timeout = absl::Milliseconds(400);
+    options.fpga.client.ping_timeout = absl::Milliseconds(200);
+    options.fpga.client.hello_timeout = absl::Milliseconds(400);
+    options.fpga.backoff_initial = absl::Milliseconds(10);
+    options.fpga.backoff_max = absl::Milliseconds(100);
+    options.fpga.ping_interval = absl::Milliseconds(100);
+    options.on_worker_event = [this](const WorkerEvent& e) {
+      absl::MutexLock lock(&mu);
+      events.push_back(e);
+    };
+    engine = *RiskEngine::Create(options);
+  }
+
+  WorkerState state() { return engine->Stats().fpga[0].state; }
+  bool WaitForState(WorkerState s) {
+    return WaitFor([&] { return state() == s; });
+  }
+  bool SawState(WorkerState s) {
+    absl::MutexLock lock(&mu);
+    for (const WorkerEvent& e : events) {
+      if (e.to == s) return true;
+    }
+    return false;
+  }
+  std::string Reasons() {
+    absl::MutexLock lock(&mu);
+    std::string all;
+    for (const WorkerEvent& e : events) {
+      all += std::string(WorkerStateName(e.from)) + "->" + std::string(WorkerStateName(e.to)) +
+             ": " + e.reason + "\n";
+    }
+    return all;
+  }
+
+  // Evaluates and checks every result; returns how many came from the board.
+  size_t EvaluateAndCheck(const std::vector<Pose>& configs, const NumberFormat& format) {
+    const RiskModel& model = *SmallCity();
+    std::vector<ConfigurationRisk> out(configs.size());
+    for (ConfigurationRisk& r : out) r.risk = -1.0;
+    const RiskEngineStats before = engine->Stats();
+    EXPECT_TRUE(engine->Evaluate(model, configs, out).ok());
+    const FpgaExpectation board(model, format);
+    size_t from_board = 0;
+    for (size_t n = 0; n < configs.size(); ++n) {
+      const ConfigurationRisk cpu = model.Evaluate(configs[n]);
+      if (SameRisk(out[n], cpu)) continue;
+      EXPECT_TRUE(SameRisk(out[n], board.Evaluate(configs[n])))
+          << "configuration " << n << " is neither the CPU's nor the board's result";
+      ++from_board;
+    }
+    // Counted once: callers + CPU workers + boards = configurations.
+    const RiskEngineStats after = engine->Stats();
+    uint64_t counted = (after.caller_configurations - before.caller_configurations) +
+                       (after.fpga[0].configurations - before.fpga[0].configurations);
+    for (size_t w = 0; w < after.cpu.size(); ++w) {
+      counted += after.cpu[w].configurations - before.cpu[w].configurations;
+    }
+    EXPECT_EQ(counted, configs.size());
+    return from_board;
+  }
+};
+
+std::vector<Pose> Configs(size_t n, uint64_t seed) { return MixedConfigs(*SmallCity(), n, seed); }
+
+TEST(FaultDrillTest, ShimKilledMidBatch) {
+  auto shim = ShimProcess::Start({"--device=model"});
+  ASSERT_NE(shim, nullptr);
+  Drill drill(shim->endpoint());
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  const std::vector<Pose> configs = Configs(120000, 1);
+  // Kill the shim once the board has finished a chunk of this batch (others
+  // are then still queued or in flight).
+  std::thread killer([&] {
+    EXPECT_TRUE(WaitFor([&] { return drill.engine->Stats().fpga[0].chunks >= 1; }));
+    shim->Kill();
+  });
+  const size_t from_board = drill.EvaluateAndCheck(configs, NumberFormat::Board());
+  killer.join();
+  EXPECT_GT(from_board, 0u);
+  EXPECT_LT(from_board, configs.size() * 99 / 100) << "the CPU took over the rest";
+  EXPECT_TRUE(drill.SawState(WorkerState::kSuspect)) << drill.Reasons();
+  EXPECT_TRUE(drill.WaitForState(WorkerState::kDown) || drill.state() == WorkerState::kProbing);
+  // Later requests are answered by the CPU alone.
+  EXPECT_EQ(drill.EvaluateAndCheck(Configs(5000, 2), NumberFormat::Board()), 0u);
+}
+
+TEST(FaultDrillTest, ShimHangs) {
+  FakeShim fake(Misbehaviour::kHang);
+  Drill drill(fake.endpoint());
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 3), NumberFormat::Board()), 0u);
+  EXPECT_GT(fake.misbehaved(), 0);
+  EXPECT_TRUE(drill.SawState(WorkerState::kSuspect)) << drill.Reasons();
+  const RiskEngineStats stats = drill.engine->Stats();
+  EXPECT_GT(stats.fpga[0].failures, 0u);
+  EXPECT_NE(stats.fpga[0].last_error.find("deadline"), std::string::npos)
+      << stats.fpga[0].last_error;
+}
+
+TEST(FaultDrillTest, ShimCorruptsFrames) {
+  FakeShim fake(Misbehaviour::kCorruptFrame);
+  Drill drill(fake.endpoint());
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 4), NumberFormat::Board()), 0u);
+  EXPECT_GT(fake.misbehaved(), 0);
+  EXPECT_NE(drill.Reasons().find("checksum"), std::string::npos) << drill.Reasons();
+}
+
+TEST(FaultDrillTest, ShimReturnsGarbageInValidFrames) {
+  FakeShim fake(Misbehaviour::kGarbageValues);
+  Drill drill(fake.endpoint());
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 5), NumberFormat::Board()), 0u);
+  EXPECT_GT(fake.misbehaved(), 0);
+  EXPECT_NE(drill.Reasons().find("implausible"), std::string::npos) << drill.Reasons();
+}
+
+TEST(FaultDrillTest, ShimClosesTheConnectionOnEval) {
+  FakeShim fake(Misbehaviour::kCloseOnEval);
+  Drill drill(fake.endpoint(), /*cpu_workers=*/1);
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 6), NumberFormat::Board()), 0u);
+  EXPECT_GT(fake.misbehaved(), 0);
+}
+
+TEST(FaultDrillTest, ProtocolVersionMismatch) {
+  FakeShim fake(Misbehaviour::kWrongVersion);
+  Drill drill(fake.endpoint());
+  ASSERT_TRUE(WaitFor([&] { return drill.SawState(WorkerState::kDown); }));
+  EXPECT_EQ(drill.EvaluateAndCheck(Configs(10000, 7), NumberFormat::Board()), 0u);
+  EXPECT_FALSE(drill.SawState(WorkerState::kUp));
+  EXPECT_NE(drill.Reasons().find("protocol version 2"), std::string::npos) << drill.Reasons();
+}
+
+TEST(FaultDrillTest, ShimRestartsAndTheWorkerReturnsToService) {
+  auto shim = ShimProcess::Start({"--device=model"});
+  ASSERT_NE(shim, nullptr);
+  const std::string endpoint = shim->endpoint();
+  Drill drill(endpoint);
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  EXPECT_GT(drill.EvaluateAndCheck(Configs(8000, 8), NumberFormat::Board()), 0u);
+  shim->Kill();
+  ASSERT_TRUE(WaitFor([&] { return drill.state() != WorkerState::kUp; })) << drill.Reasons();
+  // Meanwhile the CPU answers.
+  EXPECT_EQ(drill.EvaluateAndCheck(Configs(8000, 9), NumberFormat::Board()), 0u);
+  // The board comes back on the same port (a restarted board has lost its
+  // blobs: they are uploaded again).
+  shim = ShimProcess::Start({"--device=model"}, endpoint);
+  ASSERT_NE(shim, nullptr);
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  const uint64_t uploads = drill.engine->Stats().fpga[0].uploads;
+  EXPECT_GT(drill.EvaluateAndCheck(Configs(8000, 10), NumberFormat::Board()), 0u);
+  EXPECT_GT(drill.engine->Stats().fpga[0].uploads, uploads);
+  EXPECT_TRUE(drill.SawState(WorkerState::kProbing));
+}
+
+TEST(FaultDrillTest, RemovingAWorkerMidBatch) {
+  auto shim = ShimProcess::Start({"--device=model"});
+  ASSERT_NE(shim, nullptr);
+  Drill drill(shim->endpoint());
+  ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
+  std::thread remover([&] {
+    EXPECT_TRUE(WaitFor([&] { return drill.engine->Stats().fpga[0].chunks >= 1; }));
+    EXPECT_TRUE(drill.engine->RemoveFpgaWorker(shim->endpoint()).ok());
+  });
+  const RiskModel& model = *SmallCity();
+  const std::vector<Pose> configs = Configs(120000, 11);
+  std::vector<ConfigurationRisk> out(configs.size());
+  for (ConfigurationRisk& r : out) r.risk = -1.0;
+  ASSERT_TRUE(drill.engine->Evaluate(model, configs, out).ok());
+  remover.join();
+  const FpgaExpectation board(model, NumberFormat::Board());
+  for (size_t n = 0; n < configs.size(); n += 7) {
+    ASSERT_TRUE(SameRisk(out[n], model.Evaluate(configs[n])) ||
+                SameRisk(out[n], board.Evaluate(configs[n])))
+        << n;
+  }
+  EXPECT_TRUE(drill.engine->Stats().fpga.empty());
+}
+
+}  // namespace
+}  // namespace riskplan::accel

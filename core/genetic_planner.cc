@@ -66,8 +66,8 @@ struct PieceMemo {
   double length_m = 0.0;
   int violations = 0;
   bool has_risk = false;
-  bool pending = false;   // its samples are in the current batch
-  size_t begin = 0;       // [begin, end) of the batch
+  bool pending = false;  // its samples are in the current batch
+  size_t begin = 0;      // [begin, end) of the batch
   size_t end = 0;
   double ds = 0.0;        // spacing of its risk samples
   double risk_sum = 0.0;  // sum of M over its risk samples

@@ -5,12 +5,12 @@
 // finds the nearest vertex, and steps step_m (delta) from it towards the
 // point; as in the seed, a point closer than delta to its nearest vertex is
 // drawn again (with keep_growing the point itself is taken, or the tree would
-// stop growing once its vertices cover the map). The new edge is accepted only if every obstacle point lies
-// farther than clearance_m (xi) from it. Obstacle points are the map's (the
-// centres of the border cells of every region that cannot be flown: no-fly
-// cells, and cells whose admissible band is empty or, with flight_altitude_m,
-// does not hold that altitude; see MapObstaclePoints) and the request's
-// (PlanOptions::obstacle_points).
+// stop growing once its vertices cover the map). The new edge is accepted only
+// if every obstacle point lies farther than clearance_m (xi) from it.
+// Obstacle points are the map's (the centres of the border cells of every
+// region that cannot be flown: no-fly cells, and cells whose admissible band
+// is empty or, with flight_altitude_m, does not hold that altitude; see
+// MapObstaclePoints) and the request's (PlanOptions::obstacle_points).
 //
 // A vertex within delta of the goal whose edge to the goal is clear connects:
 // the branch from the start is turned into waypoints joined by Dubins-airplane

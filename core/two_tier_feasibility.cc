@@ -95,8 +95,7 @@ TwoTierFeasibility::TwoTierFeasibility(const RiskModel& model, TwoTierOptions op
       const double terrain = terrain_f;
       const double safe = model.SafeAltitude(i, j);
       const double floor_d =
-          safe > terrain ? safe
-                         : std::nextafter(terrain, std::numeric_limits<double>::infinity());
+          safe > terrain ? safe : std::nextafter(terrain, std::numeric_limits<double>::infinity());
       detailed_.floor[k] = std::isinf(floor_d) ? kFloatInf : RoundUp(floor_d);
       detailed_.ceiling[k] = RoundDown(terrain + max_agl);
     }

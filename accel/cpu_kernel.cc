@@ -177,7 +177,7 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
 // ones (hi), added in the same order. Columns past the last half only hold
 // zero weights; adding their +0 products to a non-negative sum changes
 // nothing, so they are skipped.
-template <int kHalves, int kN>
+template <int kHalves, int kN, bool kShared>
 __attribute__((target("avx2"))) void EwmmAvx2(const Window* windows, int rows, int weight_stride,
                                               int64_t map_stride, double* impact_factor,
                                               double* expected_shelter) {
@@ -197,7 +197,8 @@ __attribute__((target("avx2"))) void EwmmAvx2(const Window* windows, int rows, i
     for (int c = 0; c < kN; ++c) {
 #pragma GCC unroll 16
       for (int h = 0; h < kHalves; ++h) {
-        const __m256d wv = _mm256_loadu_pd(w[c] + 4 * h);
+        // With one kernel for all windows its weights are loaded once.
+        const __m256d wv = _mm256_loadu_pd((kShared ? w[0] : w[c]) + 4 * h);
         const __m256d pr = _mm256_mul_pd(wv, _mm256_cvtps_pd(_mm_loadu_ps(r[c] + 4 * h)));
         const __m256d ps = _mm256_mul_pd(wv, _mm256_cvtps_pd(_mm_loadu_ps(s[c] + 4 * h)));
         if (h % 2 == 0) {
@@ -208,6 +209,9 @@ __attribute__((target("avx2"))) void EwmmAvx2(const Window* windows, int rows, i
           sh_hi[c] = _mm256_add_pd(sh_hi[c], ps);
         }
       }
+    }
+#pragma GCC unroll 4
+    for (int c = 0; c < kN; ++c) {
       w[c] += weight_stride;
       r[c] += map_stride;
       s[c] += map_stride;
@@ -232,7 +236,7 @@ __attribute__((target("avx2"))) void EwmmAvx2(const Window* windows, int rows, i
 // row holds columns 8b .. 8b+7, so lane l again sees columns l, l+8, ... in
 // order. Half the instructions of the AVX2 loop, and with 32 registers four
 // windows stay in flight.
-template <int kBlocks, int kN>
+template <int kBlocks, int kN, bool kShared>
 __attribute__((target("avx512f"))) void EwmmAvx512(const Window* windows, int rows,
                                                    int weight_stride, int64_t map_stride,
                                                    double* impact_factor,
@@ -253,7 +257,7 @@ __attribute__((target("avx512f"))) void EwmmAvx512(const Window* windows, int ro
     for (int b = 0; b < kBlocks; ++b) {
 #pragma GCC unroll 4
       for (int c = 0; c < kN; ++c) {
-        const __m512d wv = _mm512_loadu_pd(w[c] + 8 * b);
+        const __m512d wv = _mm512_loadu_pd((kShared ? w[0] : w[c]) + 8 * b);
         rho[c] = _mm512_add_pd(rho[c],
                                _mm512_mul_pd(wv, _mm512_cvtps_pd(_mm256_loadu_ps(r[c] + 8 * b))));
         sh[c] =
@@ -279,30 +283,39 @@ __attribute__((target("avx512f"))) void EwmmAvx512(const Window* windows, int ro
 
 #pragma GCC diagnostic pop
 
-template <int kN, int... kHalves>
+template <int kN, bool kShared, int... kHalves>
 constexpr std::array<EwmmFn, sizeof...(kHalves)> Avx2Table(std::integer_sequence<int, kHalves...>) {
-  return {&EwmmAvx2<kHalves + 1, kN>...};
+  return {&EwmmAvx2<kHalves + 1, kN, kShared>...};
 }
 
-template <int kN, int... kBlocks>
+template <int kN, bool kShared, int... kBlocks>
 constexpr std::array<EwmmFn, sizeof...(kBlocks)> Avx512Table(
     std::integer_sequence<int, kBlocks...>) {
-  return {&EwmmAvx512<kBlocks + 1, kN>...};
+  return {&EwmmAvx512<kBlocks + 1, kN, kShared>...};
 }
 
-// The loop for a group of `n` (1, 2 or 4) windows of `side` cells.
-EwmmFn LoopFor(Isa isa, int n, int side) {
-  static constexpr auto avx2_1 = Avx2Table<1>(std::make_integer_sequence<int, kMaxSide / 4>());
-  static constexpr auto avx2_2 = Avx2Table<2>(std::make_integer_sequence<int, kMaxSide / 4>());
-  static constexpr auto avx512_1 = Avx512Table<1>(std::make_integer_sequence<int, kMaxSide / 8>());
-  static constexpr auto avx512_2 = Avx512Table<2>(std::make_integer_sequence<int, kMaxSide / 8>());
-  static constexpr auto avx512_4 = Avx512Table<4>(std::make_integer_sequence<int, kMaxSide / 8>());
+// The loop for a group of `n` (1, 2 or 4) windows of `side` cells; `shared`
+// when they all use the same kernel.
+EwmmFn LoopFor(Isa isa, int n, int side, bool shared) {
+  constexpr auto kHalves = std::make_integer_sequence<int, kMaxSide / 4>();
+  constexpr auto kBlocks = std::make_integer_sequence<int, kMaxSide / 8>();
+  static constexpr auto avx2_1 = Avx2Table<1, false>(kHalves);
+  static constexpr auto avx2_2 = Avx2Table<2, false>(kHalves);
+  static constexpr auto avx2_2s = Avx2Table<2, true>(kHalves);
+  static constexpr auto avx512_1 = Avx512Table<1, false>(kBlocks);
+  static constexpr auto avx512_2 = Avx512Table<2, false>(kBlocks);
+  static constexpr auto avx512_2s = Avx512Table<2, true>(kBlocks);
+  static constexpr auto avx512_4 = Avx512Table<4, false>(kBlocks);
+  static constexpr auto avx512_4s = Avx512Table<4, true>(kBlocks);
   if (isa == Isa::kAvx512) {
-    const int blocks = (side + 7) / 8;
-    return n == 4 ? avx512_4[blocks - 1] : n == 2 ? avx512_2[blocks - 1] : avx512_1[blocks - 1];
+    const int b = (side + 7) / 8 - 1;
+    if (n == 4) return shared ? avx512_4s[b] : avx512_4[b];
+    if (n == 2) return shared ? avx512_2s[b] : avx512_2[b];
+    return avx512_1[b];
   }
-  const int halves = (side + 3) / 4;
-  return n >= 2 ? avx2_2[halves - 1] : avx2_1[halves - 1];
+  const int h = (side + 3) / 4 - 1;
+  if (n >= 2) return shared ? avx2_2s[h] : avx2_2[h];
+  return avx2_1[h];
 }
 #endif  // __x86_64__
 
@@ -419,15 +432,17 @@ void CpuRiskKernel::Sums(const RiskModel& model, std::span<const LocatedSite> si
       Window group[4];
       group[0] = {k0->weights, density + first0, shelter + first0};
       int count = 1;
+      bool shared = true;
       while (count < group_max && a + count < n) {
         const ImpactKernel* k;
         int64_t first;
         if (!WindowOf(model, sites[a + count].site, &k, &first) || k->Side() != k0->Side()) break;
+        shared = shared && k->weights == k0->weights;
         group[count++] = {k->weights, density + first, shelter + first};
       }
       if (count == 3) count = 2;  // loops exist for 1, 2 and 4 windows
-      LoopFor(isa_, count, k0->Side())(group, k0->Side(), k0->Stride(), map_stride,
-                                       &impact_factor[a], &expected_shelter[a]);
+      LoopFor(isa_, count, k0->Side(), shared)(group, k0->Side(), k0->Stride(), map_stride,
+                                               &impact_factor[a], &expected_shelter[a]);
       a += count;
     }
     return;

@@ -2,14 +2,12 @@
 // (component_regs.h) on any RegisterBus: /dev/mem or UIO on a DE10-Nano,
 // the in-memory ComponentModel, or (issue 6) a Verilator model.
 //
-// A batch of sites is cut into jobs: sites sorted by impact cell, then taken
-// greedily while the job has a free lane, its cut (the bounding box of the
-// lanes' windows) stays within max_cut_cells and its kernels fit the weight
-// slots. Kernels stay in their slots between jobs (least recently used slot
-// replaced), so neighbouring samples of a trajectory, which share their
-// kernel and most of their window (the thesis measured more than 90 %
-// overlap), cost one cut streamed once for up to `lanes` risks. No zeroing:
-// a lane reads only its own side x side weights.
+// A batch of sites is cut into jobs: sites are taken in order while the job
+// has a free lane, its cut (the bounding box of the lanes' windows) stays
+// within max_cut_cells and its kernels fit the weight slots. Kernels stay in their slots between
+// jobs (least recently used slot replaced), so neighbouring samples of a trajectory, which share
+// their kernel and most of their window (the thesis measured more than 90 % overlap), cost one cut
+// streamed once for up to `lanes` risks. No zeroing: a lane reads only its own side x side weights.
 //
 // What runs only on a board: MappedRegisterBus on /dev/mem or /dev/uioN with
 // the component loaded in the FPGA. Everything else (job planning, kernel

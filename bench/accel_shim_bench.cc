@@ -1,0 +1,158 @@
+// Throughput and latency of risk batches through a local riskplan-fpga-shim
+// (issue 5): a RiskEngine whose only worker is one board, by batch size, for
+// the two access patterns (along trajectories, random), with
+//   model     the fixed-point datapath in software (one lane), and
+//   mmio      the mmio backend on the in-memory component model (8 lanes),
+//             which also reports the component's cycle count: the time the
+//             board itself would take at its clock (100 MHz).
+// The shim runs in this process (the same ShimServer as the daemon) on
+// 127.0.0.1:0; pass --shim=HOST:PORT to measure an external one instead.
+// Latency is the wall time of one batch (Evaluate call); the machine is
+// shared, so compare side by side in one run and quote medians.
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "accel/risk_engine.h"
+#include "accel/shim/component_model.h"
+#include "accel/shim/mmio_device.h"
+#include "accel/shim/shim_server.h"
+#include "benchmark/benchmark.h"
+#include "core/demo_city.h"
+#include "core/random.h"
+
+namespace riskplan {
+namespace {
+
+std::string g_external_shim;
+
+const std::shared_ptr<const RiskModel>& Model() {
+  static const std::shared_ptr<const RiskModel> model = [] {
+    auto map = MakeDemoCity();
+    return *RiskModel::Create(*map, ModelParams{});
+  }();
+  return model;
+}
+
+Pose At100mAgl(const RiskModel& model, double x, double y, double theta) {
+  int i = 0, j = 0;
+  model.map().CellOf(x, y, &i, &j);
+  return Pose{x, y, model.map().terrain(i, j) + 100.0, theta};
+}
+
+// The generators of bench/risk_kernel_bench.cc.
+std::vector<Pose> Configurations(bool along, size_t n) {
+  const RiskModel& model = *Model();
+  Rng rng(along ? 1 : 2);
+  std::vector<Pose> out;
+  while (out.size() < n) {
+    if (!along) {
+      out.push_back(At100mAgl(model, 200.0 + rng.Uniform() * 7600.0, 200.0 + rng.Uniform() * 7600.0,
+                              rng.Uniform() * 6.283185307179586));
+      continue;
+    }
+    const double theta = rng.Uniform() * 6.283185307179586;
+    double x = 1000.0 + rng.Uniform() * 6000.0;
+    double y = 1000.0 + rng.Uniform() * 6000.0;
+    for (int k = 0; k < 200 && out.size() < n; ++k) {
+      out.push_back(At100mAgl(model, x, y, theta));
+      x += 5.0 * std::cos(theta);
+      y += 5.0 * std::sin(theta);
+    }
+  }
+  return out;
+}
+
+// A shim (in-process unless --shim) and an engine using only it.
+struct Setup {
+  std::unique_ptr<accel::ShimServer> server;
+  std::unique_ptr<accel::RiskEngine> engine;
+  std::string endpoint;
+};
+
+Setup& SetupFor(bool mmio) {
+  static Setup setups[2];
+  Setup& s = setups[mmio ? 1 : 0];
+  if (s.engine != nullptr) return s;
+  s.endpoint = g_external_shim;
+  if (s.endpoint.empty()) {
+    std::unique_ptr<accel::EwmmDevice> device;
+    if (mmio) {
+      accel::ComponentConfig config;
+      config.lanes = 8;
+      device = *accel::MmioDevice::Open(std::make_unique<accel::ComponentModel>(config), {});
+    } else {
+      device = std::make_unique<accel::ModelDevice>(accel::NumberFormat::Board());
+    }
+    s.server = std::make_unique<accel::ShimServer>(std::move(device), accel::ShimServerOptions{});
+    s.endpoint = *s.server->Start("127.0.0.1:0");
+  }
+  accel::RiskEngineOptions options;
+  options.cpu_workers = 0;
+  options.caller_runs = false;
+  options.max_chunk_configs = 65536;
+  options.min_chunk_configs = 65536;  // one chunk per batch: one EVAL
+  options.fpga_shims = {s.endpoint};
+  s.engine = *accel::RiskEngine::Create(options);
+  while (s.engine->Stats().fpga[0].state != accel::WorkerState::kUp) {
+    absl::SleepFor(absl::Milliseconds(5));
+  }
+  // Warm up: the blobs are uploaded once.
+  std::vector<Pose> one = Configurations(true, 10);
+  std::vector<ConfigurationRisk> out(one.size());
+  (void)s.engine->Evaluate(*Model(), one, out);
+  return s;
+}
+
+// Args: batch size, pattern (1 along, 0 random), backend (0 model, 1 mmio).
+void BM_ShimBatch(benchmark::State& state) {
+  const size_t batch = static_cast<size_t>(state.range(0));
+  const bool along = state.range(1) == 1;
+  const bool mmio = state.range(2) == 1;
+  Setup& s = SetupFor(mmio);
+  const std::vector<Pose> configs = Configurations(along, 65536);
+  std::vector<ConfigurationRisk> out(batch);
+  const accel::RiskEngineStats before = s.engine->Stats();
+  size_t first = 0;
+  int64_t batches = 0;
+  for (auto _ : state) {
+    if (first + batch > configs.size()) first = 0;
+    if (!s.engine->Evaluate(*Model(), std::span<const Pose>(configs).subspan(first, batch), out)
+             .ok()) {
+      state.SkipWithError("Evaluate failed");
+      return;
+    }
+    first += batch;
+    ++batches;
+  }
+  const accel::RiskEngineStats after = s.engine->Stats();
+  state.SetItemsProcessed(static_cast<int64_t>(batches * batch));
+  const double cycles =
+      static_cast<double>(after.fpga[0].device_cycles - before.fpga[0].device_cycles);
+  if (mmio && batches > 0) {
+    state.counters["cycles_per_risk"] = cycles / static_cast<double>(batches * batch);
+    // What the component alone would sustain at 100 MHz.
+    state.counters["board_risks_per_s_100MHz"] =
+        1e8 * static_cast<double>(batches * batch) / cycles;
+  }
+}
+BENCHMARK(BM_ShimBatch)
+    ->ArgsProduct({{16, 256, 4096, 65536}, {1, 0}, {0}})
+    ->ArgsProduct({{256, 4096}, {1, 0}, {1}})
+    ->ArgNames({"batch", "along", "mmio"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace riskplan
+
+int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--shim=", 7) == 0) riskplan::g_external_shim = argv[i] + 7;
+  }
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  return 0;
+}

@@ -50,7 +50,9 @@ bool IsOmplPlanner(const std::string& name);
 // time, after ompl::RNG::setSeed(seed). The clock starts after setup(), as
 // RISK_RRT_STAR's starts after its checks. `checkpoints_s` (ascending, each
 // <= budget_s) are the times at which the iteration count is recorded.
-// InvalidArgument for an unknown planner or setting.
+// InvalidArgument for an unknown planner or setting. With the environment
+// variable RISKPLAN_OMPL_DEBUG set, also prints the number of motionCost
+// calls, configuration risks and motion checks to stderr.
 absl::StatusOr<RunRecord> RunOmplPlanner(const std::string& planner,
                                          std::shared_ptr<const RiskModel> model,
                                          const Scenario& scenario, uint64_t seed, double budget_s,

@@ -49,6 +49,9 @@ if [ -z "${SKIP_LOAD:-}" ]; then
 echo; echo "## EvaluateRisk, closed loop, 4 callers, with the Ping ceiling"
 load --rpc=eval --waypoints="$WAYPOINTS" --mode=closed --concurrency=4 --ceiling \
   --report_json="$OUT/eval-closed-4.json" | grep -v '^  t='
+echo; echo "## EvaluateRisk of a 100 m polyline (20 samples), closed loop, 4 callers, with the Ping ceiling"
+load --rpc=eval --polyline="1000,1000,250; 1100,1000,250" --mode=closed --concurrency=4 --ceiling \
+  --report_json="$OUT/eval-short-closed-4.json" | grep -v '^  t='
 echo; echo "## EvaluateRisk, closed loop, 16 callers, with the Ping ceiling"
 load --rpc=eval --waypoints="$WAYPOINTS" --mode=closed --concurrency=16 --ceiling \
   --report_json="$OUT/eval-closed-16.json" | grep -v '^  t='

@@ -85,7 +85,8 @@ class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
   absl::Status CheckEndpointsIfModelReady();
 
   // Plans on the calling (pool) thread, streams the results, and releases the
-  // admission slot. REQUIRES: admitted.
+  // admission slot (and the running-plans gauge) before the final message is
+  // offered. REQUIRES: admitted, and PlanAdmitted() recorded.
   void Run();
 
   // Ends the call with `status` without planning (admission or scheduling

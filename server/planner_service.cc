@@ -125,10 +125,7 @@ grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
     return call.get();
   }
   metrics_.PlanAdmitted();
-  if (!plan_pool_.TrySubmit([call, this] {
-        call->Run();
-        metrics_.PlanReleased();
-      })) {
+  if (!plan_pool_.TrySubmit([call] { call->Run(); })) {
     active_.Release(call.get());
     metrics_.PlanReleased();
     call->Reject(kDraining);

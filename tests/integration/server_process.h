@@ -54,6 +54,9 @@ struct CommandResult {
 };
 CommandResult RunCommand(const std::string& command);
 
+// GET http://ADDRESS/PATH (HTTP/1.0); the response body, or an error.
+absl::StatusOr<std::string> HttpGet(const std::string& address, const std::string& path);
+
 // The demo-city of 2 km that ServerProcess serves by default, and poses on it
 // that are admissible under the default model parameters.
 inline constexpr double kSmallCitySizeM = 2000.0;

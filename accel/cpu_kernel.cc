@@ -489,7 +489,7 @@ void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> confi
         }
       }
     }
-    site_cache_->CountLookups(hits, sites_.size() - kept);
+    site_cache_->CountLookups(hits, kept);
     stats_.cache_hits += hits;
     sites_.resize(kept);
   }

@@ -60,7 +60,7 @@ ABSL_FLAG(std::string, report_json, "", "load: also write the report as JSON to 
 namespace {
 
 constexpr char kUsage[] =
-    "riskplan: client of riskplan-server.\n"
+    "the client of riskplan-server.\n"
     "\n"
     "  riskplan --server=HOST:PORT <command> [flags]\n"
     "\n"

@@ -72,7 +72,7 @@ namespace riskplan::server {
 namespace {
 
 constexpr char kUsage[] =
-    "riskplan-server: risk-aware UAV trajectory planning over gRPC (riskplan.v1.Planner).\n"
+    "risk-aware UAV trajectory planning over gRPC (riskplan.v1.Planner).\n"
     "\n"
     "  riskplan-server --listen=HOST:PORT [--maps=DIR] [flags]\n"
     "\n"

@@ -586,11 +586,12 @@ const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
       {"near_radius_m", 0.0, 0.0, 20000.0, "largest distance of a neighbour, m (0: 2.5 * step_m)"},
       {"nearest_candidates", 8, 1, 100,
        "Euclidean candidates ranked by Dubins length to find the nearest node"},
-      {"max_nodes", 200000, 10, 5000000, "largest tree; the run ends when it is reached"},
+      {"max_nodes", 200000, 10, 300000,
+       "largest tree (about 130 bytes a node); the run ends when it is reached"},
       {"batch_chunk", 16, 0, 100000,
        "midpoints per candidate edge in one risk batch; a losing edge is dropped between "
        "batches (0: whole edges, one batch per step)"},
-      {"risk_cache_log2", 0, 0, 24,
+      {"risk_cache_log2", 0, 0, 20,
        "log2 of the entries of the exact configuration-risk cache (40 B each) used when no "
        "external evaluator is given; 0 turns it off"},
   };

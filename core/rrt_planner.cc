@@ -203,7 +203,7 @@ const std::vector<PlannerParamInfo>& RrtPlanner::ParamInfo() {
       {"flight_altitude_m", 0.0, 0.0, 20000.0,
        "plan at this altitude AMSL: cells where it is not admissible are obstacles (0: any "
        "admissible altitude; the trajectory follows the middle of the band)"},
-      {"max_nodes", 200000, 10, 5000000, "largest tree; the run ends when it is reached"},
+      {"max_nodes", 200000, 10, 300000, "largest tree; the run ends when it is reached"},
   };
   return *info;
 }

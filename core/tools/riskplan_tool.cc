@@ -58,7 +58,7 @@ namespace riskplan {
 namespace {
 
 constexpr char kUsage[] =
-    "riskplan-tool: offline risk evaluation and map tools.\n"
+    "offline risk evaluation and map tools.\n"
     "\n"
     "Commands:\n"
     "  evaluate   risk, length and admissibility of a trajectory on a map\n"

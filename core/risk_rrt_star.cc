@@ -603,6 +603,9 @@ absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
                                              const CancellationToken& cancel,
                                              const ImprovementCallback& on_improvement) {
   if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
+  if (absl::Status s = CheckRequestObstacles(PlannerAlgorithm::kRiskRrtStar, options); !s.ok()) {
+    return s;
+  }
   const PlannerBudget& b = options.budget;
   if (!(b.max_time_s >= 0.0) || !std::isfinite(b.max_time_s) || b.max_iterations < 0 ||
       (b.max_time_s == 0.0 && b.max_iterations == 0)) {

@@ -85,6 +85,7 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   out->set_length_m(improvement.length_m);
   out->set_found_at_iteration(improvement.iterations);
   out->set_found_at_s(improvement.elapsed_s);
+  out->set_replanned(improvement.replanned);
 
   absl::StatusOr<std::vector<TrajectoryPiece>> pieces =
       PiecesFromWaypoints(improvement.waypoints, params);

@@ -236,6 +236,9 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
     spec.options.dynamic_obstacles.push_back(
         DynamicObstacle{o.at_iteration(), o.x0_m(), o.y0_m(), o.x1_m(), o.y1_m()});
   }
+  // A planner that cannot honour a reported hazard refuses it rather than
+  // dropping it silently.
+  if (absl::Status s = CheckRequestObstacles(spec.algorithm, spec.options); !s.ok()) return s;
   return spec;
 }
 

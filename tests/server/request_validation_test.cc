@@ -148,6 +148,7 @@ TEST_F(RequestValidationTest, Algorithms) {
 
 TEST_F(RequestValidationTest, ObstaclesReachThePlanOptions) {
   v1::PlanRequest r = GoodPlan();
+  r.set_algorithm(v1::HARMONIC);  // takes both kinds of request obstacles
   r.add_obstacle_points()->set_x(700);
   v1::DynamicObstacle* o = r.add_dynamic_obstacles();
   o->set_at_iteration(50);
@@ -165,6 +166,21 @@ TEST_F(RequestValidationTest, ObstaclesReachThePlanOptions) {
   limits_.max_obstacle_points = 0;
   ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
                   "obstacle_points has 1 points; the limit is 0");
+}
+
+TEST_F(RequestValidationTest, PlannersThatCannotHonourObstaclesRefuseThem) {
+  v1::PlanRequest r = GoodPlan();
+  r.set_algorithm(v1::RISK_RRT_STAR);
+  r.add_obstacle_points()->set_x(700);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "obstacle_points: RISK_RRT_STAR does not take request obstacles");
+  r = GoodPlan();
+  r.set_algorithm(v1::RRT);
+  v1::DynamicObstacle* o = r.add_dynamic_obstacles();
+  o->set_x1_m(10);
+  o->set_y1_m(10);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "dynamic_obstacles: RRT does not take obstacles that appear while it runs");
 }
 
 TEST_F(RequestValidationTest, BudgetOutOfRange) {

@@ -15,21 +15,26 @@
 
 #include "accel/cpu_kernel.h"
 #include "accel/prepared_map.h"
+#include "accel/risk_engine.h"
+#include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
 #include "core/demo_city.h"
+#include "core/planner.h"
 #include "core/random.h"
 #include "core/risk_model.h"
 
 namespace riskplan {
 namespace {
 
-const RiskModel& Model() {
-  static std::shared_ptr<const RiskModel> model = [] {
+const std::shared_ptr<const RiskModel>& ModelPtr() {
+  static const std::shared_ptr<const RiskModel> model = [] {
     auto map = MakeDemoCity();
     return *RiskModel::Create(*map, ModelParams{});
   }();
-  return *model;
+  return model;
 }
+
+const RiskModel& Model() { return *ModelPtr(); }
 
 Pose At100mAgl(const RiskModel& model, double x, double y, double theta) {
   int i = 0;
@@ -146,7 +151,64 @@ void BM_Kernel_Random(benchmark::State& state) { RunKernel(state, Random(), true
 void BM_KernelFloat_Along(benchmark::State& state) { RunKernel(state, Along(), false); }
 void BM_KernelFloat_Random(benchmark::State& state) { RunKernel(state, Random(), false); }
 
+// The hit path of the site cache: every site of the batch is in the cache
+// (the second and later passes over the same configurations).
+void BM_KernelCacheHits_Along(benchmark::State& state) {
+  const std::vector<Pose>& configs = Along();
+  accel::SiteCache cache(size_t{256} << 20);
+  accel::CpuRiskKernel kernel(&Maps(), &cache);
+  std::vector<ConfigurationRisk> out(4096);
+  const auto pass = [&] {
+    for (size_t first = 0; first + 4096 <= configs.size(); first += 4096) {
+      kernel.Evaluate(Model(), std::span<const Pose>(configs).subspan(first, 4096), out);
+    }
+  };
+  pass();  // fills the cache
+  for (auto _ : state) pass();
+  state.SetItemsProcessed(
+      static_cast<int64_t>(state.iterations() * (configs.size() / 4096 * 4096)));
+}
+
+// Risk-based RRT* on demo-city scenarios, 800 iterations each, evaluating
+// directly (core) or through a RiskEngine on the calling thread, with and
+// without the site cache (Arg: site cache MiB). Reports the share of sites
+// the cache answered.
+void BM_Planner(benchmark::State& state, bool engine_path) {
+  const std::shared_ptr<const RiskModel>& model = ModelPtr();
+  const std::vector<bench::Scenario> scenarios = bench::DemoCityScenarios(*model);
+  accel::RiskEngineOptions options;
+  options.cpu_workers = 0;
+  options.site_cache_bytes = static_cast<size_t>(state.range(0)) << 20;
+  std::unique_ptr<accel::RiskEngine> engine = *accel::RiskEngine::Create(options);
+  uint64_t configurations = 0;
+  for (auto _ : state) {
+    for (size_t s = 0; s < scenarios.size(); s += 6) {
+      PlanningProblem problem{model, scenarios[s].start, scenarios[s].goal};
+      PlanOptions plan;
+      plan.budget.max_time_s = 0.0;
+      plan.budget.max_iterations = 800;
+      plan.seed = 3;
+      CancellationToken cancel;
+      std::unique_ptr<RiskEvaluator> evaluator = engine_path ? engine->NewEvaluator() : nullptr;
+      auto planner = *MakePlanner(PlannerAlgorithm::kRiskRrtStar, evaluator.get());
+      auto result = planner->Plan(problem, plan, cancel, nullptr);
+      configurations += result->configurations_evaluated;
+    }
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(configurations));
+  const accel::RiskEngineStats stats = engine->Stats();
+  if (stats.cache_hits + stats.cache_misses > 0) {
+    state.counters["cache_hit_share"] = static_cast<double>(stats.cache_hits) /
+                                        static_cast<double>(stats.cache_hits + stats.cache_misses);
+  }
+}
+void BM_Planner_Direct(benchmark::State& state) { BM_Planner(state, false); }
+void BM_Planner_Engine(benchmark::State& state) { BM_Planner(state, true); }
+
 BENCHMARK(BM_Core_Along)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KernelCacheHits_Along)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Planner_Direct)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Planner_Engine)->Arg(0)->Arg(64)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Kernel_Along)
     ->ArgsProduct({{256, 4096, 100000}, {1, 2}})
     ->Unit(benchmark::kMillisecond);

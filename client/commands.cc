@@ -82,7 +82,37 @@ absl::StatusOr<v1::EvaluateRiskRequest> EvalRequest(const CliOptions& o) {
   if (absl::Status s = ParseModelParameters(o.params, request.mutable_model_params()); !s.ok()) {
     return s;
   }
+  if (o.two_tier) {
+    v1::TwoTierOptions* two_tier = request.mutable_two_tier();
+    two_tier->set_enabled(true);
+    v1::CollisionRule rule = v1::COLLISION_RULE_UNSPECIFIED;
+    if (!v1::CollisionRule_Parse(absl::AsciiStrToUpper(o.two_tier_rule), &rule) ||
+        rule == v1::COLLISION_RULE_UNSPECIFIED) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "--two_tier_rule=%s: unknown; known: FLIGHT_BAND, TERRAIN_ONLY", o.two_tier_rule));
+    }
+    two_tier->set_rule(rule);
+    if (o.two_tier_detailed_segments != -1) {
+      two_tier->set_detailed_segments(o.two_tier_detailed_segments);
+    }
+    if (o.two_tier_block_cells != -1) two_tier->set_block_cells(o.two_tier_block_cells);
+    two_tier->set_bresenham(o.two_tier_bresenham);
+  }
   return request;
+}
+
+std::string TwoTierText(const v1::TwoTierResult& t) {
+  if (t.feasible()) {
+    return absl::StrFormat("two-tier check: feasible (%d cells checked)",
+                           static_cast<int64_t>(t.cells_checked()));
+  }
+  return absl::StrFormat(
+      "two-tier check: NOT feasible: %s tier, %s in piece %d at (%.1f, %.1f, %.1f), %s %d, %d "
+      "(%d cells checked)",
+      v1::FeasibilityTier_Name(t.tier()), v1::ViolationKind_Name(t.kind()), t.segment(),
+      t.position().x(), t.position().y(), t.position().z(),
+      t.tier() == v1::COARSE ? "block" : "cell", t.cell_i(), t.cell_j(),
+      static_cast<int64_t>(t.cells_checked()));
 }
 
 absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
@@ -168,6 +198,7 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
   if (r.has_first_violation()) {
     std::printf("first violation: %s\n", r.first_violation().message().c_str());
   }
+  if (r.has_two_tier()) std::printf("%s\n", TwoTierText(r.two_tier()).c_str());
   if (o.samples) {
     std::printf("%10s %10s %8s %6s %10s %5s %12s %12s %8s %8s\n", "x", "y", "z", "theta", "arc_m",
                 "piece", "M", "I", "S", "p_cas");

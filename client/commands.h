@@ -28,6 +28,12 @@ struct CliOptions {
   std::string trajectory_file;
   bool samples = false;
   std::string params;  // model parameters "name=value,..."
+  // Two-tier feasibility check (eval).
+  bool two_tier = false;
+  std::string two_tier_rule = "FLIGHT_BAND";  // FLIGHT_BAND | TERRAIN_ONLY
+  int two_tier_detailed_segments = -1;        // -1: unset (server default)
+  int two_tier_block_cells = -1;              // -1: unset (server default)
+  bool two_tier_bresenham = false;
 
   // Planning (plan, load --rpc=plan).
   std::string start;

@@ -22,6 +22,18 @@ ABSL_FLAG(std::string, trajectory_file, "",
           "eval, load: JSON file {\"waypoints\": [[x,y,z,theta],...]} or {\"polyline\": "
           "[[x,y,z],...]}");
 ABSL_FLAG(bool, samples, false, "eval: also print every sample's configuration risk");
+ABSL_FLAG(bool, two_tier, false,
+          "eval: also run the two-tier feasibility check and print which tier found the "
+          "first collision");
+ABSL_FLAG(std::string, two_tier_rule, "FLIGHT_BAND",
+          "eval --two_tier: cell rule, FLIGHT_BAND (spec section 6) or TERRAIN_ONLY (seed 001)");
+ABSL_FLAG(int, two_tier_detailed_segments, -1,
+          "eval --two_tier: pieces checked on the detailed grid (-1: the server's default, 2)");
+ABSL_FLAG(int, two_tier_block_cells, -1,
+          "eval --two_tier: side of a coarse block, cells (-1: the server's default, 16)");
+ABSL_FLAG(bool, two_tier_bresenham, false,
+          "eval --two_tier: seed 001's one-cell-per-step traversal instead of every cell a "
+          "segment touches");
 ABSL_FLAG(std::string, params, "",
           "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
           "mass_kg=12,airspeed_mps=20)");
@@ -101,6 +113,11 @@ int main(int argc, char** argv) {
   o.polyline = absl::GetFlag(FLAGS_polyline);
   o.trajectory_file = absl::GetFlag(FLAGS_trajectory_file);
   o.samples = absl::GetFlag(FLAGS_samples);
+  o.two_tier = absl::GetFlag(FLAGS_two_tier);
+  o.two_tier_rule = absl::GetFlag(FLAGS_two_tier_rule);
+  o.two_tier_detailed_segments = absl::GetFlag(FLAGS_two_tier_detailed_segments);
+  o.two_tier_block_cells = absl::GetFlag(FLAGS_two_tier_block_cells);
+  o.two_tier_bresenham = absl::GetFlag(FLAGS_two_tier_bresenham);
   o.params = absl::GetFlag(FLAGS_params);
   o.start = absl::GetFlag(FLAGS_start);
   o.goal = absl::GetFlag(FLAGS_goal);

@@ -48,7 +48,8 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
 };
 
 // Risk of a validated trajectory (runs on the evaluation pool).
-absl::Status Evaluate(RiskModelCache& models, const RequestLimits& limits, const EvaluateSpec& spec,
+absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers,
+                      const RequestLimits& limits, const EvaluateSpec& spec,
                       v1::EvaluateRiskResponse* response) {
   absl::StatusOr<std::shared_ptr<const RiskModel>> model = models.Get(*spec.map, spec.params);
   if (!model.ok()) return model.status();
@@ -72,6 +73,12 @@ absl::Status Evaluate(RiskModelCache& models, const RequestLimits& limits, const
       EvaluateTrajectory(**model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples});
   if (!evaluation.ok()) return evaluation.status();
   EvaluationToProto(*evaluation, spec.include_samples, response);
+  if (spec.two_tier.has_value()) {
+    // Bounded like the evaluation: the cells visited grow with the length,
+    // which CheckSampleCount has capped.
+    std::shared_ptr<const SharedFeasibility> feasibility = checkers.Get(*model, *spec.two_tier);
+    FeasibilityToProto(feasibility->checker.CheckTrajectory(*pieces), response->mutable_two_tier());
+  }
   return absl::OkStatus();
 }
 
@@ -83,6 +90,7 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
       models_(models),
       metrics_(metrics),
       options_(options),
+      checkers_(options.max_cached_checkers),
       active_(options.max_running_plans),
       eval_pool_(options.eval_threads, options.max_queued_evals),
       plan_pool_(options.plan_threads) {
@@ -147,7 +155,7 @@ grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerConte
     return call;
   }
   const bool queued = eval_pool_.TrySubmit([this, call, response, spec = *std::move(spec)] {
-    absl::Status status = Evaluate(models_, options_.limits, spec, response);
+    absl::Status status = Evaluate(models_, checkers_, options_.limits, spec, response);
     call->Complete(ToGrpcStatus(status), spec.map->name());
   });
   if (!queued) {

@@ -16,6 +16,7 @@
 
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
+#include "server/feasibility_cache.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
@@ -32,6 +33,7 @@ struct ServiceOptions {
   int max_running_plans = 4;       // admitted plans (planning or queued); more: RESOURCE_EXHAUSTED
   int eval_threads = 2;            // EvaluateRisk and GetMapLayer workers
   size_t max_queued_evals = 1024;  // waiting evaluations; more: RESOURCE_EXHAUSTED
+  size_t max_cached_checkers = 8;  // two-tier feasibility checkers kept (EvaluateRisk.two_tier)
 };
 
 class PlannerService final : public v1::Planner::CallbackService {
@@ -68,6 +70,7 @@ class PlannerService final : public v1::Planner::CallbackService {
   RiskModelCache& models_;
   ServerMetrics& metrics_;
   const ServiceOptions options_;
+  FeasibilityCache checkers_;
   v1::ListMapsResponse map_list_;  // built once
   std::atomic<bool> draining_{false};
   ActivePlans active_;

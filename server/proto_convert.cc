@@ -77,6 +77,36 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samp
   }
 }
 
+void FeasibilityToProto(const FeasibilityResult& result, v1::TwoTierResult* out) {
+  out->Clear();
+  out->set_feasible(result.feasible);
+  out->set_cells_checked(result.cells_checked);
+  if (result.feasible) {
+    out->set_segment(-1);
+    out->set_cell_i(-1);
+    out->set_cell_j(-1);
+    return;
+  }
+  switch (result.tier) {
+    case FeasibilityTier::kNone:
+      out->set_tier(v1::FEASIBILITY_TIER_UNSPECIFIED);
+      break;
+    case FeasibilityTier::kDetailed:
+      out->set_tier(v1::DETAILED);
+      break;
+    case FeasibilityTier::kCoarse:
+      out->set_tier(v1::COARSE);
+      break;
+  }
+  out->set_segment(result.segment);
+  out->set_cell_i(result.cell_i);
+  out->set_cell_j(result.cell_j);
+  out->mutable_position()->set_x(result.position.x);
+  out->mutable_position()->set_y(result.position.y);
+  out->mutable_position()->set_z(result.position.z);
+  out->set_kind(ViolationKindToProto(result.kind));
+}
+
 absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelParams& params,
                                double display_step_m, v1::Trajectory* out) {
   out->Clear();

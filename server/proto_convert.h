@@ -12,6 +12,7 @@
 #include "core/planner.h"
 #include "core/risk_map.h"
 #include "core/trajectory.h"
+#include "core/two_tier_feasibility.h"
 #include "riskplan/v1/planner.pb.h"
 
 namespace riskplan::server {
@@ -29,6 +30,9 @@ v1::ViolationKind ViolationKindToProto(ViolationKind kind);
 // samples when `include_samples`. Clears `out` first.
 void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samples,
                        v1::EvaluateRiskResponse* out);
+
+// The two-tier feasibility result; the collision fields only when infeasible.
+void FeasibilityToProto(const FeasibilityResult& result, v1::TwoTierResult* out);
 
 // The trajectory of an improvement: waypoints, risk, length, and the flown
 // path sampled every `display_step_m` (Dubins-airplane pieces with `params`).

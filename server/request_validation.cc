@@ -242,6 +242,36 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   return spec;
 }
 
+absl::StatusOr<TwoTierOptions> TwoTierOptionsFromProto(const v1::TwoTierOptions& proto) {
+  TwoTierOptions options;
+  switch (proto.rule()) {
+    case v1::COLLISION_RULE_UNSPECIFIED:
+    case v1::FLIGHT_BAND:
+      options.rule = CollisionRule::kFlightBand;
+      break;
+    case v1::TERRAIN_ONLY:
+      options.rule = CollisionRule::kTerrain;
+      break;
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrFormat("two_tier.rule has value %d; it must be FLIGHT_BAND (1) or "
+                          "TERRAIN_ONLY (2) (0: FLIGHT_BAND)",
+                          static_cast<int>(proto.rule())));
+  }
+  if (proto.has_detailed_segments()) options.detailed_segments = proto.detailed_segments();
+  if (proto.has_block_cells()) options.block_cells = proto.block_cells();
+  options.traversal = proto.bresenham() ? CellTraversal::kBresenham : CellTraversal::kSupercover;
+  if (options.detailed_segments < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("two_tier.detailed_segments has value %d; it must be >= 0 (unset: 2)",
+                        options.detailed_segments));
+  }
+  // The checker's own limits, e.g. "two_tier: two-tier feasibility:
+  // block_cells is 0; it must be in [1, 1024]".
+  if (absl::Status s = CheckTwoTierOptions(options); !s.ok()) return InField("two_tier", s);
+  return options;
+}
+
 absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskRequest& request,
                                                      const MapRegistry& registry,
                                                      const RequestLimits& limits) {
@@ -294,6 +324,9 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   if (!params.ok()) return params.status();
   spec.params = *params;
   spec.include_samples = request.include_samples();
+  absl::StatusOr<TwoTierOptions> two_tier = TwoTierOptionsFromProto(request.two_tier());
+  if (!two_tier.ok()) return two_tier.status();
+  if (request.two_tier().enabled()) spec.two_tier = *two_tier;
   return spec;
 }
 

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include "core/model_params.h"
 #include "core/planner.h"
 #include "core/risk_map.h"
+#include "core/two_tier_feasibility.h"
 #include "riskplan/v1/planner.pb.h"
 #include "server/map_registry.h"
 
@@ -84,7 +86,14 @@ struct EvaluateSpec {
   std::vector<Pose> waypoints;
   std::vector<Point3> polyline;
   bool include_samples = false;
+  // Set when two_tier.enabled; passed CheckTwoTierOptions().
+  std::optional<TwoTierOptions> two_tier;
 };
+
+// The options of EvaluateRiskRequest.two_tier (unset fields take their
+// defaults), checked whether or not the check is enabled. Errors name
+// "two_tier.<field>".
+absl::StatusOr<TwoTierOptions> TwoTierOptionsFromProto(const v1::TwoTierOptions& proto);
 
 absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskRequest& request,
                                                      const MapRegistry& registry,

@@ -1,8 +1,10 @@
 #include "server/proto_convert.h"
 
 #include <cmath>
+#include <vector>
 
 #include "gtest/gtest.h"
+#include "server/feasibility_cache.h"
 #include "server/model_cache.h"
 #include "tests/core/test_maps.h"
 
@@ -147,6 +149,83 @@ TEST(ModelCacheTest, DefaultModelIsSharedAndOverridesAreCachedWithLruBound) {
   EXPECT_EQ(stats.builds, 3u);
   EXPECT_EQ(stats.evictions, 1u);
   EXPECT_EQ(stats.overridden_cached, 2u);
+}
+
+TEST(ProtoConvertTest, FeasibilityResult) {
+  v1::TwoTierResult out;
+  FeasibilityResult feasible;
+  feasible.cells_checked = 42;
+  FeasibilityToProto(feasible, &out);
+  EXPECT_TRUE(out.feasible());
+  EXPECT_EQ(out.tier(), v1::FEASIBILITY_TIER_UNSPECIFIED);
+  EXPECT_EQ(out.segment(), -1);
+  EXPECT_EQ(out.cell_i(), -1);
+  EXPECT_EQ(out.kind(), v1::VIOLATION_KIND_UNSPECIFIED);
+  EXPECT_EQ(out.cells_checked(), 42);
+  EXPECT_FALSE(out.has_position());
+
+  FeasibilityResult collision;
+  collision.feasible = false;
+  collision.tier = FeasibilityTier::kCoarse;
+  collision.segment = 3;
+  collision.cell_i = 5;
+  collision.cell_j = 7;
+  collision.position = Point3{1.0, 2.0, 3.0};
+  collision.kind = ViolationKind::kTerrainCollision;
+  collision.cells_checked = 99;
+  FeasibilityToProto(collision, &out);
+  EXPECT_FALSE(out.feasible());
+  EXPECT_EQ(out.tier(), v1::COARSE);
+  EXPECT_EQ(out.segment(), 3);
+  EXPECT_EQ(out.cell_i(), 5);
+  EXPECT_EQ(out.cell_j(), 7);
+  EXPECT_EQ(out.position().z(), 3.0);
+  EXPECT_EQ(out.kind(), v1::TERRAIN_COLLISION);
+  EXPECT_EQ(out.cells_checked(), 99);
+  collision.tier = FeasibilityTier::kDetailed;
+  FeasibilityToProto(collision, &out);
+  EXPECT_EQ(out.tier(), v1::DETAILED);
+}
+
+TEST(FeasibilityCacheTest, CachesPerModelAndOptionsWithLruBound) {
+  auto registry = MapRegistry::FromMaps({SmallMap()});
+  ASSERT_TRUE(registry.ok());
+  auto models = RiskModelCache::Create(**registry, /*max_overridden=*/2);
+  ASSERT_TRUE(models.ok()) << models.status();
+  const RiskMap& map = *(*registry)->maps().front();
+  std::shared_ptr<const RiskModel> def = (*models)->Default(map);
+  ModelParams a;
+  a.min_agl_m = 40;
+  std::shared_ptr<const RiskModel> model_a = (*models)->Get(map, a).value();
+
+  FeasibilityCache cache(/*capacity=*/2);
+  const TwoTierOptions defaults;
+  auto first = cache.Get(def, defaults);
+  EXPECT_EQ(first->model, def);
+  EXPECT_EQ(cache.Get(def, defaults), first);  // a hit
+  EXPECT_EQ(cache.stats().hits, 1u);
+  EXPECT_EQ(cache.stats().builds, 1u);
+
+  // Other model parameters or other options: another checker.
+  auto other_model = cache.Get(model_a, defaults);
+  EXPECT_NE(other_model, first);
+  EXPECT_EQ(other_model->model, model_a);
+  TwoTierOptions coarse8;
+  coarse8.block_cells = 8;
+  auto other_options = cache.Get(def, coarse8);  // evicts the least recently used
+  EXPECT_NE(other_options, first);
+  EXPECT_EQ(other_options->checker.options().block_cells, 8);
+  EXPECT_EQ(cache.stats().builds, 3u);
+  EXPECT_EQ(cache.stats().evictions, 1u);
+  EXPECT_EQ(cache.stats().cached, 2u);
+
+  // An evicted checker stays usable by whoever holds it, and keeps its model.
+  model_a.reset();
+  const Point3 path[] = {{1010.0, 2010.0, 150.0}, {1080.0, 2040.0, 150.0}};
+  EXPECT_TRUE(other_model->checker.CheckPath(path).feasible);
+  EXPECT_FALSE(other_model->checker
+                   .CheckPath(std::vector<Point3>{{1010.0, 2010.0, 150.0}, {1080.0, 2040.0, 90.0}})
+                   .feasible);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "absl/strings/str_format.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/core/test_maps.h"
@@ -270,6 +271,63 @@ TEST_F(RequestValidationTest, EvaluateErrors) {
   r = GoodEval();
   r.set_map("nowhere");
   ExpectEvalError(r, absl::StatusCode::kNotFound, "map 'nowhere' is not served");
+}
+
+TEST_F(RequestValidationTest, TwoTierOptions) {
+  v1::EvaluateRiskRequest r = GoodEval();
+  absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_FALSE(spec->two_tier.has_value());  // not asked for
+
+  // Unset fields take the checker's defaults.
+  r.mutable_two_tier()->set_enabled(true);
+  spec = ValidateEvaluateRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  ASSERT_TRUE(spec->two_tier.has_value());
+  EXPECT_EQ(spec->two_tier->rule, CollisionRule::kFlightBand);
+  EXPECT_EQ(spec->two_tier->detailed_segments, 2);
+  EXPECT_EQ(spec->two_tier->block_cells, 16);
+  EXPECT_EQ(spec->two_tier->traversal, CellTraversal::kSupercover);
+
+  // Every field reaches the options; 0 detailed segments is allowed.
+  r.mutable_two_tier()->set_rule(v1::TERRAIN_ONLY);
+  r.mutable_two_tier()->set_detailed_segments(0);
+  r.mutable_two_tier()->set_block_cells(8);
+  r.mutable_two_tier()->set_bresenham(true);
+  spec = ValidateEvaluateRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->two_tier->rule, CollisionRule::kTerrain);
+  EXPECT_EQ(spec->two_tier->detailed_segments, 0);
+  EXPECT_EQ(spec->two_tier->block_cells, 8);
+  EXPECT_EQ(spec->two_tier->traversal, CellTraversal::kBresenham);
+}
+
+TEST_F(RequestValidationTest, TwoTierOptionErrorsNameTheField) {
+  v1::EvaluateRiskRequest r = GoodEval();
+  r.mutable_two_tier()->set_enabled(true);
+  r.mutable_two_tier()->set_detailed_segments(-1);
+  ExpectEvalError(r, absl::StatusCode::kInvalidArgument,
+                  "two_tier.detailed_segments has value -1; it must be >= 0");
+
+  for (int cells : {0, 1025}) {
+    r = GoodEval();
+    r.mutable_two_tier()->set_enabled(true);
+    r.mutable_two_tier()->set_block_cells(cells);
+    ExpectEvalError(r, absl::StatusCode::kInvalidArgument,
+                    absl::StrFormat("two_tier: two-tier feasibility: block_cells is %d; it must "
+                                    "be in [1, 1024]",
+                                    cells));
+  }
+
+  r = GoodEval();
+  r.mutable_two_tier()->set_enabled(true);
+  r.mutable_two_tier()->set_rule(static_cast<v1::CollisionRule>(7));
+  ExpectEvalError(r, absl::StatusCode::kInvalidArgument, "two_tier.rule has value 7");
+
+  // Refused even when the check is not enabled.
+  r = GoodEval();
+  r.mutable_two_tier()->set_block_cells(0);
+  ExpectEvalError(r, absl::StatusCode::kInvalidArgument, "block_cells is 0");
 }
 
 TEST_F(RequestValidationTest, SampleCountLimits) {

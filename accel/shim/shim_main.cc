@@ -20,6 +20,8 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/flags/usage_config.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "accel/shim/component_model.h"
 #include "accel/shim/device.h"
@@ -121,6 +123,14 @@ int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "the riskplan FPGA shim: serves the shim protocol for one board.\n"
       "  riskplan-fpga-shim --listen=HOST:PORT --device=<model|mmio|verilator> ...");
+  // --help lists this file's flags (Abseil's default looks for a file named
+  // after the program).
+  absl::FlagsUsageConfig config;
+  config.contains_help_flags = [](absl::string_view file) {
+    return absl::StrContains(file, "shim/shim_main.cc");
+  };
+  config.contains_helpshort_flags = config.contains_help_flags;
+  absl::SetFlagsUsageConfig(config);
   absl::ParseCommandLine(argc, argv);
   return riskplan::accel::Main();
 }

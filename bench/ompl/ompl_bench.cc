@@ -150,7 +150,8 @@ absl::StatusOr<RunRecord> RunOurs(std::shared_ptr<const RiskModel> model, const 
 }
 
 int Main() {
-  ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
+  ompl::msg::setLogLevel(std::getenv("RISKPLAN_OMPL_DEBUG") != nullptr ? ompl::msg::LOG_DEBUG
+                                                                       : ompl::msg::LOG_WARN);
   auto map = MakeDemoCity();
   if (!map.ok()) {
     std::fprintf(stderr, "%s\n", std::string(map.status().message()).c_str());

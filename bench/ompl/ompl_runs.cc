@@ -143,6 +143,7 @@ absl::StatusOr<RunRecord> RunOmplPlanner(const std::string& planner_name,
   }
   record.configurations = objective->configurations_evaluated();
   if (std::getenv("RISKPLAN_OMPL_DEBUG") != nullptr) {
+    std::fprintf(stderr, "debug: space measure %.6g\n", si->getSpaceMeasure());
     std::fprintf(stderr, "debug: motionCost calls %llu, configurations %llu, motions checked %u\n",
                  static_cast<unsigned long long>(objective->edges_evaluated()),
                  static_cast<unsigned long long>(objective->configurations_evaluated()),

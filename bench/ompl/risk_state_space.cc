@@ -65,7 +65,9 @@ void DubinsAirplaneSpace::FromPose(const Pose& pose, ob::State* state) {
   auto* se2 = compound->as<ob::SE2StateSpace::StateType>(0);
   se2->setXY(pose.x, pose.y);
   const double theta = NormalizeHeading(pose.theta);
-  se2->setYaw(theta > kPi ? theta - kTwoPi : theta);
+  // SO2's bounds are [-pi, pi): a heading of exactly pi must become -pi, or
+  // OMPL rejects the state as out of bounds (BIT* then drops such a goal).
+  se2->setYaw(theta >= kPi ? theta - kTwoPi : theta);
   compound->as<ob::RealVectorStateSpace::StateType>(1)->values[0] = pose.z;
 }
 

@@ -44,7 +44,7 @@ class DubinsAirplaneSpace final : public ompl::base::CompoundStateSpace {
 
   const RiskModel& model() const { return *model_; }
 
-  // Conversions. OMPL keeps yaw in (-pi, pi]; riskplan's headings are in
+  // Conversions. OMPL keeps yaw in [-pi, pi); riskplan's headings are in
   // [0, 2 pi). ToPose(FromPose(p)) equals p up to the last bit of theta.
   static Pose ToPose(const ompl::base::State* state);
   static void FromPose(const Pose& pose, ompl::base::State* state);

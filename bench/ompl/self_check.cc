@@ -142,8 +142,27 @@ bool RunSelfCheck(std::shared_ptr<const RiskModel> model, int edges) {
               path_exact, paths);
   std::printf("self-check: pose round trip worst error %.3g, interpolation worst error %.3g m\n",
               worst_round_trip, worst_interpolation_m);
+  // Every heading gives a state inside OMPL's bounds (SO2: [-pi, pi)).
+  int in_bounds = 0;
+  const std::vector<double> headings = {0.0,     1.0,
+                                        kPi / 2, std::nextafter(kPi, 0.0),
+                                        kPi,     std::nextafter(kPi, 4.0),
+                                        4.0,     std::nextafter(kTwoPi, 0.0)};
+  const Pose centre = FindFlyablePose(m, 4000.0, 4000.0, 0.0).value_or(Pose{});
+  for (double heading : headings) {
+    Pose p = centre;
+    p.theta = heading;
+    DubinsAirplaneSpace::FromPose(p, a.get());
+    if (si->satisfiesBounds(a.get()) &&
+        DubinsAirplaneSpace::ToPose(a.get()).theta == NormalizeHeading(heading)) {
+      ++in_bounds;
+    }
+  }
+  std::printf("self-check: states inside OMPL's bounds with their heading kept: %d/%zu\n",
+              in_bounds, headings.size());
   ok = ok && validator_agrees == tried && exact == admissible && path_exact == paths &&
-       worst_round_trip < 1e-12 && worst_interpolation_m < 1e-9;
+       worst_round_trip < 1e-12 && worst_interpolation_m < 1e-9 &&
+       in_bounds == static_cast<int>(headings.size());
 
   // 2. GridNearestNeighbors against NearestNeighborsLinear.
   const RiskMap& map = m.map();

@@ -63,6 +63,7 @@ absl::StatusOr<std::string> ServerMetrics::Expose(const std::string& address) {
         absl::StrFormat("--metrics_listen=%s: cannot serve metrics: %s", address, e.what()));
   }
   exposer_->RegisterCollectable(registry_);
+  for (const auto& c : collectables_) exposer_->RegisterCollectable(c);
   const std::vector<int> ports = exposer_->GetListeningPorts();
   const std::string host = address.substr(0, address.rfind(':'));
   return absl::StrCat(host, ":", ports.empty() ? 0 : ports.front());
@@ -92,6 +93,11 @@ void ServerMetrics::RecordUpdates(int64_t sent, int64_t replaced) {
 
 void ServerMetrics::SetMapMemory(const std::string& map, double bytes) {
   map_memory_->Add({{"map", map}}).Set(bytes);
+}
+
+void ServerMetrics::AddCollectable(std::shared_ptr<prometheus::Collectable> collectable) {
+  collectables_.push_back(collectable);
+  if (exposer_ != nullptr) exposer_->RegisterCollectable(collectable);
 }
 
 }  // namespace riskplan::server

@@ -49,7 +49,12 @@ class ServerMetrics {
 
   prometheus::Registry& registry() { return *registry_; }
 
+  // Serves `collectable` next to the registry (now, or once Expose() is
+  // called). The metrics keep a reference to it.
+  void AddCollectable(std::shared_ptr<prometheus::Collectable> collectable);
+
  private:
+  std::vector<std::shared_ptr<prometheus::Collectable>> collectables_;
   std::shared_ptr<prometheus::Registry> registry_;
   std::unique_ptr<prometheus::Exposer> exposer_;
   prometheus::Family<prometheus::Counter>* rpcs_;

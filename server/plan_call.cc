@@ -107,7 +107,11 @@ void PlanCall::Run() {
       const PlanningProblem problem{*model, spec_.start, spec_.goal};
       if (!endpoints_checked_.load()) error = CheckEndpoints(problem);
       if (error.ok()) {
-        absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec_.algorithm);
+        // One evaluator per plan: it counts the plan's configurations.
+        std::unique_ptr<RiskEvaluator> evaluator =
+            env_.engine != nullptr ? env_.engine->NewEvaluator() : nullptr;
+        absl::StatusOr<std::unique_ptr<Planner>> planner =
+            MakePlanner(spec_.algorithm, evaluator.get());
         if (!planner.ok()) {
           error = planner.status();
         } else {

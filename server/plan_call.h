@@ -28,6 +28,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "accel/risk_engine.h"
 #include "core/planner.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
@@ -69,6 +70,7 @@ struct PlanCallEnv {
   ServerMetrics* metrics = nullptr;
   TimerQueue* timer = nullptr;
   ActivePlans* active = nullptr;
+  accel::RiskEngine* engine = nullptr;  // null: the planner's own evaluator
 };
 
 class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,

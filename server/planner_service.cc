@@ -48,7 +48,7 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
 };
 
 // Risk of a validated trajectory (runs on the evaluation pool).
-absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers,
+absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel::RiskEngine* engine,
                       const RequestLimits& limits, const EvaluateSpec& spec,
                       v1::EvaluateRiskResponse* response) {
   absl::StatusOr<std::shared_ptr<const RiskModel>> model = models.Get(*spec.map, spec.params);
@@ -69,8 +69,9 @@ absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers,
       !s.ok()) {
     return s;
   }
-  absl::StatusOr<TrajectoryEvaluation> evaluation =
-      EvaluateTrajectory(**model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples});
+  std::unique_ptr<RiskEvaluator> evaluator = engine != nullptr ? engine->NewEvaluator() : nullptr;
+  absl::StatusOr<TrajectoryEvaluation> evaluation = EvaluateTrajectory(
+      **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples}, evaluator.get());
   if (!evaluation.ok()) return evaluation.status();
   EvaluationToProto(*evaluation, spec.include_samples, response);
   if (spec.two_tier.has_value()) {
@@ -109,9 +110,12 @@ grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
   // that every PlanTrajectory is logged and counted the same way.
   PlanSpec call_spec;
   if (spec.ok()) call_spec = *spec;
-  std::shared_ptr<PlanCall> call = PlanCall::Create(
-      PlanCallEnv{.models = &models_, .metrics = &metrics_, .timer = &timer_, .active = &active_},
-      ctx, std::move(call_spec));
+  std::shared_ptr<PlanCall> call = PlanCall::Create(PlanCallEnv{.models = &models_,
+                                                                .metrics = &metrics_,
+                                                                .timer = &timer_,
+                                                                .active = &active_,
+                                                                .engine = options_.engine},
+                                                    ctx, std::move(call_spec));
   if (draining()) {
     call->Reject(kDraining);
     return call.get();
@@ -155,7 +159,8 @@ grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerConte
     return call;
   }
   const bool queued = eval_pool_.TrySubmit([this, call, response, spec = *std::move(spec)] {
-    absl::Status status = Evaluate(models_, checkers_, options_.limits, spec, response);
+    absl::Status status =
+        Evaluate(models_, checkers_, options_.engine, options_.limits, spec, response);
     call->Complete(ToGrpcStatus(status), spec.map->name());
   });
   if (!queued) {

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <memory>
 
+#include "accel/risk_engine.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
 #include "server/feasibility_cache.h"
@@ -34,6 +35,10 @@ struct ServiceOptions {
   int eval_threads = 2;            // EvaluateRisk and GetMapLayer workers
   size_t max_queued_evals = 1024;  // waiting evaluations; more: RESOURCE_EXHAUSTED
   size_t max_cached_checkers = 8;  // two-tier feasibility checkers kept (EvaluateRisk.two_tier)
+  // Computes every risk batch of plans and evaluations (CPU workers, FPGA
+  // boards); null: each call computes its own on its thread. Not owned; must
+  // outlive the service.
+  accel::RiskEngine* engine = nullptr;
 };
 
 class PlannerService final : public v1::Planner::CallbackService {

@@ -54,7 +54,12 @@ void LogRpc(const RpcLogRecord& record) {
 }
 
 void LogEvent(std::string_view event, std::string_view detail) {
-  nlohmann::ordered_json line = {{"ts", Timestamp()}, {"event", event}, {"detail", detail}};
+  // Keys one by one: an initializer list can reorder them (ts, event, detail
+  // is the order tests and readers rely on).
+  nlohmann::ordered_json line = nlohmann::ordered_json::object();
+  line["ts"] = Timestamp();
+  line["event"] = std::string(event);
+  line["detail"] = std::string(detail);
   WriteLine(line);
 }
 

@@ -14,12 +14,16 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
+#include "accel/engine_metrics.h"
+#include "accel/risk_engine.h"
 #include "core/planner.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/health_check_service_interface.h"
+#include "server/accel_metrics.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
@@ -67,6 +71,17 @@ ABSL_FLAG(int64_t, max_connection_age_ms, 0,
 ABSL_FLAG(std::string, metrics_listen, "",
           "Serve Prometheus metrics at http://HOST:PORT/metrics (empty: off)");
 ABSL_FLAG(bool, rpc_log, true, "Log one JSON line per RPC on stderr");
+ABSL_FLAG(int, cpu_workers, 0,
+          "Accelerator engine: CPU worker threads for risk batches (0 and no --fpga_shims: each "
+          "plan and evaluation computes its own risks on its thread, as without an engine)");
+ABSL_FLAG(std::string, fpga_shims, "",
+          "Accelerator engine: riskplan-fpga-shim endpoints HOST:PORT,... (docs/shim-protocol.md); "
+          "their workers' states are logged (event accel_worker) and exported as "
+          "riskplan_accel_* metrics");
+ABSL_FLAG(bool, accel_caller_runs, true,
+          "Accelerator engine: callers compute chunks of their own batches too (false: every "
+          "chunk goes to the workers and boards)");
+ABSL_FLAG(int, risk_cache_mb, 64, "Accelerator engine: bound of the exact kernel-site cache, MiB");
 
 namespace riskplan::server {
 namespace {
@@ -147,7 +162,35 @@ int Main() {
                                           (*maps)->MemoryBytes(),
                                           absl::ToDoubleSeconds(absl::Now() - load_start)));
 
+  // The accelerator engine, only when asked for: it must outlive the service.
+  std::unique_ptr<accel::RiskEngine> engine;
+  const std::string shims = absl::GetFlag(FLAGS_fpga_shims);
+  if (absl::GetFlag(FLAGS_cpu_workers) > 0 || !shims.empty()) {
+    accel::RiskEngineOptions engine_options;
+    engine_options.cpu_workers = absl::GetFlag(FLAGS_cpu_workers);
+    engine_options.caller_runs = absl::GetFlag(FLAGS_accel_caller_runs);
+    engine_options.site_cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_risk_cache_mb)) << 20;
+    for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
+      engine_options.fpga_shims.emplace_back(s);
+    }
+    engine_options.on_worker_event = [](const accel::WorkerEvent& e) {
+      LogEvent("accel_worker", accel::WorkerEventJson(e));
+    };
+    absl::StatusOr<std::unique_ptr<accel::RiskEngine>> created =
+        accel::RiskEngine::Create(engine_options);
+    if (!created.ok()) {
+      return Fail(
+          1, absl::StrFormat("cannot start: accelerator engine: %s", created.status().message()));
+    }
+    engine = *std::move(created);
+    options.engine = engine.get();
+    LogEvent("accel_engine",
+             absl::StrFormat("cpu_workers=%d fpga_shims=[%s] caller_runs=%d",
+                             engine_options.cpu_workers, shims, engine_options.caller_runs));
+  }
+
   ServerMetrics metrics;
+  if (engine != nullptr) metrics.AddCollectable(std::make_shared<AccelMetrics>(engine.get()));
   if (const std::string address = absl::GetFlag(FLAGS_metrics_listen); !address.empty()) {
     absl::StatusOr<std::string> bound = metrics.Expose(address);
     if (!bound.ok()) return Fail(1, std::string(bound.status().message()));

@@ -215,12 +215,14 @@ TEST(RrtPlannerTest, CancellationFromAnotherThreadStopsPromptly) {
     options.obstacle_points.push_back({goal.x + 40.0 * std::cos(a), goal.y + 40.0 * std::sin(a)});
   }
   options.budget.max_time_s = 600.0;
-  options.params = {{"keep_growing", 1.0}, {"max_nodes", 5000000}};
+  // The largest tree allowed; cancelled long before it fills (it would end the
+  // run as BUDGET_EXHAUSTED).
+  options.params = {{"keep_growing", 1.0}, {"max_nodes", 300000}};
   auto planner = MakePlanner(kRrt);
   CancellationToken cancel;
   std::chrono::steady_clock::time_point cancelled;
   std::thread canceller([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
     cancelled = std::chrono::steady_clock::now();
     cancel.Cancel();
   });

@@ -110,4 +110,23 @@ absl::Status CheckPoseClearance(const Pose& pose, const char* which,
   return absl::OkStatus();
 }
 
+absl::StatusOr<PlannerParamValues> PrepareSeedPlan(PlannerAlgorithm algorithm,
+                                                   const std::vector<PlannerParamInfo>& info,
+                                                   const PlanningProblem& problem,
+                                                   const PlanOptions& options) {
+  if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
+  if (absl::Status s = CheckBudget(options.budget); !s.ok()) return s;
+  if (absl::Status s = CheckRequestObstacles(algorithm, options); !s.ok()) return s;
+  auto params = PlannerParamValues::Parse(PlannerAlgorithmName(algorithm), info, options.params);
+  if (!params.ok()) return params.status();
+  const double clearance = params->Get("clearance_m");
+  for (auto [pose, which] : {std::pair{&problem.start, "start"}, {&problem.goal, "goal"}}) {
+    if (absl::Status s = CheckPoseClearance(*pose, which, options.obstacle_points, clearance);
+        !s.ok()) {
+      return s;
+    }
+  }
+  return params;
+}
+
 }  // namespace riskplan

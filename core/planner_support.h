@@ -86,6 +86,16 @@ absl::StatusOr<std::optional<PlanImprovement>> EvaluateWaypoints(const RiskModel
 absl::Status CheckPoseClearance(const Pose& pose, const char* which,
                                 const std::vector<Point2>& points, double clearance_m);
 
+// The checks a seed planner (RRT, GENETIC, HARMONIC) makes before it plans, in
+// this order: start and goal (CheckEndpoints), the budget, the request's
+// obstacles (CheckRequestObstacles), its parameters (parsed against `info`),
+// and the clearance of start and goal from the request's obstacle points by
+// its "clearance_m" parameter. Returns the parsed parameters.
+absl::StatusOr<PlannerParamValues> PrepareSeedPlan(PlannerAlgorithm algorithm,
+                                                   const std::vector<PlannerParamInfo>& info,
+                                                   const PlanningProblem& problem,
+                                                   const PlanOptions& options);
+
 }  // namespace riskplan
 
 #endif  // RISKPLAN_CORE_PLANNER_SUPPORT_H_

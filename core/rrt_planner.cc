@@ -212,18 +212,8 @@ absl::StatusOr<PlanResult> RrtPlanner::Plan(const PlanningProblem& problem,
                                             const PlanOptions& options,
                                             const CancellationToken& cancel,
                                             const ImprovementCallback& on_improvement) {
-  if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
-  if (absl::Status s = CheckBudget(options.budget); !s.ok()) return s;
-  if (absl::Status s = CheckRequestObstacles(PlannerAlgorithm::kRrt, options); !s.ok()) return s;
-  auto params = PlannerParamValues::Parse("RRT", ParamInfo(), options.params);
+  auto params = PrepareSeedPlan(PlannerAlgorithm::kRrt, ParamInfo(), problem, options);
   if (!params.ok()) return params.status();
-  const double clearance = params->Get("clearance_m");
-  for (auto [pose, which] : {std::pair{&problem.start, "start"}, {&problem.goal, "goal"}}) {
-    if (absl::Status s = CheckPoseClearance(*pose, which, options.obstacle_points, clearance);
-        !s.ok()) {
-      return s;
-    }
-  }
   DirectRiskEvaluator direct;
   RiskEvaluator* evaluator = evaluator_ != nullptr ? evaluator_ : &direct;
   Run run(problem, options, *params, evaluator, cancel, on_improvement);

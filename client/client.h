@@ -72,6 +72,10 @@ void SetTimeout(grpc::ClientContext* context, absl::Duration timeout);
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
                                            const grpc::ChannelArguments& extra = {});
 
+// "OK", "CANCELLED", ... "UNAUTHENTICATED": the canonical name of a gRPC
+// status code ("UNKNOWN" for a value outside the canonical set).
+std::string StatusCodeName(grpc::StatusCode code);
+
 }  // namespace riskplan::client
 
 #endif  // RISKPLAN_CLIENT_CLIENT_H_

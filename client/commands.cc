@@ -23,26 +23,8 @@ int Usage(const std::string& message) {
 }
 
 int RpcError(const char* method, const grpc::Status& status) {
-  static const char* const kNames[] = {"OK",
-                                       "CANCELLED",
-                                       "UNKNOWN",
-                                       "INVALID_ARGUMENT",
-                                       "DEADLINE_EXCEEDED",
-                                       "NOT_FOUND",
-                                       "ALREADY_EXISTS",
-                                       "PERMISSION_DENIED",
-                                       "RESOURCE_EXHAUSTED",
-                                       "FAILED_PRECONDITION",
-                                       "ABORTED",
-                                       "OUT_OF_RANGE",
-                                       "UNIMPLEMENTED",
-                                       "INTERNAL",
-                                       "UNAVAILABLE",
-                                       "DATA_LOSS",
-                                       "UNAUTHENTICATED"};
-  const int code = static_cast<int>(status.error_code());
   std::fprintf(stderr, "riskplan: %s failed: %s: %s\n", method,
-               code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN", status.error_message().c_str());
+               StatusCodeName(status.error_code()).c_str(), status.error_message().c_str());
   return 1;
 }
 

@@ -15,28 +15,6 @@
 namespace riskplan::client {
 namespace {
 
-std::string CodeName(grpc::StatusCode code) {
-  static const char* const kNames[] = {"OK",
-                                       "CANCELLED",
-                                       "UNKNOWN",
-                                       "INVALID_ARGUMENT",
-                                       "DEADLINE_EXCEEDED",
-                                       "NOT_FOUND",
-                                       "ALREADY_EXISTS",
-                                       "PERMISSION_DENIED",
-                                       "RESOURCE_EXHAUSTED",
-                                       "FAILED_PRECONDITION",
-                                       "ABORTED",
-                                       "OUT_OF_RANGE",
-                                       "UNIMPLEMENTED",
-                                       "INTERNAL",
-                                       "UNAVAILABLE",
-                                       "DATA_LOSS",
-                                       "UNAUTHENTICATED"};
-  const int i = static_cast<int>(code);
-  return i >= 0 && i <= 16 ? kNames[i] : "UNKNOWN";
-}
-
 // The shared state of one load phase.
 class LoadRun {
  public:
@@ -185,7 +163,7 @@ void LoadRun::Record(absl::Time intended, const grpc::Status& status, absl::Time
   const double latency_s = absl::ToDoubleSeconds(done - intended);
   absl::MutexLock lock(&mu_);
   ++report_.completed;
-  ++report_.codes[CodeName(status.error_code())];
+  ++report_.codes[StatusCodeName(status.error_code())];
   report_.latency.Add(latency_s);
   interval_.Add(latency_s);
   last_done_ = std::max(last_done_, done);

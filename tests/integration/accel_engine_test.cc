@@ -40,7 +40,11 @@ TEST(AccelEngineTest, PlansAndEvaluationsThroughCpuWorkersMatchTheDirectPath) {
   ASSERT_TRUE(direct.status.ok()) << direct.status.error_message();
   ASSERT_TRUE(engine.status.ok()) << engine.status.error_message();
   ASSERT_FALSE(direct.updates.empty());
-  ASSERT_EQ(direct.updates.size(), engine.updates.size());
+  ASSERT_FALSE(engine.updates.empty());
+  // How many updates are sent depends on timing (a slow reader gets only the
+  // newest); the final trajectory of an iteration budget does not.
+  ASSERT_TRUE(direct.updates.back().final());
+  ASSERT_TRUE(engine.updates.back().final());
   const v1::Trajectory& t1 = direct.updates.back().trajectory();
   const v1::Trajectory& t2 = engine.updates.back().trajectory();
   EXPECT_EQ(t1.risk(), t2.risk());

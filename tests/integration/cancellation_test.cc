@@ -92,8 +92,10 @@ TEST_F(CancellationTest, CancelStopsThePlanAndFreesTheSlotPromptly) {
   // The server logs a plan when gRPC is done with it, which may be after the
   // client has moved on: stop the server (it exits once every call is done),
   // then read its log.
+  // The server may take up to its grace period (10 s by default) to drain, so
+  // wait longer than that.
   server_->Signal(SIGTERM);
-  ASSERT_EQ(server_->Wait(absl::Seconds(10)), std::optional<int>(0));
+  ASSERT_EQ(server_->Wait(absl::Seconds(20)), std::optional<int>(0));
   EXPECT_THAT(server_->Stderr(), HasSubstr("\"method\":\"PlanTrajectory\",\"code\":\"CANCELLED\""));
 }
 

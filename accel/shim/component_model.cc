@@ -93,6 +93,11 @@ void ComponentModel::Write32(uint32_t offset, uint32_t value) {
       const uint32_t slot = waddr_ >> 16;
       const uint32_t index = waddr_ & 0xffff;
       const size_t per_slot = static_cast<size_t>(config_.max_side) * config_.max_side;
+      if (status_ & regs::kStatusBusy) {
+        // Weights are loaded between jobs (a lane may be reading them).
+        Fail(regs::kErrorWeightBusy);
+        return;
+      }
       if (slot < config_.weight_slots && index < per_slot) {
         weights_[slot * per_slot + index] = uint64_t{value} << 32 | wdata_lo_;
       }
@@ -141,10 +146,16 @@ void ComponentModel::Fail(uint32_t code) {
 }
 
 void ComponentModel::Start() {
-  for (uint32_t l = 0; l < config_.lanes; ++l) {
-    Lane& lane = lanes_[l];
+  for (Lane& lane : lanes_) {
     lane.impact = 0;
     lane.shelter = 0;
+  }
+  if (cut_cols_ > 0xffff || cut_rows_ > 0xffff) {
+    Fail(regs::kErrorBadLane);
+    return;
+  }
+  for (uint32_t l = 0; l < config_.lanes; ++l) {
+    const Lane& lane = lanes_[l];
     if (!(lane_mask_ & (1u << l))) continue;
     if (lane.slot >= config_.weight_slots || lane.side == 0 || lane.side > config_.max_side ||
         uint64_t{lane.col} + lane.side > cut_cols_ || uint64_t{lane.row} + lane.side > cut_rows_) {
@@ -158,7 +169,7 @@ void ComponentModel::Start() {
   }
   cells_ = 0;
   words_.clear();
-  cycles_ = kPipelineCycles;
+  cycles_ = 0;
   status_ = regs::kStatusBusy;
   if (uint64_t{cut_cols_} * cut_rows_ == 0) status_ = regs::kStatusDone;
 }
@@ -180,7 +191,10 @@ void ComponentModel::AddCell(uint64_t density, uint64_t shelter) {
     lane.shelter += static_cast<Accumulator>(w) * shelter;
   }
   ++cycles_;
-  if (++cells_ == uint64_t{cut_cols_} * cut_rows_) status_ = regs::kStatusDone;
+  if (++cells_ == uint64_t{cut_cols_} * cut_rows_) {
+    cycles_ += kPipelineCycles;
+    status_ = regs::kStatusDone;
+  }
 }
 
 }  // namespace riskplan::accel

@@ -3,9 +3,12 @@
 // register level. It lets the mmio backend run, and be tested, without a
 // board (riskplan-fpga-shim --device=mmio --mmio_device=model).
 //
-// Cycle count of a job: one cut cell per clock through the stream (density
-// and shelter side by side) plus kPipelineCycles; kernel writes are not
-// counted (they go through the CSR slave, not the job).
+// Cycle count of a job (the CYCLES register): one cut cell per clock through
+// the stream (density and shelter side by side) plus kPipelineCycles to drain
+// the lanes' pipeline, which is what the RTL (accel/rtl/rp_ewmm.sv) takes when
+// its stream sink is fed a cell every clock (tests/accel/rtl_component_test.cc
+// checks the two agree); 0 for an empty cut. Kernel writes are not counted
+// (they go through the CSR slave, between jobs).
 //
 // Not thread-safe (the shim serialises device access).
 #ifndef RISKPLAN_ACCEL_SHIM_COMPONENT_MODEL_H_
@@ -30,7 +33,7 @@ struct ComponentConfig {
 
 class ComponentModel final : public RegisterBus {
  public:
-  static constexpr uint64_t kPipelineCycles = 8;
+  static constexpr uint64_t kPipelineCycles = 2;
 
   explicit ComponentModel(const ComponentConfig& config);
 

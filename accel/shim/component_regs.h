@@ -1,7 +1,7 @@
 // The register map of the streaming EWMM component (docs/accel.md,
 // "Register map"): an Avalon-MM CSR slave of 32-bit registers at byte
 // offsets from the component's base. The mmio backend programs it; the
-// ComponentModel and the RTL of issue 6 implement it.
+// ComponentModel and the RTL (accel/rtl/rp_ewmm.sv) implement it.
 //
 // A job: write kernels into weight slots (WADDR, then WDATA_LO/WDATA_HI per
 // weight; WADDR increments after each WDATA_HI), program the cut size, the
@@ -47,8 +47,10 @@ inline constexpr uint32_t kStatusError = 1u << 2;
 // Error codes in STATUS[15:8].
 inline constexpr uint32_t kErrorNone = 0;
 inline constexpr uint32_t kErrorBadLane =
-    1;  // a lane's window leaves the cut or the slot is out of range
-inline constexpr uint32_t kErrorStream = 2;  // STREAM written while not busy
+    1;  // a lane's window leaves the cut, its slot or side is out of range, a lane in
+        // LANE_MASK does not exist, or the cut is wider or taller than 65535 cells
+inline constexpr uint32_t kErrorStream = 2;  // STREAM written with no job taking cells
+inline constexpr uint32_t kErrorWeightBusy = 3;  // WDATA_HI written while a job runs
 
 // Per-lane registers: base kLaneBase + l * kLaneStride.
 inline constexpr uint32_t kLaneBase = 0x100;

@@ -30,12 +30,13 @@ absl::StatusOr<std::unique_ptr<MmioDevice>> MmioDevice::Open(std::unique_ptr<Reg
   const uint32_t caps = b.Read32(regs::kCaps);
   const uint32_t limits = b.Read32(regs::kLimits);
   DeviceInfo& info = device->info_;
-  info.backend = "mmio";
+  info.backend = options.backend;
   info.device = b.Name();
   info.firmware = absl::StrFormat("EWMM component %d.%d", version >> 16, version & 0xffff);
   info.format = NumberFormat{static_cast<int>((caps >> 8) & 0xff),
                              static_cast<int>((caps >> 16) & 0xff), static_cast<int>(caps >> 24)};
   info.lanes = caps & 0xff;
+  if (options.max_lanes != 0 && options.max_lanes < info.lanes) info.lanes = options.max_lanes;
   info.max_kernel_side = limits & 0xffff;
   info.clock_hz = b.Read32(regs::kClockHz);
   device->slots_count_ = limits >> 16;
@@ -77,8 +78,8 @@ uint32_t MmioDevice::SlotFor(const QuantizedKernelTable& kernels, int b, int k,
 }
 
 void MmioDevice::StreamValue(uint64_t value) {
-  bus_->Write32(regs::kStream, static_cast<uint32_t>(value));
-  if (info_.format.cell_bits > 32) bus_->Write32(regs::kStream, static_cast<uint32_t>(value >> 32));
+  stream_.push_back(static_cast<uint32_t>(value));
+  if (info_.format.cell_bits > 32) stream_.push_back(static_cast<uint32_t>(value >> 32));
 }
 
 absl::Status MmioDevice::RunJob(const QuantizedMap& map, const QuantizedKernelTable& kernels,
@@ -115,12 +116,14 @@ absl::Status MmioDevice::RunJob(const QuantizedMap& map, const QuantizedKernelTa
     return absl::InternalError(
         absl::StrFormat("mmio: job refused, error code %d", (status >> 8) & 0xff));
   }
+  stream_.clear();
   for (int j = j0; j < j1; ++j) {
     for (int i = i0; i < i1; ++i) {
       StreamValue(map.DensityAt(i, j));
       StreamValue(map.ShelterAt(i, j));
     }
   }
+  bus_->WriteStream(stream_);
   const absl::Time deadline = absl::Now() + options_.job_timeout;
   while (!((status = bus_->Read32(regs::kStatus)) & regs::kStatusDone)) {
     if (absl::Now() > deadline) {

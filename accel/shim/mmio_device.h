@@ -20,6 +20,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -31,6 +32,11 @@ namespace riskplan::accel {
 
 struct MmioOptions {
   uint32_t max_cut_cells = 4096;
+  // Use at most this many of the component's lanes (0: all); for measuring
+  // cycles by lane count.
+  uint32_t max_lanes = 0;
+  // DeviceInfo::backend ("mmio"; "verilator" for the RTL under simulation).
+  std::string backend = "mmio";
   // How long a job may take before the device is declared failed.
   absl::Duration job_timeout = absl::Seconds(1);
 };
@@ -69,6 +75,7 @@ class MmioDevice final : public EwmmDevice {
   uint32_t SlotFor(const QuantizedKernelTable& kernels, int b, int k,
                    const std::vector<uint32_t>& busy);
   void StreamValue(uint64_t value);
+  std::vector<uint32_t> stream_;  // the words of the cut being streamed
 
   std::unique_ptr<RegisterBus> bus_;
   const MmioOptions options_;

@@ -9,8 +9,13 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "accel/shim/component_regs.h"
 
 namespace riskplan::accel {
+
+void RegisterBus::WriteStream(std::span<const uint32_t> words) {
+  for (uint32_t word : words) Write32(regs::kStream, word);
+}
 
 absl::StatusOr<std::unique_ptr<MappedRegisterBus>> MappedRegisterBus::Open(const std::string& path,
                                                                            uint64_t base,

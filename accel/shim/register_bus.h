@@ -7,7 +7,8 @@
 // file it maps the file, which is how tests exercise it without a board.
 //
 // ComponentModel (component_model.h) is an in-memory bus that behaves like
-// the component. The Verilator backend of issue 6 is a third.
+// the component; the RTL under Verilator (accel/rtl/verilated_component.h)
+// is a third.
 //
 // Not thread-safe: the shim serialises device access.
 #ifndef RISKPLAN_ACCEL_SHIM_REGISTER_BUS_H_
@@ -15,6 +16,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -26,6 +28,10 @@ class RegisterBus {
   virtual ~RegisterBus() = default;
   virtual uint32_t Read32(uint32_t offset) = 0;
   virtual void Write32(uint32_t offset, uint32_t value) = 0;
+  // Writes `words` to the STREAM register, in order. A bus with a faster way
+  // to the component's stream (the RTL's Avalon-ST sink under Verilator; a
+  // DMA on a board) overrides it.
+  virtual void WriteStream(std::span<const uint32_t> words);
   // A human-readable name ("/dev/mem@0xff200000", "model").
   virtual std::string Name() const = 0;
 };

@@ -11,6 +11,7 @@
 // it.
 #include <signal.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -28,25 +29,39 @@
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/register_bus.h"
 #include "accel/shim/shim_server.h"
+#ifdef RISKPLAN_HAVE_VERILATOR
+#include "accel/rtl/verilated_component.h"
+#endif
 
 ABSL_FLAG(std::string, listen, "127.0.0.1:7070", "HOST:PORT to listen on (port 0 picks one)");
 ABSL_FLAG(std::string, device, "model",
           "device backend: model (the fixed-point datapath in software), mmio (the component's "
-          "registers), verilator (issue 6, not built yet)");
+          "registers on a board), verilator (the component's RTL, simulated cycle by cycle)");
 ABSL_FLAG(std::string, format, "board",
           "number format of the model backend: board (w32m32a80), precise (w48m48a128) or "
-          "wWmMaA; the mmio backend reads the component's");
+          "wWmMaA; the mmio and verilator backends read the component's");
 ABSL_FLAG(std::string, mmio_device, "/dev/mem",
           "mmio: /dev/mem, /dev/uioN, a file, or 'model' for the in-memory component model");
 ABSL_FLAG(std::string, mmio_base, "0xff200000",
           "mmio: byte address of the component's CSR slave in --mmio_device (0 for UIO)");
 ABSL_FLAG(int, model_lanes, 8, "mmio with --mmio_device=model: lanes of the component model");
+ABSL_FLAG(std::string, rtl_config, "l8-board",
+          "verilator: the verilated configuration of the RTL (l8-board: 8 lanes, w32m32a80; "
+          "l16-precise: 16 lanes, w48m48a128)");
+ABSL_FLAG(int, lanes, 0, "mmio, verilator: use at most this many of the component's lanes (0: all)");
 ABSL_FLAG(int, store_mb, 1024, "room for blobs (maps and kernel tables, quantised), MiB");
 ABSL_FLAG(int, max_sites, 65536, "largest EVAL, in sites");
 ABSL_FLAG(int, idle_timeout_s, 600, "close connections idle this long, seconds");
 
 namespace riskplan::accel {
 namespace {
+
+MmioOptions MmioOptionsFromFlags(const std::string& backend) {
+  MmioOptions options;
+  options.backend = backend;
+  options.max_lanes = static_cast<uint32_t>(std::max(0, absl::GetFlag(FLAGS_lanes)));
+  return options;
+}
 
 absl::StatusOr<std::unique_ptr<EwmmDevice>> MakeDevice() {
   const std::string kind = absl::GetFlag(FLAGS_device);
@@ -71,13 +86,25 @@ absl::StatusOr<std::unique_ptr<EwmmDevice>> MakeDevice() {
       if (!mapped.ok()) return mapped.status();
       bus = *std::move(mapped);
     }
-    absl::StatusOr<std::unique_ptr<MmioDevice>> device = MmioDevice::Open(std::move(bus), {});
+    absl::StatusOr<std::unique_ptr<MmioDevice>> device =
+        MmioDevice::Open(std::move(bus), MmioOptionsFromFlags("mmio"));
     if (!device.ok()) return device.status();
     return std::unique_ptr<EwmmDevice>(*std::move(device));
   }
   if (kind == "verilator") {
+#ifdef RISKPLAN_HAVE_VERILATOR
+    absl::StatusOr<std::unique_ptr<SimulatedComponentBus>> bus =
+        OpenVerilatedComponent(absl::GetFlag(FLAGS_rtl_config));
+    if (!bus.ok()) return bus.status();
+    absl::StatusOr<std::unique_ptr<MmioDevice>> device =
+        MmioDevice::Open(*std::move(bus), MmioOptionsFromFlags("verilator"));
+    if (!device.ok()) return device.status();
+    return std::unique_ptr<EwmmDevice>(*std::move(device));
+#else
     return absl::UnimplementedError(
-        "--device=verilator: the RTL backend is not part of this build (issue 6)");
+        "--device=verilator: this build has no RTL backend (Verilator was not found when it "
+        "was configured; install the verilator package and reconfigure)");
+#endif
   }
   return absl::InvalidArgumentError("--device must be model, mmio or verilator");
 }

@@ -2,10 +2,9 @@
 // of kernel sites, the exact fixed-point EWMM sums of a quantised map and
 // kernel table (accel/fixed_point.h); the server turns them into risks.
 //
-// Backends: ModelDevice (the datapath in software, bit-exact), MmioDevice
-// (the component's registers, on a DE10-Nano through /dev/mem or UIO, or on
-// the in-memory ComponentModel), and, in a later issue, a Verilator model of
-// the RTL behind the same register interface.
+// Backends: ModelDevice (the datapath in software, bit-exact) and MmioDevice
+// (the component's registers: on a DE10-Nano through /dev/mem or UIO, on the
+// in-memory ComponentModel, or on the RTL under Verilator, accel/rtl/).
 //
 // Thread-compatible: the shim serialises calls.
 #ifndef RISKPLAN_ACCEL_SHIM_DEVICE_H_

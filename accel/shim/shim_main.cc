@@ -140,6 +140,18 @@ int Main() {
   int signal = 0;
   sigwait(&stop, &signal);
   server.Stop();
+  // What the device did, and what it would take at its clock.
+  const ShimContext& served = server.context();
+  const uint64_t sites = served.sites.load(), cycles = served.device_cycles.load();
+  std::cerr << "riskplan-fpga-shim: served " << served.evals.load() << " EVAL(s), " << sites
+            << " site(s)";
+  if (cycles > 0 && info.clock_hz > 0) {
+    std::cerr << "; device " << cycles << " cycles = "
+              << 1e3 * static_cast<double>(cycles) / static_cast<double>(info.clock_hz)
+              << " ms at " << static_cast<double>(info.clock_hz) / 1e6 << " MHz ("
+              << static_cast<double>(cycles) / static_cast<double>(sites) << " cycles per site)";
+  }
+  std::cerr << "\n";
   return 0;
 }
 

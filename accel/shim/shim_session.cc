@@ -232,6 +232,7 @@ std::string ShimSession::HandleEval(uint64_t id, absl::string_view payload, bool
   if (!s.ok()) return ErrorFrame(id, ShimErrorCode::kDeviceError, s.message());
   context_->evals.fetch_add(1, std::memory_order_relaxed);
   context_->sites.fetch_add(eval.sites.size(), std::memory_order_relaxed);
+  context_->device_cycles.fetch_add(reply.device_cycles, std::memory_order_relaxed);
   return EncodeFrame(MessageType::kEvalReply, id, EncodeEvalReply(reply));
 }
 

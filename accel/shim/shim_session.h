@@ -69,6 +69,8 @@ struct ShimContext {
   ShimLimits limits;
   std::atomic<uint64_t> evals{0};
   std::atomic<uint64_t> sites{0};
+  // Device clock cycles of the EVALs served (devices that count them).
+  std::atomic<uint64_t> device_cycles{0};
 };
 
 class ShimSession {

@@ -92,6 +92,11 @@ TEST_F(ShimSessionTest, EvalNamesTheMissingBlobThenAnswersLikeTheModel) {
     ModelEwmm(map, kernels.kernel(s.height_bin, s.heading_bin), s.impact_i, s.impact_j, &i, &sh);
     EXPECT_TRUE(i == reply.impact[n] && sh == reply.shelter[n]) << n;
   }
+  // What the shim reports when it stops: one EVAL served (the refused one is
+  // not counted), its sites, and no device cycles (the model counts none).
+  EXPECT_EQ(context_.evals.load(), 1u);
+  EXPECT_EQ(context_.sites.load(), batch.sites.size());
+  EXPECT_EQ(context_.device_cycles.load(), 0u);
 }
 
 TEST_F(ShimSessionTest, RefusesABlobWhoseHashDoesNotMatch) {

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <utility>
 
+#include "accel/float_kernel.h"
+
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -101,14 +103,13 @@ __attribute__((target("avx2"), always_inline)) inline double FloorAvx2(double x)
 // RiskModel::Locate, operation for operation (this file is built with
 // -ffp-contract=off like core/), without library calls: floor is exact
 // either way, and fmod of an integral double by N is the integer remainder
-// (same sign as the dividend) while the quotient fits in 31 bits.
-__attribute__((target("avx2"), always_inline)) inline bool LocateOneAvx2(const RiskModel& model,
-                                                                         const LocateConstants& c,
-                                                                         const Pose& q,
-                                                                         KernelSite* site) {
+// (same sign as the dividend) while the quotient fits in 31 bits. fx, fy and
+// kf (the floors of the cell coordinates and of the heading bin) come from
+// LocateAvx2's vector pass, computed with the same operations.
+__attribute__((target("avx2"), always_inline)) inline bool LocateOneAvx2(
+    const RiskModel& model, const LocateConstants& c, const Pose& q, double fx, double fy,
+    double kf, KernelSite* site) {
   if (!std::isfinite(q.z) || !std::isfinite(q.theta)) return false;
-  const double fx = FloorAvx2((q.x - c.x0) / c.res);
-  const double fy = FloorAvx2((q.y - c.y0) / c.res);
   if (!(fx >= 0.0 && fx < c.nx && fy >= 0.0 && fy < c.ny)) return false;
   const int i = static_cast<int>(fx);
   const int j = static_cast<int>(fy);
@@ -123,7 +124,6 @@ __attribute__((target("avx2"), always_inline)) inline bool LocateOneAvx2(const R
   } else {
     b = static_cast<int>(bf);
   }
-  const double kf = FloorAvx2(q.theta / c.heading_bin_width + 0.5);
   int k;
   if (kf > -2147483648.0 && kf < 2147483648.0) {
     const int r = static_cast<int>(static_cast<int64_t>(kf) % c.heading_bins);
@@ -143,30 +143,74 @@ __attribute__((target("avx2"), always_inline)) inline bool LocateOneAvx2(const R
 // random positions the terrain read is a cache miss.
 constexpr size_t kTerrainPrefetch = 8;
 
+// Configurations per block of the vector pass.
+constexpr size_t kLocateBlock = 64;
+
+// Two passes per block of configurations: the floors that depend on the pose
+// alone, four poses at a time (a 4 x 4 transpose of x, y, z, theta), then the
+// rest one by one. The same IEEE operations as RiskModel::Locate in every
+// lane, so the same results.
 __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
                                                 std::span<const Pose> configs,
                                                 std::span<ConfigurationRisk> out,
                                                 std::vector<LocatedSite>* sites) {
+  static_assert(sizeof(Pose) == 4 * sizeof(double), "Pose is x, y, z, theta");
   const LocateConstants c = ConstantsOf(model);
   const size_t n = configs.size();
   sites->reserve(sites->size() + n);
-  for (size_t a = 0; a < n; ++a) {
-    if (a + kTerrainPrefetch < n) {
-      const Pose& q = configs[a + kTerrainPrefetch];
-      const double fx = FloorAvx2((q.x - c.x0) / c.res);
-      const double fy = FloorAvx2((q.y - c.y0) / c.res);
-      if (fx >= 0.0 && fx < c.nx && fy >= 0.0 && fy < c.ny) {
-        _mm_prefetch(reinterpret_cast<const char*>(c.terrain + static_cast<int64_t>(fy) * c.nx_int +
-                                                   static_cast<int64_t>(fx)),
-                     _MM_HINT_T0);
-      }
+  alignas(32) double fx[kLocateBlock];
+  alignas(32) double fy[kLocateBlock];
+  alignas(32) double kf[kLocateBlock];
+  const __m256d x0 = _mm256_set1_pd(c.x0);
+  const __m256d y0 = _mm256_set1_pd(c.y0);
+  const __m256d res = _mm256_set1_pd(c.res);
+  const __m256d width = _mm256_set1_pd(c.heading_bin_width);
+  const __m256d half = _mm256_set1_pd(0.5);
+  constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+  for (size_t base = 0; base < n; base += kLocateBlock) {
+    const size_t m = std::min(kLocateBlock, n - base);
+    size_t t = 0;
+    for (; t + 4 <= m; t += 4) {
+      const double* p = &configs[base + t].x;
+      const __m256d r0 = _mm256_loadu_pd(p);
+      const __m256d r1 = _mm256_loadu_pd(p + 4);
+      const __m256d r2 = _mm256_loadu_pd(p + 8);
+      const __m256d r3 = _mm256_loadu_pd(p + 12);
+      const __m256d t0 = _mm256_unpacklo_pd(r0, r1);  // x0 x1 z0 z1
+      const __m256d t1 = _mm256_unpackhi_pd(r0, r1);  // y0 y1 theta0 theta1
+      const __m256d t2 = _mm256_unpacklo_pd(r2, r3);
+      const __m256d t3 = _mm256_unpackhi_pd(r2, r3);
+      const __m256d xs = _mm256_permute2f128_pd(t0, t2, 0x20);
+      const __m256d ys = _mm256_permute2f128_pd(t1, t3, 0x20);
+      const __m256d thetas = _mm256_permute2f128_pd(t1, t3, 0x31);
+      _mm256_store_pd(fx + t, _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(xs, x0), res), kFloor));
+      _mm256_store_pd(fy + t, _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(ys, y0), res), kFloor));
+      _mm256_store_pd(kf + t, _mm256_round_pd(
+                                  _mm256_add_pd(_mm256_div_pd(thetas, width), half), kFloor));
     }
-    LocatedSite s;
-    s.index = static_cast<uint32_t>(a);
-    if (LocateOneAvx2(model, c, configs[a], &s.site)) {
-      sites->push_back(s);
-    } else {
-      out[a] = ConfigurationRisk{};
+    for (; t < m; ++t) {
+      const Pose& q = configs[base + t];
+      fx[t] = FloorAvx2((q.x - c.x0) / c.res);
+      fy[t] = FloorAvx2((q.y - c.y0) / c.res);
+      kf[t] = FloorAvx2(q.theta / c.heading_bin_width + 0.5);
+    }
+    for (t = 0; t < m; ++t) {
+      if (t + kTerrainPrefetch < m) {
+        const double px = fx[t + kTerrainPrefetch];
+        const double py = fy[t + kTerrainPrefetch];
+        if (px >= 0.0 && px < c.nx && py >= 0.0 && py < c.ny) {
+          _mm_prefetch(reinterpret_cast<const char*>(c.terrain + static_cast<int64_t>(py) * c.nx_int +
+                                                     static_cast<int64_t>(px)),
+                       _MM_HINT_T0);
+        }
+      }
+      LocatedSite s;
+      s.index = static_cast<uint32_t>(base + t);
+      if (LocateOneAvx2(model, c, configs[base + t], fx[t], fy[t], kf[t], &s.site)) {
+        sites->push_back(s);
+      } else {
+        out[base + t] = ConfigurationRisk{};
+      }
     }
   }
 }
@@ -327,6 +371,70 @@ inline void PrefetchWindow(const char* row, int64_t row_bytes, int rows, int win
   }
 }
 
+// Along a trajectory, neighbouring windows lie a cell or so apart, so what a
+// window needs beyond the windows before it is its leading edge: the rows it
+// adds (when it moves north or south) and, in every row, the line holding its
+// first or last column (when it moves west or east). Those lines are cold
+// (the map streams by once), the rest is in L1. EdgePrefetcher fetches the
+// leading edge of every fourth window some windows ahead: about a dozen
+// prefetches per window instead of a whole window's hundred.
+class EdgePrefetcher {
+ public:
+  EdgePrefetcher(const float* density, const float* shelter, int64_t map_stride)
+      : density_(density), shelter_(shelter), map_stride_(map_stride) {}
+
+  // Prefetches what the window of `side` cells from padded index `first`
+  // (cell (i, j) of the padded layers) adds to the last window prefetched.
+  void Window(int64_t first, int i, int j, int side) {
+    const int cols = (side + 7) / 8 * 8;
+    const int di = i - last_i_;
+    const int dj = j - last_j_;
+    if (!have_ || std::abs(di) > 16 || std::abs(dj) >= side || side != last_side_) {
+      for (int v = 0; v < side; ++v) Row(first + v * map_stride_, cols);
+    } else {
+      // Rows new to this window: whole.
+      const int new_from = dj > 0 ? side - dj : 0;
+      const int new_to = dj > 0 ? side : -dj;
+      for (int v = new_from; v < new_to; ++v) Row(first + v * map_stride_, cols);
+      // The others: the line of the leading column.
+      if (di != 0) {
+        const int64_t column = di > 0 ? cols - 1 : 0;
+        for (int v = 0; v < side; ++v) {
+          if (v >= new_from && v < new_to) continue;
+          const int64_t at = first + v * map_stride_ + column;
+          __builtin_prefetch(density_ + at);
+          __builtin_prefetch(shelter_ + at);
+        }
+      }
+    }
+    have_ = true;
+    last_i_ = i;
+    last_j_ = j;
+    last_side_ = side;
+  }
+
+ private:
+  void Row(int64_t at, int cols) {
+    for (int u = 0; u < cols; u += 16) {
+      __builtin_prefetch(density_ + at + u);
+      __builtin_prefetch(shelter_ + at + u);
+    }
+    __builtin_prefetch(density_ + at + cols - 1);
+    __builtin_prefetch(shelter_ + at + cols - 1);
+  }
+
+  const float* const density_;
+  const float* const shelter_;
+  const int64_t map_stride_;
+  bool have_ = false;
+  int last_i_ = 0;
+  int last_j_ = 0;
+  int last_side_ = 0;
+};
+
+// Windows ahead whose leading edges are prefetched along trajectories.
+constexpr size_t kEdgeAhead = 16;
+
 // Whether the window of a site lies inside the padded layers (the condition
 // of RiskModel::Ewmm) and fits the vector loops; if so its kernel and first
 // cell.
@@ -345,6 +453,46 @@ inline bool WindowOf(const RiskModel& model, const KernelSite& s, const ImpactKe
   return true;
 }
 
+// Whether most neighbouring windows of `sites` are far apart (then the rows
+// of the windows ahead are prefetched).
+bool MostlyScattered(std::span<const LocatedSite> sites) {
+  size_t jumps = 0;
+  for (size_t a = 1; a < sites.size(); ++a) {
+    const KernelSite& p = sites[a - 1].site;
+    const KernelSite& q = sites[a].site;
+    jumps += std::abs(p.impact_i - q.impact_i) > 8 || std::abs(p.impact_j - q.impact_j) > 8;
+  }
+  return 2 * jumps > sites.size();
+}
+
+// Prefetches the windows of sites[from, from + count) in both layers.
+void PrefetchSites(const RiskModel& model, std::span<const LocatedSite> sites, size_t from,
+                   int count, const float* density, const float* shelter, int64_t row_bytes) {
+  for (int p = 0; p < count && from + p < sites.size(); ++p) {
+    const ImpactKernel* k;
+    int64_t first;
+    if (WindowOf(model, sites[from + p].site, &k, &first)) {
+      const int bytes = (k->Side() + 3) / 4 * 4 * static_cast<int>(sizeof(float));
+      PrefetchWindow(reinterpret_cast<const char*>(density + first), row_bytes, k->Side(), bytes);
+      PrefetchWindow(reinterpret_cast<const char*>(shelter + first), row_bytes, k->Side(), bytes);
+    }
+  }
+}
+
+// Prefetches the leading edges of every fourth window of `sites` from
+// *next up to `until`.
+void PrefetchEdgesAhead(const RiskModel& model, std::span<const LocatedSite> sites, size_t until,
+                        size_t* next, EdgePrefetcher* edges) {
+  for (; *next < sites.size() && *next <= until; *next += 4) {
+    const KernelSite& s = sites[*next].site;
+    const ImpactKernel* k;
+    int64_t first;
+    if (WindowOf(model, s, &k, &first)) {
+      edges->Window(first, s.impact_i - k->half_width, s.impact_j - k->half_width, k->Side());
+    }
+  }
+}
+
 Isa DetectIsa() {
 #if defined(__x86_64__)
   if (__builtin_cpu_supports("avx512f")) return Isa::kAvx512;
@@ -361,8 +509,43 @@ Isa Resolve(Isa wanted) {
 
 }  // namespace
 
-CpuRiskKernel::CpuRiskKernel(PreparedMapCache* maps, SiteCache* sites, CpuKernelOptions options)
-    : maps_(maps), site_cache_(sites), options_(options), isa_(Resolve(options.isa)) {}
+std::string_view KernelPrecisionName(KernelPrecision precision) {
+  return precision == KernelPrecision::kFloat32 ? "float32" : "exact";
+}
+
+bool ParseKernelPrecision(std::string_view name, KernelPrecision* precision) {
+  if (name == "exact") {
+    *precision = KernelPrecision::kExact;
+    return true;
+  }
+  if (name == "float32") {
+    *precision = KernelPrecision::kFloat32;
+    return true;
+  }
+  return false;
+}
+
+CpuRiskKernel::CpuRiskKernel(PreparedMapCache* maps, SiteCache* sites, CpuKernelOptions options,
+                             KernelWeightsCache* weights)
+    : maps_(maps),
+      site_cache_(sites),
+      options_(options),
+      isa_(Resolve(options.isa)),
+      weights_cache_(weights),
+      finisher_(std::make_unique<FastRiskFinisher>()) {}
+
+CpuRiskKernel::~CpuRiskKernel() = default;
+
+const KernelWeights* CpuRiskKernel::WeightsFor(const RiskModel& model, WeightFormat format) {
+  if (weights_cache_ == nullptr) return nullptr;
+  const int f = static_cast<int>(format);
+  const std::shared_ptr<const ImpactTable>& table = model.table_ptr();
+  if (last_table_[f].lock() != table) {
+    last_weights_[f] = weights_cache_->Get(table, format);
+    last_table_[f] = table;
+  }
+  return last_weights_[f].get();
+}
 
 Isa CpuRiskKernel::BestIsa() { return Resolve(Isa::kAuto); }
 
@@ -399,27 +582,23 @@ void CpuRiskKernel::Sums(const RiskModel& model, std::span<const LocatedSite> si
     const int64_t map_stride = model.map().padded_nx();
     const int64_t row_bytes = map_stride * static_cast<int64_t>(sizeof(float));
     const int group_max = isa_ == Isa::kAvx512 ? 4 : 2;
-    // Windows far apart: fetch the rows of the next ones early.
-    size_t jumps = 0;
-    for (size_t a = 1; a < n; ++a) {
-      const KernelSite& p = sites[a - 1].site;
-      const KernelSite& q = sites[a].site;
-      jumps += std::abs(p.impact_i - q.impact_i) > 8 || std::abs(p.impact_j - q.impact_j) > 8;
-    }
-    const int distance = 2 * jumps > n ? options_.prefetch_distance : 0;
+    // The same weights, on 64-byte boundaries (null: the table's own).
+    const KernelWeights* aligned = WeightsFor(model, WeightFormat::kDouble);
+    const auto weights_of = [&](const KernelSite& site, const ImpactKernel* k) {
+      return aligned != nullptr ? aligned->doubles(site.height_bin, site.heading_bin) : k->weights;
+    };
+    // Windows far apart: fetch the rows of the next ones early; along
+    // trajectories, their leading edges.
+    const bool scattered = MostlyScattered(sites);
+    const int distance = scattered ? options_.prefetch_distance : 0;
+    EdgePrefetcher edges(density, shelter, map_stride);
+    size_t next_edge = 0;
     size_t a = 0;
     while (a < n) {
-      for (int p = 0; distance > 0 && p < group_max && a + distance + p < n; ++p) {
-        const ImpactKernel* k;
-        int64_t first;
-        if (WindowOf(model, sites[a + distance + p].site, &k, &first)) {
-          const int bytes = (k->Side() + 3) / 4 * 4 * static_cast<int>(sizeof(float));
-          PrefetchWindow(reinterpret_cast<const char*>(density + first), row_bytes, k->Side(),
-                         bytes);
-          PrefetchWindow(reinterpret_cast<const char*>(shelter + first), row_bytes, k->Side(),
-                         bytes);
-        }
+      if (distance > 0) {
+        PrefetchSites(model, sites, a + distance, group_max, density, shelter, row_bytes);
       }
+      if (!scattered) PrefetchEdgesAhead(model, sites, a + kEdgeAhead, &next_edge, &edges);
       const ImpactKernel* k0;
       int64_t first0;
       if (!WindowOf(model, sites[a].site, &k0, &first0)) {
@@ -430,15 +609,17 @@ void CpuRiskKernel::Sums(const RiskModel& model, std::span<const LocatedSite> si
       }
       // A group of consecutive windows of the same size goes through one loop.
       Window group[4];
-      group[0] = {k0->weights, density + first0, shelter + first0};
+      group[0] = {weights_of(sites[a].site, k0), density + first0, shelter + first0};
       int count = 1;
       bool shared = true;
       while (count < group_max && a + count < n) {
+        const KernelSite& s = sites[a + count].site;
         const ImpactKernel* k;
         int64_t first;
-        if (!WindowOf(model, sites[a + count].site, &k, &first) || k->Side() != k0->Side()) break;
+        if (!WindowOf(model, s, &k, &first) || k->Side() != k0->Side()) break;
         shared = shared && k->weights == k0->weights;
-        group[count++] = {k->weights, density + first, shelter + first};
+        group[count] = {weights_of(s, k), density + first, shelter + first};
+        ++count;
       }
       if (count == 3) count = 2;  // loops exist for 1, 2 and 4 windows
       LoopFor(isa_, count, k0->Side(), shared)(group, k0->Side(), k0->Stride(), map_stride,
@@ -456,6 +637,62 @@ void CpuRiskKernel::Sums(const RiskModel& model, std::span<const LocatedSite> si
   }
 }
 
+void CpuRiskKernel::SumsFloat32(const RiskModel& model, std::span<const LocatedSite> sites,
+                                std::span<double> impact_factor,
+                                std::span<double> expected_shelter) {
+  const KernelWeights* weights = WeightsFor(model, WeightFormat::kFloat32);
+  if (weights == nullptr) return Sums(model, sites, impact_factor, expected_shelter);
+  const size_t n = sites.size();
+  stats_.ewmms += n;
+  const Isa isa = FloatIsa(isa_);
+  const float* shelter = nullptr;
+  const float* density = DensityFor(model, &shelter);
+  const int64_t map_stride = model.map().padded_nx();
+  const int64_t row_bytes = map_stride * static_cast<int64_t>(sizeof(float));
+  const bool scattered = MostlyScattered(sites);
+  const int distance = scattered ? options_.prefetch_distance : 0;
+  // Along trajectories: the leading edges of the windows ahead.
+  EdgePrefetcher edges(density, shelter, map_stride);
+  size_t next_edge = 0;
+  size_t a = 0;
+  while (a < n) {
+    if (!scattered) PrefetchEdgesAhead(model, sites, a + kEdgeAhead, &next_edge, &edges);
+    const KernelSite& s0 = sites[a].site;
+    const ImpactKernel* k0;
+    int64_t first0;
+    if (!WindowOf(model, s0, &k0, &first0)) {
+      // Far off the map or wider than the loops: the exact sums.
+      model.Ewmm(*k0, s0.impact_i, s0.impact_j, &impact_factor[a], &expected_shelter[a]);
+      ++a;
+      continue;
+    }
+    const int side = k0->Side();
+    const int group_max = FloatGroupMax(isa, side);
+    if (distance > 0) {
+      PrefetchSites(model, sites, a + distance, group_max, density, shelter, row_bytes);
+    }
+    FloatWindow group[4];
+    group[0] = {weights->floats(s0.height_bin, s0.heading_bin), density + first0, shelter + first0};
+    int count = 1;
+    bool shared = true;
+    while (count < group_max && a + count < n) {
+      const KernelSite& s = sites[a + count].site;
+      const ImpactKernel* k;
+      int64_t first;
+      if (!WindowOf(model, s, &k, &first) || k->Side() != side) break;
+      shared = shared && k->weights == k0->weights;
+      group[count] = {weights->floats(s.height_bin, s.heading_bin), density + first,
+                      shelter + first};
+      ++count;
+    }
+    if (count == 3) count = 2;  // loops exist for 1, 2 and 4 windows
+    FloatLoopFor(isa, count, side, shared)(group, side,
+                                           KernelWeights::StrideFor(side, WeightFormat::kFloat32),
+                                           map_stride, &impact_factor[a], &expected_shelter[a]);
+    a += count;
+  }
+}
+
 void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> configs,
                              std::span<ConfigurationRisk> out) {
   stats_.configurations += configs.size();
@@ -467,7 +704,8 @@ void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> confi
   SiteCache::Session session;
   const bool cached = site_cache_ != nullptr && site_cache_->enabled();
   if (cached) {
-    session = site_cache_->Begin(model);
+    // Exact and float32 results never share entries.
+    session = site_cache_->Begin(model, static_cast<uint32_t>(options_.precision));
     constexpr size_t kRound = 32;
     keys_.resize(kRound);
     size_t kept = 0;
@@ -526,9 +764,19 @@ void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> confi
 
   impact_.resize(sites_.size());
   shelter_.resize(sites_.size());
-  Sums(model, sites_, impact_, shelter_);
+  // The float32 path needs its weights; without them everything is exact.
+  const bool float32 = options_.precision == KernelPrecision::kFloat32 &&
+                       WeightsFor(model, WeightFormat::kFloat32) != nullptr;
+  if (float32) {
+    finisher_->PrepareFor(model);
+    SumsFloat32(model, sites_, impact_, shelter_);
+  } else {
+    Sums(model, sites_, impact_, shelter_);
+  }
   for (size_t a = 0; a < sites_.size(); ++a) {
-    const ConfigurationRisk r = model.FromSums(sites_[a].site, impact_[a], shelter_[a]);
+    const ConfigurationRisk r = float32
+                                    ? finisher_->Finish(sites_[a].site, impact_[a], shelter_[a])
+                                    : model.FromSums(sites_[a].site, impact_[a], shelter_[a]);
     out[sites_[a].index] = r;
     if (cached) {
       const uint64_t key = SiteCache::KeyOf(session, sites_[a].site);

@@ -71,6 +71,8 @@ std::vector<MetricSample> EngineMetrics(const RiskEngineStats& stats) {
   add("riskplan_accel_cache_bytes", Type::kGauge, {{"cache", "prepared_map"}},
       stats.prepared_map_bytes);
   add("riskplan_accel_cache_bytes", Type::kGauge, {{"cache", "blob"}}, stats.blob_cache_bytes);
+  add("riskplan_accel_cache_bytes", Type::kGauge, {{"cache", "kernel_weights"}},
+      stats.kernel_weights_bytes);
   return out;
 }
 

@@ -15,7 +15,8 @@
 //   riskplan_accel_device_cycles_total{worker}        counter  as the board reports them
 //   riskplan_accel_fpga_workers_up                    gauge
 //   riskplan_accel_site_cache_lookups_total{result}   counter  result: hit, miss
-//   riskplan_accel_cache_bytes{cache}                 gauge    cache: site, prepared_map, blob
+//   riskplan_accel_cache_bytes{cache}                 gauge    cache: site, prepared_map, blob,
+//                                                              kernel_weights
 //
 // Counters are totals since the engine started: export them as gauges, or
 // as counters incremented by the difference from the last export.

@@ -39,6 +39,7 @@ RiskEngine::RiskEngine(const RiskEngineOptions& options)
     : options_(options),
       site_cache_(options.site_cache_bytes),
       prepared_maps_(options.prepared_map_bytes),
+      kernel_weights_(options.kernel_weights_bytes),
       blobs_(options.blob_cache_bytes),
       queue_(options.caller_runs) {}
 
@@ -125,7 +126,8 @@ std::unique_ptr<CpuRiskKernel> RiskEngine::TakeKernel() {
       return kernel;
     }
   }
-  return std::make_unique<CpuRiskKernel>(&prepared_maps_, &site_cache_, options_.kernel);
+  return std::make_unique<CpuRiskKernel>(&prepared_maps_, &site_cache_, options_.kernel,
+                                         &kernel_weights_);
 }
 
 void RiskEngine::ReturnKernel(std::unique_ptr<CpuRiskKernel> kernel) {
@@ -134,7 +136,7 @@ void RiskEngine::ReturnKernel(std::unique_ptr<CpuRiskKernel> kernel) {
 }
 
 void RiskEngine::CpuWorkerLoop(int index) {
-  CpuRiskKernel kernel(&prepared_maps_, &site_cache_, options_.kernel);
+  CpuRiskKernel kernel(&prepared_maps_, &site_cache_, options_.kernel, &kernel_weights_);
   while (true) {
     Chunk* chunk = queue_.Take(WorkQueue::Taker::kCpu, absl::Seconds(1));
     if (chunk == nullptr) {
@@ -235,6 +237,7 @@ RiskEngineStats RiskEngine::Stats() const {
   s.site_cache_bytes = site_cache_.capacity_bytes();
   s.prepared_map_bytes = prepared_maps_.MemoryBytes();
   s.blob_cache_bytes = blobs_.MemoryBytes();
+  s.kernel_weights_bytes = kernel_weights_.MemoryBytes();
   return s;
 }
 

@@ -3,7 +3,9 @@
 // configuration risks with I and S~ out), cuts them into chunks, queues them
 // over a pool of workers, and returns the results in order:
 // - CPU workers: threads running CpuRiskKernel (bit for bit
-//   RiskModel::Evaluate), sharing an exact SiteCache and PreparedMapCache;
+//   RiskModel::Evaluate, or its float32 path when options.kernel.precision
+//   says so), sharing a SiteCache, a PreparedMapCache and a
+//   KernelWeightsCache;
 // - FPGA workers: one per riskplan-fpga-shim endpoint (FpgaWorker), whose
 //   results carry the board's fixed-point rounding (docs/accel.md);
 // - the calling thread, which runs chunks of its own batch when
@@ -12,7 +14,8 @@
 // A chunk whose FPGA worker fails, times out, returns garbage or is removed
 // goes back to the queue; every result is written exactly once.
 //
-// Which results a batch gets: a chunk evaluated on the CPU is exact; one
+// Which results a batch gets: a chunk evaluated on the CPU is exact (within
+// 1e-5 relative with the float32 path); one
 // evaluated on a board is within the board's documented bound. With FPGA
 // workers configured, which chunks go where depends on timing, so bit-for-bit
 // reproducibility of a plan holds on the CPU path only (DESIGN.md).
@@ -35,6 +38,7 @@
 #include "accel/blobs.h"
 #include "accel/cpu_kernel.h"
 #include "accel/fpga_worker.h"
+#include "accel/kernel_weights.h"
 #include "accel/prepared_map.h"
 #include "accel/site_cache.h"
 #include "accel/work_queue.h"
@@ -55,6 +59,10 @@ struct RiskEngineOptions {
   size_t site_cache_bytes = size_t{64} << 20;
   size_t prepared_map_bytes = size_t{256} << 20;
   size_t blob_cache_bytes = size_t{256} << 20;
+  // The CPU kernels' 64-byte-aligned weight copies (KernelWeightsCache): one
+  // per impact table in use and format (double for kernel.precision kExact,
+  // float32 for kFloat32; about 20 MB each for the default table).
+  size_t kernel_weights_bytes = size_t{128} << 20;
   // Chunk sizes: a batch is cut into about two chunks per worker, each of
   // min_chunk_configs to max_chunk_configs configurations.
   int min_chunk_configs = 512;
@@ -85,6 +93,7 @@ struct RiskEngineStats {
   size_t site_cache_bytes = 0;
   size_t prepared_map_bytes = 0;
   size_t blob_cache_bytes = 0;
+  size_t kernel_weights_bytes = 0;
   std::vector<CpuWorkerStats> cpu;
   std::vector<FpgaWorkerStats> fpga;
 };
@@ -126,6 +135,7 @@ class RiskEngine {
   const RiskEngineOptions options_;
   SiteCache site_cache_;
   PreparedMapCache prepared_maps_;
+  KernelWeightsCache kernel_weights_;
   BlobCache blobs_;
   WorkQueue queue_;
   std::vector<std::thread> cpu_threads_;

@@ -24,7 +24,7 @@ SiteCache::SiteCache(size_t budget_bytes, uint32_t max_tags)
   mask_ = entries - 1;
 }
 
-SiteCache::Session SiteCache::Begin(const RiskModel& model) {
+SiteCache::Session SiteCache::Begin(const RiskModel& model, uint32_t variant) {
   if (slots_.empty()) return Session{};
   const double alpha = model.params().alpha_j;
   const double beta = model.params().beta_j;
@@ -37,7 +37,7 @@ SiteCache::Session SiteCache::Begin(const RiskModel& model) {
       continue;
     }
     if (it->map.lock() == model.map_ptr() && it->table.lock() == model.table_ptr() &&
-        it->alpha_j == alpha && it->beta_j == beta) {
+        it->alpha_j == alpha && it->beta_j == beta && it->variant == variant) {
       return Session{it->tag, epoch_.load()};
     }
     ++it;
@@ -49,7 +49,8 @@ SiteCache::Session SiteCache::Begin(const RiskModel& model) {
     next_tag_ = 1;
     models_.clear();
   }
-  models_.push_back(ModelId{model.map_ptr(), model.table_ptr(), alpha, beta, next_tag_});
+  models_.push_back(
+      ModelId{model.map_ptr(), model.table_ptr(), alpha, beta, variant, next_tag_});
   return Session{next_tag_++, epoch_.load()};
 }
 

@@ -12,11 +12,11 @@
 // compare-and-swap and simply skips the insert when another writer holds it.
 // A key packs a model tag (15 bits), the bins (7 + 9 bits) and the impact
 // cell (16 + 16 bits); sites that do not fit (very large maps, unusual bin
-// counts) bypass the cache. Models are told apart by their map, impact table
-// and casualty-model energies. When the 32767 tags run out the table is
-// cleared and tags start over in a new epoch; lookups and inserts made under
-// an older epoch then miss or are dropped, so a reused tag never meets an
-// entry of another model.
+// counts) bypass the cache. Models are told apart by their map, impact table,
+// casualty-model energies and a variant (results computed differently).
+// When the 32767 tags run out the table is cleared and tags start over in a
+// new epoch; lookups and inserts made under an older epoch then miss or are
+// dropped, so a reused tag never meets an entry of another model.
 //
 // Thread-safe. Memory: exactly capacity_bytes(), allocated at construction.
 #ifndef RISKPLAN_ACCEL_SITE_CACHE_H_
@@ -51,8 +51,10 @@ class SiteCache {
     uint32_t tag = 0;
     uint64_t epoch = 0;
   };
-  // Registers `model` on first use.
-  Session Begin(const RiskModel& model);
+  // Registers `model` on first use. `variant` tells apart results of the
+  // same model computed differently (the CPU kernel's exact and float32
+  // paths): they get different tags.
+  Session Begin(const RiskModel& model, uint32_t variant = 0);
 
   // The key of a site, or 0 when it does not fit (or the cache is disabled).
   static uint64_t KeyOf(const Session& session, const KernelSite& site);
@@ -93,6 +95,7 @@ class SiteCache {
     std::weak_ptr<const ImpactTable> table;
     double alpha_j;
     double beta_j;
+    uint32_t variant;
     uint32_t tag;
   };
 

@@ -33,7 +33,8 @@ void ExpectExact(const RiskModel& model, CpuRiskKernel& kernel, const std::vecto
   }
 }
 
-// (instruction set, prepared maps, site cache, sort threshold)
+// (instruction set, prepared maps and aligned weights, site cache, sort
+// threshold)
 class CpuKernelExactTest : public ::testing::TestWithParam<std::tuple<Isa, bool, bool, int>> {};
 
 TEST_P(CpuKernelExactTest, MatchesRiskModelBitForBit) {
@@ -43,11 +44,12 @@ TEST_P(CpuKernelExactTest, MatchesRiskModelBitForBit) {
   }
   const RiskModel& model = *SmallCity();
   PreparedMapCache maps(prepared ? size_t{1} << 30 : 0);
+  KernelWeightsCache weights(prepared ? size_t{1} << 30 : 0);
   SiteCache cache(cached ? size_t{1} << 20 : 0);
   CpuKernelOptions options;
   options.isa = isa;
   options.sort_min_configs = sort_min;
-  CpuRiskKernel kernel(&maps, &cache, options);
+  CpuRiskKernel kernel(&maps, &cache, options, &weights);
   ASSERT_EQ(kernel.isa(), isa);
   const std::vector<Pose> configs = MixedConfigs(model, 20000, 11);
   ExpectExact(model, kernel, configs);
@@ -97,9 +99,10 @@ TEST(CpuKernelTest, AwkwardConfigurations) {
   for (Isa isa : {Isa::kPortable, Isa::kAvx2, Isa::kAvx512}) {
     if (static_cast<int>(isa) > static_cast<int>(CpuRiskKernel::BestIsa())) continue;
     PreparedMapCache maps(size_t{1} << 30);
+    KernelWeightsCache weights(size_t{1} << 30);
     CpuKernelOptions options;
     options.isa = isa;
-    CpuRiskKernel kernel(&maps, nullptr, options);
+    CpuRiskKernel kernel(&maps, nullptr, options, &weights);
     ExpectExact(model, kernel, configs);
   }
 }
@@ -132,14 +135,16 @@ TEST(CpuKernelTest, WideKernelsTakeTheFallback) {
                        kTwoPi * rng.Uniform()});
   }
   PreparedMapCache maps(size_t{1} << 30);
-  CpuRiskKernel kernel(&maps, nullptr);
+  KernelWeightsCache weights(size_t{1} << 30);
+  CpuRiskKernel kernel(&maps, nullptr, {}, &weights);
   ExpectExact(**model, kernel, configs);
 }
 
 TEST(CpuKernelTest, SumsMatchEwmmForAnySite) {
   const RiskModel& model = *SmallCity();
   PreparedMapCache maps(size_t{1} << 30);
-  CpuRiskKernel kernel(&maps, nullptr);
+  KernelWeightsCache weights(size_t{1} << 30);
+  CpuRiskKernel kernel(&maps, nullptr, {}, &weights);
   Rng rng(5);
   std::vector<LocatedSite> sites;
   for (int n = 0; n < 5000; ++n) {

@@ -13,6 +13,8 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/flags/usage_config.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
@@ -82,6 +84,14 @@ ABSL_FLAG(bool, accel_caller_runs, true,
           "Accelerator engine: callers compute chunks of their own batches too (false: every "
           "chunk goes to the workers and boards)");
 ABSL_FLAG(int, risk_cache_mb, 64, "Accelerator engine: bound of the exact kernel-site cache, MiB");
+ABSL_FLAG(std::string, cpu_kernel, "exact",
+          "Accelerator engine: the CPU kernel's arithmetic. exact: bit for bit riskplan-tool's "
+          "(plans are reproducible against it); float32: EWMM sums in float32 with fused "
+          "multiply-add, within 1e-5 relative of exact (docs/risk-model.md), faster. float32 "
+          "starts the engine even without --cpu_workers (callers compute)");
+ABSL_FLAG(int, kernel_weights_cache_mb, 128,
+          "Accelerator engine: bound of the CPU kernel's aligned weight copies (one per impact "
+          "table and format, about 20 MB each), MiB");
 
 namespace riskplan::server {
 namespace {
@@ -136,6 +146,14 @@ int Main() {
                 "--grace_period_ms and --model_cache_size must be >= 0, "
                 "--max_request_bytes >= 1024");
   }
+  accel::KernelPrecision cpu_kernel = accel::KernelPrecision::kExact;
+  if (!accel::ParseKernelPrecision(absl::GetFlag(FLAGS_cpu_kernel), &cpu_kernel)) {
+    return Fail(2, absl::StrFormat("--cpu_kernel=%s: must be exact or float32",
+                                   absl::GetFlag(FLAGS_cpu_kernel)));
+  }
+  if (absl::GetFlag(FLAGS_kernel_weights_cache_mb) < 0 || absl::GetFlag(FLAGS_risk_cache_mb) < 0) {
+    return Fail(2, "--kernel_weights_cache_mb and --risk_cache_mb must be >= 0");
+  }
   SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
 
   // Every thread created from here on inherits the blocked signals, so that
@@ -165,11 +183,15 @@ int Main() {
   // The accelerator engine, only when asked for: it must outlive the service.
   std::unique_ptr<accel::RiskEngine> engine;
   const std::string shims = absl::GetFlag(FLAGS_fpga_shims);
-  if (absl::GetFlag(FLAGS_cpu_workers) > 0 || !shims.empty()) {
+  if (absl::GetFlag(FLAGS_cpu_workers) > 0 || !shims.empty() ||
+      cpu_kernel != accel::KernelPrecision::kExact) {
     accel::RiskEngineOptions engine_options;
     engine_options.cpu_workers = absl::GetFlag(FLAGS_cpu_workers);
     engine_options.caller_runs = absl::GetFlag(FLAGS_accel_caller_runs);
     engine_options.site_cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_risk_cache_mb)) << 20;
+    engine_options.kernel.precision = cpu_kernel;
+    engine_options.kernel_weights_bytes =
+        static_cast<size_t>(absl::GetFlag(FLAGS_kernel_weights_cache_mb)) << 20;
     for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
       engine_options.fpga_shims.emplace_back(s);
     }
@@ -185,8 +207,9 @@ int Main() {
     engine = *std::move(created);
     options.engine = engine.get();
     LogEvent("accel_engine",
-             absl::StrFormat("cpu_workers=%d fpga_shims=[%s] caller_runs=%d",
-                             engine_options.cpu_workers, shims, engine_options.caller_runs));
+             absl::StrFormat("cpu_workers=%d fpga_shims=[%s] caller_runs=%d cpu_kernel=%s",
+                             engine_options.cpu_workers, shims, engine_options.caller_runs,
+                             accel::KernelPrecisionName(cpu_kernel)));
   }
 
   ServerMetrics metrics;
@@ -271,6 +294,14 @@ int main(int argc, char** argv) {
     }
   }
   absl::SetProgramUsageMessage(usage);
+  // --help lists this file's flags (Abseil's default looks for a file named
+  // after the program).
+  absl::FlagsUsageConfig config;
+  config.contains_help_flags = [](absl::string_view file) {
+    return absl::StrContains(file, "server/server_main.cc");
+  };
+  config.contains_helpshort_flags = config.contains_help_flags;
+  absl::SetFlagsUsageConfig(config);
   absl::ParseCommandLine(argc, argv);
   return riskplan::server::Main();
 }

@@ -27,6 +27,11 @@ ABSL_FLAG(int, seeds, 5, "seeds per scenario");
 ABSL_FLAG(double, budget_s, 3.0, "wall-time budget per run, s");
 ABSL_FLAG(std::string, scenarios, "", "comma-separated scenario names (empty: all)");
 ABSL_FLAG(std::string, params, "", "planner parameters name=value,...");
+ABSL_FLAG(int64_t, iterations, 0,
+          "iteration budget per run instead of wall time (0: wall time); with --print_runs a "
+          "reproducibility check");
+ABSL_FLAG(bool, print_runs, false,
+          "print every run: final risk (17 digits), tree size, configurations evaluated, CPU s");
 
 namespace riskplan {
 namespace {
@@ -79,6 +84,8 @@ int Main() {
   }
   const int seeds = absl::GetFlag(FLAGS_seeds);
   const double budget = absl::GetFlag(FLAGS_budget_s);
+  const int64_t iterations = absl::GetFlag(FLAGS_iterations);
+  const bool print_runs = absl::GetFlag(FLAGS_print_runs);
   std::printf("riskplan-bench-planner: RISK_RRT_STAR, %zu scenarios x %d seeds, %.1f s each\n",
               scenarios.size(), seeds, budget);
   std::printf("%-14s %8s %9s %10s %12s %12s %12s %12s %7s\n", "scenario", "nodes/s", "cfg/node",
@@ -91,7 +98,8 @@ int Main() {
     for (int seed = 1; seed <= seeds; ++seed) {
       auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar);
       PlanOptions options;
-      options.budget.max_time_s = budget;
+      options.budget.max_time_s = iterations > 0 ? 0.0 : budget;
+      options.budget.max_iterations = iterations;
       options.seed = seed;
       options.params = params;
       CancellationToken cancel;
@@ -105,7 +113,15 @@ int Main() {
       }
       RunStats stats;
       stats.nodes_per_s = result->tree_size / result->elapsed_s;
-      stats.nodes_per_cpu_s = result->tree_size / (ThreadCpuSeconds() - cpu_before);
+      const double cpu_s = ThreadCpuSeconds() - cpu_before;
+      stats.nodes_per_cpu_s = result->tree_size / cpu_s;
+      if (print_runs) {
+        std::printf(
+            "run %s seed %d: risk %.17g tree %lld iterations %lld configurations %llu cpu %.3f s\n",
+            sc.name, seed, result->best.has_value() ? result->best->risk : -1.0,
+            static_cast<long long>(result->tree_size), static_cast<long long>(result->iterations),
+            static_cast<unsigned long long>(result->configurations_evaluated), cpu_s);
+      }
       stats.configs_per_node =
           static_cast<double>(result->configurations_evaluated) / result->tree_size;
       if (!improvements.empty()) stats.first_solution_s = improvements.front().elapsed_s;

@@ -76,20 +76,24 @@ struct Node {
   std::vector<int32_t> children;
 };
 
-// A candidate edge, evaluated progressively: its midpoints go to the risk
-// batches a chunk at a time, and it is dropped as soon as base + its partial
-// risk reaches its limit (risk only grows as samples are added).
+// A candidate edge, evaluated progressively: its midpoints are generated,
+// checked and sent to the risk batches a chunk at a time, and it is dropped as
+// soon as a midpoint is inadmissible or base + its partial risk reaches its
+// limit (risk only grows as samples are added), so a losing edge costs only
+// the chunks it took to lose.
 struct CandidateEdge {
   int32_t node = -1;  // the tree node at the other end
   TrajectoryPiece piece;
-  std::vector<Pose> samples;  // midpoints, in order
-  double ds = 0.0;            // length of one part
-  double base = 0.0;          // risk added to the edge's own: R of its far end
-  double limit = kInf;        // drop when base + partial risk >= limit
-  double sum = 0.0;           // sum of M over samples[0, done), in order
-  size_t done = 0;
+  int parts = 0;        // K midpoints
+  double ds = 0.0;      // length of one part
+  double base = 0.0;    // risk added to the edge's own: R of its far end
+  double limit = kInf;  // drop when base + partial risk >= limit
+  double sum = 0.0;     // sum of M over midpoints [0, done), in order
+  int done = 0;
+  int in_batch = 0;  // midpoints of this edge in the current batch
   bool alive = true;
-  double risk = kInf;  // set when complete: exactly the piece risk of EvaluateTrajectory
+  bool admissible = true;  // false once an inadmissible midpoint was found
+  double risk = kInf;      // set when complete: exactly the piece risk of EvaluateTrajectory
 };
 
 // One planning run: all state of a Plan() call.
@@ -132,16 +136,17 @@ class Run {
   Pose Sample(bool* is_start);
   int32_t NearestNode(const Pose& q) const;
   std::vector<int32_t> NearCandidates(const Pose& q) const;
-  // Appends an edge (flown from `from` to `to`) to the batch if all its
-  // midpoints are admissible. Returns false if it is not.
-  // Appends the edge flown from `from` to `to` if all its midpoints are
-  // admissible (returns false if not).
-  bool AddCandidate(const Pose& from, const Pose& to, int32_t node, double base, double limit,
-                    std::vector<CandidateEdge>* edges);
-  // Evaluates the edges progressively, dropping each as soon as base + partial
-  // risk reaches its limit; with `shared_limit` the limit is the best total
-  // base + risk completed so far (starting at the edges' limit), and *winner is
-  // the index of the edge that set it (-1: none).
+  // Appends the edge flown from `from` to `to`; its midpoints are generated
+  // and checked by EvaluateCandidates.
+  void AddCandidate(const Pose& from, const Pose& to, int32_t node, double base, double limit,
+                    std::vector<CandidateEdge>* edges) const;
+  // Evaluates the edges progressively, dropping each as soon as a midpoint is
+  // inadmissible or base + partial risk reaches its limit; with `shared_limit`
+  // the limit is the best total base + risk completed so far (starting at the
+  // edges' limit), and *winner is the index of the edge that set it (-1: none).
+  // An edge that completes is admissible and has exactly the risk a full
+  // evaluation of admissible edges alone would give it, so the outcome does
+  // not depend on when an inadmissible edge is found out.
   absl::Status EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
                                   int32_t* winner);
   void SetParent(int32_t child, int32_t parent, double edge_risk);
@@ -262,47 +267,55 @@ std::vector<int32_t> Run::NearCandidates(const Pose& q) const {
   return out;
 }
 
-bool Run::AddCandidate(const Pose& from, const Pose& to, int32_t node, double base, double limit,
-                       std::vector<CandidateEdge>* edges) {
+void Run::AddCandidate(const Pose& from, const Pose& to, int32_t node, double base, double limit,
+                       std::vector<CandidateEdge>* edges) const {
   const ModelParams& mp = model_.params();
   CandidateEdge edge;
   edge.node = node;
   edge.base = base;
   edge.limit = limit;
   edge.piece = TrajectoryPiece::Manoeuvre(from, to, mp.turn_radius_m, mp.max_climb_rad);
-  const int parts = PartCount(edge.piece.Length(), mp.sample_step_m);
-  edge.ds = parts > 0 ? edge.piece.Length() / parts : 0.0;
-  edge.samples.reserve(parts);
-  for (int i = 0; i < parts; ++i) {
-    const Pose q = edge.piece.PoseAt((i + 0.5) * edge.ds);
-    if (!Admissible(q)) return false;
-    edge.samples.push_back(q);
-  }
+  edge.parts = PartCount(edge.piece.Length(), mp.sample_step_m);
+  edge.ds = edge.parts > 0 ? edge.piece.Length() / edge.parts : 0.0;
   edges->push_back(std::move(edge));
-  return true;
 }
 
 absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
                                      int32_t* winner) {
   const ModelParams& mp = model_.params();
   const double per_metre = mp.failure_rate_per_s / mp.airspeed_mps;
-  const size_t chunk = params_.batch_chunk > 0 ? static_cast<size_t>(params_.batch_chunk)
-                                               : std::numeric_limits<size_t>::max();
+  const int chunk = params_.batch_chunk > 0 ? static_cast<int>(params_.batch_chunk)
+                                            : std::numeric_limits<int>::max();
   double best = kInf;
   for (const CandidateEdge& e : *edges) best = std::min(best, e.limit);
   if (winner != nullptr) *winner = -1;
   while (true) {
-    // One risk batch: the next chunk of every live, unfinished edge.
+    // One risk batch: the next chunk of every live, unfinished edge, generated
+    // and checked now (an inadmissible midpoint drops the edge).
     batch_poses_.clear();
     for (CandidateEdge& e : *edges) {
-      if (!e.alive || e.done == e.samples.size()) continue;
-      const size_t end = std::min(e.samples.size(), e.done + chunk);
-      batch_poses_.insert(batch_poses_.end(), e.samples.begin() + e.done, e.samples.begin() + end);
+      e.in_batch = 0;
+      if (!e.alive || e.done == e.parts) continue;
+      const int end = e.parts - e.done > chunk ? e.done + chunk : e.parts;
+      const size_t mark = batch_poses_.size();
+      for (int i = e.done; i < end; ++i) {
+        const Pose q = e.piece.PoseAt((i + 0.5) * e.ds);
+        if (!Admissible(q)) {
+          e.alive = false;
+          e.admissible = false;
+          break;
+        }
+        batch_poses_.push_back(q);
+      }
+      if (e.alive) {
+        e.in_batch = end - e.done;
+      } else {
+        batch_poses_.resize(mark);
+      }
     }
     batch_risks_.resize(batch_poses_.size());
     if (!batch_poses_.empty()) {
-      if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_poses_, batch_risks_);
-          !s.ok()) {
+      if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_poses_, batch_risks_); !s.ok()) {
         return s;
       }
     }
@@ -311,9 +324,9 @@ absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool sha
     for (size_t n = 0; n < edges->size(); ++n) {
       CandidateEdge& e = (*edges)[n];
       if (!e.alive) continue;
-      const size_t end = std::min(e.samples.size(), e.done + chunk);
       // Same order of additions as EvaluateTrajectory's single pass.
-      for (; e.done < end; ++e.done) e.sum += batch_risks_[cursor++].risk;
+      for (int i = 0; i < e.in_batch; ++i) e.sum += batch_risks_[cursor++].risk;
+      e.done += e.in_batch;
       const double limit = shared_limit ? best : e.limit;
       // (lambda / v) * (sum M) * ds: exactly the piece risk of EvaluateTrajectory.
       const double partial = per_metre * e.sum * e.ds;
@@ -321,7 +334,7 @@ absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool sha
         e.alive = false;  // risk never decreases with more samples
         continue;
       }
-      if (e.done < e.samples.size()) {
+      if (e.done < e.parts) {
         pending = true;
         continue;
       }
@@ -359,8 +372,8 @@ void Run::SetParent(int32_t child, int32_t parent, double edge_risk) {
   }
 }
 
-absl::Status Run::BestParent(const Pose& from, const std::vector<int32_t>& candidates,
-                             double bound, int32_t* parent, double* edge_risk) {
+absl::Status Run::BestParent(const Pose& from, const std::vector<int32_t>& candidates, double bound,
+                             int32_t* parent, double* edge_risk) {
   *parent = -1;
   *edge_risk = kInf;
   // Branch and bound. Candidates go in order of R(n). A candidate whose R(n)
@@ -375,15 +388,17 @@ absl::Status Run::BestParent(const Pose& from, const std::vector<int32_t>& candi
   std::vector<CandidateEdge> edges;
   size_t next = 0;
   double best = bound;
-  // The first admissible candidate, alone (a whole edge in one batch).
-  while (next < order.size() && edges.empty()) {
+  // The first admissible candidate, alone.
+  int32_t winner = -1;
+  while (next < order.size()) {
     const int32_t n = order[next++];
     if (nodes_[n].cost >= best) return absl::OkStatus();
+    edges.clear();
     AddCandidate(from, nodes_[n].pose, n, nodes_[n].cost, best, &edges);
-  }
-  int32_t winner = -1;
-  if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/true, &winner); !s.ok()) {
-    return s;
+    if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/true, &winner); !s.ok()) {
+      return s;
+    }
+    if (edges[0].admissible) break;
   }
   if (winner >= 0) {
     *parent = edges[winner].node;

@@ -9,7 +9,9 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "core/dubins.h"
+#include "core/path_refiner.h"
 #include "core/random.h"
+#include "core/risk_guide.h"
 #include "core/spatial_grid.h"
 #include "core/trajectory.h"
 
@@ -28,6 +30,9 @@ struct Params {
   double max_nodes = 200000;
   double risk_cache_log2 = 0;
   double batch_chunk = 16;
+  double refine_edits = 8;
+  double refine_scale_m = 0.0;  // 0: step_m / 2
+  double guide_cell_m = 100.0;  // 0: no guide route
 };
 
 absl::StatusOr<Params> ParseParams(const std::map<std::string, double>& given) {
@@ -57,8 +62,12 @@ absl::StatusOr<Params> ParseParams(const std::map<std::string, double>& given) {
     if (name == "max_nodes") p.max_nodes = std::floor(value);
     if (name == "risk_cache_log2") p.risk_cache_log2 = std::floor(value);
     if (name == "batch_chunk") p.batch_chunk = std::floor(value);
+    if (name == "refine_edits") p.refine_edits = value;
+    if (name == "refine_scale_m") p.refine_scale_m = value;
+    if (name == "guide_cell_m") p.guide_cell_m = value;
   }
   if (p.near_radius_m == 0.0) p.near_radius_m = 2.5 * p.step_m;
+  if (p.refine_scale_m == 0.0) p.refine_scale_m = 0.5 * p.step_m;
   if (p.goal_bias + p.path_bias > 0.9) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "planner parameters goal_bias (%g) + path_bias (%g) must not exceed 0.9: uniform "
@@ -110,6 +119,10 @@ class Run {
         cancel_(cancel),
         on_improvement_(on_improvement),
         rng_(options.seed),
+        refine_rng_(options.seed ^ 0x5265666e65526e67ULL),
+        refiner_(model_, evaluator, params.refine_scale_m,
+                 params.batch_chunk > 0 ? static_cast<int>(params.batch_chunk)
+                                        : std::numeric_limits<int>::max()),
         grid_(model_.map().x0(), model_.map().y0(), model_.map().width_m(), model_.map().height_m(),
               std::max(50.0, params.near_radius_m / 2.0)) {}
 
@@ -159,6 +172,14 @@ class Run {
   absl::Status ConnectStart();
   absl::Status Extend(const Pose& q_new);
   absl::Status MaybeReport();
+  // Local improvement of the best trajectory between tree iterations
+  // (core/path_refiner.h): an accepted edit becomes part of the tree (a new
+  // node for its waypoint, the trajectory's nodes re-parented), so the tree's
+  // R(start) is the improved risk and later samples build on it.
+  absl::Status Refine();
+  // Seeds the tree with the coarse guide route (core/risk_guide.h), its
+  // waypoints added from the goal's side by the ordinary extension.
+  absl::Status Guide();
 
   static constexpr int32_t kGoal = 0;
   static constexpr int32_t kStart = 1;
@@ -171,6 +192,9 @@ class Run {
   const CancellationToken& cancel_;
   const ImprovementCallback& on_improvement_;
   Rng rng_;
+  Rng refine_rng_;  // the refiner's own stream: the tree's samples do not depend on it
+  PathRefiner refiner_;
+  double refine_credit_ = 0.0;
   SpatialGrid grid_;
   std::vector<Node> nodes_;
   std::chrono::steady_clock::time_point start_time_;
@@ -178,6 +202,9 @@ class Run {
   std::optional<PlanImprovement> best_;
   std::vector<TrajectoryPiece> best_pieces_;
   // Scratch buffers reused between iterations.
+  std::vector<int32_t> path_nodes_;
+  std::vector<Pose> path_poses_;
+  std::vector<double> path_risks_;
   std::vector<Pose> batch_poses_;
   std::vector<ConfigurationRisk> batch_risks_;
 };
@@ -533,6 +560,56 @@ absl::Status Run::MaybeReport() {
   return absl::OkStatus();
 }
 
+absl::Status Run::Refine() {
+  if (!std::isfinite(BestCost())) return absl::OkStatus();
+  refine_credit_ += params_.refine_edits;
+  bool stale = true;
+  for (; refine_credit_ >= 1.0; refine_credit_ -= 1.0) {
+    if (static_cast<double>(nodes_.size()) >= params_.max_nodes) break;
+    if (stale) {
+      // The best trajectory as the tree holds it: start ... goal.
+      path_nodes_.clear();
+      path_poses_.clear();
+      path_risks_.clear();
+      for (int32_t n = kStart; n >= 0; n = nodes_[n].parent) {
+        path_nodes_.push_back(n);
+        path_poses_.push_back(nodes_[n].pose);
+        if (nodes_[n].parent >= 0) path_risks_.push_back(nodes_[n].edge_risk);
+      }
+      stale = false;
+    }
+    PathRefiner::Edit edit;
+    absl::StatusOr<bool> improved = refiner_.TryEdit(path_poses_, path_risks_, refine_rng_, &edit);
+    if (!improved.ok()) return improved.status();
+    if (!*improved) continue;
+    int32_t target = path_nodes_[edit.last];
+    if (edit.has_waypoint) {
+      const int32_t id = static_cast<int32_t>(nodes_.size());
+      nodes_.push_back(Node{edit.waypoint, -1, kInf, kInf, {}});
+      SetParent(id, target, edit.risk_out);
+      grid_.Insert(id, edit.waypoint.x, edit.waypoint.y);
+      target = id;
+    }
+    // The nodes between keep their other children; only the trajectory leaves them.
+    SetParent(path_nodes_[edit.first], target, edit.risk_in);
+    stale = true;
+  }
+  return MaybeReport();
+}
+
+absl::Status Run::Guide() {
+  if (params_.guide_cell_m <= 0.0) return absl::OkStatus();
+  absl::StatusOr<std::vector<Pose>> route = CoarseRiskRoute(
+      model_, problem_.start, problem_.goal, params_.guide_cell_m, params_.step_m, evaluator_);
+  if (!route.ok()) return route.status();
+  for (auto it = route->rbegin(); it != route->rend(); ++it) {
+    if (!Admissible(*it)) continue;
+    if (absl::Status s = Extend(*it); !s.ok()) return s;
+  }
+  if (absl::Status s = ConnectStart(); !s.ok()) return s;
+  return MaybeReport();
+}
+
 absl::StatusOr<PlanResult> Run::Execute() {
   start_time_ = std::chrono::steady_clock::now();
   nodes_.push_back(Node{problem_.goal, -1, 0.0, 0.0, {}});
@@ -541,6 +618,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
   grid_.Insert(kStart, problem_.start.x, problem_.start.y);
   const ModelParams& mp = model_.params();
 
+  if (absl::Status s = Guide(); !s.ok()) return s;
   PlanResult result;
   result.reason = StopReason::kBudgetExhausted;
   while (true) {
@@ -572,6 +650,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
     }
     if (!status.ok()) return status;
     if (absl::Status s = MaybeReport(); !s.ok()) return s;
+    if (absl::Status s = Refine(); !s.ok()) return s;
   }
   if (!best_.has_value() && result.reason != StopReason::kCancelled) {
     result.reason = StopReason::kNoSolution;
@@ -606,6 +685,13 @@ const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
       {"batch_chunk", 16, 0, 100000,
        "midpoints per candidate edge in one risk batch; a losing edge is dropped between "
        "batches (0: whole edges, one batch per step)"},
+      {"refine_edits", 8, 0, 100,
+       "local edits of the best trajectory tried per tree iteration once a solution exists "
+       "(fractions accumulate; 0: off)"},
+      {"refine_scale_m", 0.0, 0.0, 5000.0,
+       "largest standard deviation of an edit's new waypoint, horizontally, m (0: step_m / 2)"},
+      {"guide_cell_m", 100.0, 0.0, 2000.0,
+       "cell of the coarse risk grid whose cheapest route seeds the tree, m (0: no guide)"},
       {"risk_cache_log2", 0, 0, 20,
        "log2 of the entries of the exact configuration-risk cache (40 B each) used when no "
        "external evaluator is given; 0 turns it off"},

@@ -137,6 +137,62 @@ TEST_F(RiskRrtStarScenarioTest, SameSeedGivesTheSameTrajectoryBitForBit) {
   EXPECT_NE(a.result->best->risk, c.result->best->risk);
 }
 
+// Improvements come from the tree, from the guide route and from the local
+// refinement of the best trajectory: every one of them must carry exactly the
+// risk an independent EvaluateTrajectory gives, and be admissible.
+TEST_F(RiskRrtStarScenarioTest, EveryImprovementIsEvaluateTrajectorysRiskBitForBit) {
+  int checked = 0;
+  for (size_t k = 0; k < scenarios_.size(); k += 4) {
+    const Scenario& sc = scenarios_[k];
+    SCOPED_TRACE(sc.name);
+    Outcome out = RunPlanner(model_, sc.start, sc.goal, 400, 3);
+    ASSERT_TRUE(out.result.ok()) << out.result.status();
+    for (const PlanImprovement& i : out.improvements) {
+      bool admissible = false;
+      const double risk = ReEvaluate(*model_, i.waypoints, &admissible);
+      EXPECT_TRUE(admissible);
+      EXPECT_EQ(i.risk, risk);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 50);
+}
+
+TEST_F(RiskRrtStarScenarioTest, GuideRouteGivesASolutionBeforeTheFirstIteration) {
+  const Scenario& sc = scenarios_[0];  // across the centre
+  Outcome guided = RunPlanner(model_, sc.start, sc.goal, 1, 1);
+  ASSERT_TRUE(guided.result.ok());
+  ASSERT_FALSE(guided.improvements.empty());
+  EXPECT_EQ(guided.improvements.front().iterations, 0);
+  Outcome unguided = RunPlanner(model_, sc.start, sc.goal, 1, 1, {{"guide_cell_m", 0.0}});
+  ASSERT_TRUE(unguided.result.ok());
+  EXPECT_TRUE(unguided.improvements.empty());
+}
+
+TEST_F(RiskRrtStarScenarioTest, RefinementAndGuideOffStillPlanDeterministically) {
+  const Scenario& sc = scenarios_[2];
+  const std::map<std::string, double> off = {{"guide_cell_m", 0.0}, {"refine_edits", 0.0}};
+  Outcome a = RunPlanner(model_, sc.start, sc.goal, 800, 5, off);
+  Outcome b = RunPlanner(model_, sc.start, sc.goal, 800, 5, off);
+  ASSERT_TRUE(a.result.ok() && b.result.ok());
+  ASSERT_TRUE(a.result->best.has_value());
+  EXPECT_EQ(a.result->best->risk, b.result->best->risk);
+  // Whole-edge batches (batch_chunk 0) give the same trajectory: only the
+  // batching differs.
+  std::map<std::string, double> whole = off;
+  whole["batch_chunk"] = 0.0;
+  Outcome c = RunPlanner(model_, sc.start, sc.goal, 800, 5, whole);
+  ASSERT_TRUE(c.result.ok() && c.result->best.has_value());
+  EXPECT_EQ(a.result->best->risk, c.result->best->risk);
+  EXPECT_EQ(a.result->tree_size, c.result->tree_size);
+  // And with the defaults, refinement and guide on, the same seed still
+  // gives the same run (SameSeedGivesTheSameTrajectoryBitForBit checks more).
+  Outcome d = RunPlanner(model_, sc.start, sc.goal, 800, 5, {{"batch_chunk", 0.0}});
+  Outcome e = RunPlanner(model_, sc.start, sc.goal, 800, 5, {{"batch_chunk", 0.0}});
+  ASSERT_TRUE(d.result.ok() && e.result.ok());
+  EXPECT_EQ(d.result->best->risk, e.result->best->risk);
+}
+
 TEST_F(RiskRrtStarScenarioTest, InadmissibleStartOrGoalIsAClearError) {
   const Scenario& sc = scenarios_[0];
   Pose low = sc.start;

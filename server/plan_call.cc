@@ -64,6 +64,7 @@ std::shared_ptr<PlanCall> PlanCall::Create(const PlanCallEnv& env, grpc::Callbac
                                            PlanSpec spec) {
   std::shared_ptr<PlanCall> call(new PlanCall(env, ctx, std::move(spec)));
   call->self_ = call;
+  if (env.open_calls != nullptr) env.open_calls->Opened();
   return call;
 }
 
@@ -278,6 +279,9 @@ void PlanCall::OnWriteDone(bool ok) {
       // The client is gone: stop planning, and finish once Run() is done
       // with the call (it offers the final message, or already has).
       write_failed_ = true;
+      // Nothing is in flight any more: Run() must not wait for this write to
+      // complete before it finishes the call (it would wait forever).
+      coalescer_.OnWriteFailed();
       cancel_.Cancel();
       if (finish_started_ || (!coalescer_.final_offered() && !finish_when_idle_.has_value())) {
         return;
@@ -332,6 +336,7 @@ void PlanCall::OnDone() {
           .peer = peer_,
           .map = spec_.map ? spec_.map->name() : "",
           .detail = detail});
+  if (env_.open_calls != nullptr) env_.open_calls->Done();
   // Drops gRPC's reference last: this may destroy the call.
   std::shared_ptr<PlanCall> last = std::move(self_);
 }

@@ -34,6 +34,7 @@
 #include "riskplan/v1/planner.grpc.pb.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
+#include "server/open_calls.h"
 #include "server/request_validation.h"
 #include "server/timer_queue.h"
 #include "server/update_coalescer.h"
@@ -71,6 +72,7 @@ struct PlanCallEnv {
   TimerQueue* timer = nullptr;
   ActivePlans* active = nullptr;
   accel::RiskEngine* engine = nullptr;  // null: the planner's own evaluator
+  OpenCalls* open_calls = nullptr;       // counts the call until its OnDone
 };
 
 class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,

@@ -22,8 +22,12 @@ const grpc::Status kDraining(grpc::StatusCode::UNAVAILABLE,
 // the log line written.
 class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
-  UnaryCall(const char* method, grpc::CallbackServerContext* ctx, ServerMetrics* metrics)
-      : method_(method), started_(absl::Now()), ctx_(ctx), metrics_(metrics) {}
+  UnaryCall(const char* method, grpc::CallbackServerContext* ctx, ServerMetrics* metrics,
+            OpenCalls* open_calls)
+      : method_(method), started_(absl::Now()), ctx_(ctx), metrics_(metrics),
+        open_calls_(open_calls) {
+    open_calls_->Opened();
+  }
 
   // Ends the call. Call exactly once, from any thread.
   void Complete(const grpc::Status& status, std::string map = "") {
@@ -38,13 +42,17 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
     Finish(status);
   }
 
-  void OnDone() override { delete this; }
+  void OnDone() override {
+    open_calls_->Done();
+    delete this;
+  }
 
  private:
   const char* const method_;
   const absl::Time started_;
   grpc::CallbackServerContext* const ctx_;
   ServerMetrics* const metrics_;
+  OpenCalls* const open_calls_;
 };
 
 // Risk of a validated trajectory (runs on the evaluation pool).
@@ -114,7 +122,8 @@ grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
                                                                 .metrics = &metrics_,
                                                                 .timer = &timer_,
                                                                 .active = &active_,
-                                                                .engine = options_.engine},
+                                                                .engine = options_.engine,
+                                                                .open_calls = &open_calls_},
                                                     ctx, std::move(call_spec));
   if (draining()) {
     call->Reject(kDraining);
@@ -148,7 +157,7 @@ grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
 grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerContext* ctx,
                                                        const v1::EvaluateRiskRequest* request,
                                                        v1::EvaluateRiskResponse* response) {
-  auto* call = new UnaryCall("EvaluateRisk", ctx, &metrics_);
+  auto* call = new UnaryCall("EvaluateRisk", ctx, &metrics_, &open_calls_);
   if (draining()) {
     call->Complete(kDraining, request->map());
     return call;
@@ -176,7 +185,7 @@ grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerConte
 grpc::ServerUnaryReactor* PlannerService::ListMaps(grpc::CallbackServerContext* ctx,
                                                    const v1::ListMapsRequest* /*request*/,
                                                    v1::ListMapsResponse* response) {
-  auto* call = new UnaryCall("ListMaps", ctx, &metrics_);
+  auto* call = new UnaryCall("ListMaps", ctx, &metrics_, &open_calls_);
   if (draining()) {
     call->Complete(kDraining);
     return call;
@@ -189,7 +198,7 @@ grpc::ServerUnaryReactor* PlannerService::ListMaps(grpc::CallbackServerContext* 
 grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContext* ctx,
                                                       const v1::GetMapLayerRequest* request,
                                                       v1::GetMapLayerResponse* response) {
-  auto* call = new UnaryCall("GetMapLayer", ctx, &metrics_);
+  auto* call = new UnaryCall("GetMapLayer", ctx, &metrics_, &open_calls_);
   if (draining()) {
     call->Complete(kDraining, request->map());
     return call;
@@ -235,7 +244,7 @@ grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContex
 grpc::ServerUnaryReactor* PlannerService::Ping(grpc::CallbackServerContext* ctx,
                                                const v1::PingRequest* /*request*/,
                                                v1::PingResponse* /*response*/) {
-  auto* call = new UnaryCall("Ping", ctx, &metrics_);
+  auto* call = new UnaryCall("Ping", ctx, &metrics_, &open_calls_);
   call->Complete(draining() ? kDraining : grpc::Status::OK);
   return call;
 }

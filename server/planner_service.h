@@ -20,6 +20,7 @@
 #include "server/feasibility_cache.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
+#include "server/open_calls.h"
 #include "server/model_cache.h"
 #include "server/plan_call.h"
 #include "server/request_validation.h"
@@ -69,6 +70,8 @@ class PlannerService final : public v1::Planner::CallbackService {
   bool draining() const { return draining_.load(); }
 
   ActivePlans& active_plans() { return active_; }
+  // Calls of this service gRPC has not finished with (plans, evaluations...).
+  const OpenCalls& open_calls() const { return open_calls_; }
 
  private:
   const MapRegistry& maps_;
@@ -79,6 +82,7 @@ class PlannerService final : public v1::Planner::CallbackService {
   v1::ListMapsResponse map_list_;  // built once
   std::atomic<bool> draining_{false};
   ActivePlans active_;
+  OpenCalls open_calls_;
   // Declared last: destroyed first, so queued tasks run while everything they
   // use is still alive.
   TimerQueue timer_;

@@ -268,10 +268,14 @@ int Main() {
     service.active_plans().StopAll();
     service.active_plans().WaitUntilIdle(drain_start + grace);
   }
-  // Final messages still in flight get what is left of the grace period
-  // (at least a moment); calls still open after it are cancelled.
-  server->Shutdown(
-      absl::ToChronoTime(std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
+  // Final messages still in flight and evaluations get what is left of the
+  // grace period; once none is open, gRPC is shut down at once (calls still
+  // open after the grace period are cancelled). Waiting on gRPC's Shutdown
+  // deadline alone would also wait for idle clients to acknowledge GOAWAY.
+  const bool none_open = service.open_calls().WaitUntilNone(drain_start + grace);
+  server->Shutdown(absl::ToChronoTime(none_open ? absl::Now()
+                                                : std::max(drain_start + grace,
+                                                           absl::Now() + absl::Milliseconds(200))));
   LogEvent("stopped",
            absl::StrFormat("seconds=%.3f", absl::ToDoubleSeconds(absl::Now() - drain_start)));
   return 0;

@@ -68,6 +68,10 @@ class UpdateCoalescer {
     return Next(now);
   }
 
+  // The write in flight failed (the client is gone): nothing more will be
+  // written, and nothing is in flight any more.
+  void OnWriteFailed() { in_flight_ = false; }
+
   // A wake-up asked for by a previous Step is due.
   Step Poll(absl::Time now) {
     wake_scheduled_.reset();

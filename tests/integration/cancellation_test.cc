@@ -91,12 +91,25 @@ TEST_F(CancellationTest, CancelStopsThePlanAndFreesTheSlotPromptly) {
   EXPECT_LT(free_after, absl::Milliseconds(500));
   // The server logs a plan when gRPC is done with it, which may be after the
   // client has moved on: stop the server (it exits once every call is done),
-  // then read its log.
-  // The server may take up to its grace period (10 s by default) to drain, so
-  // wait longer than that.
+  // then read its log. With no call open it exits at once, well within its
+  // 10 s grace period, even though this client is still connected; a call
+  // gRPC never finished (a cancelled plan whose last write failed used to
+  // be one) would hold it for the whole grace period.
   server_->Signal(SIGTERM);
-  ASSERT_EQ(server_->Wait(absl::Seconds(20)), std::optional<int>(0));
+  ASSERT_EQ(server_->Wait(absl::Seconds(5)), std::optional<int>(0));
   EXPECT_THAT(server_->Stderr(), HasSubstr("\"method\":\"PlanTrajectory\",\"code\":\"CANCELLED\""));
+}
+
+TEST_F(CancellationTest, StopsAtOnceWhenNoCallIsOpenThoughClientsAreConnected) {
+  // An idle, connected client: its channel is not polled, so it would
+  // acknowledge the server's GOAWAY only seconds later; the server does not
+  // wait for that once its calls are done.
+  v1::EvaluateRiskResponse response;
+  ASSERT_TRUE(client_->EvaluateRisk(SmallCityPolyline(), &response).ok());
+  ASSERT_TRUE(RunPlan(*client_, SmallCityPlan(0, 1)).status.ok());
+  server_->Signal(SIGTERM);
+  ASSERT_EQ(server_->Wait(absl::Seconds(5)), std::optional<int>(0));
+  EXPECT_THAT(server_->Stderr(), HasSubstr("\"event\":\"stopped\""));
 }
 
 TEST_F(CancellationTest, DeadlineStopsThePlanAndFreesTheSlotPromptly) {

@@ -19,9 +19,9 @@
 #include "accel/shim/component_model.h"
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/shim_server.h"
+#include "bench/demo_city_configs.h"
 #include "benchmark/benchmark.h"
 #include "core/demo_city.h"
-#include "core/random.h"
 
 namespace riskplan {
 namespace {
@@ -36,33 +36,8 @@ const std::shared_ptr<const RiskModel>& Model() {
   return model;
 }
 
-Pose At100mAgl(const RiskModel& model, double x, double y, double theta) {
-  int i = 0, j = 0;
-  model.map().CellOf(x, y, &i, &j);
-  return Pose{x, y, model.map().terrain(i, j) + 100.0, theta};
-}
-
-// The generators of bench/risk_kernel_bench.cc.
 std::vector<Pose> Configurations(bool along, size_t n) {
-  const RiskModel& model = *Model();
-  Rng rng(along ? 1 : 2);
-  std::vector<Pose> out;
-  while (out.size() < n) {
-    if (!along) {
-      out.push_back(At100mAgl(model, 200.0 + rng.Uniform() * 7600.0, 200.0 + rng.Uniform() * 7600.0,
-                              rng.Uniform() * 6.283185307179586));
-      continue;
-    }
-    const double theta = rng.Uniform() * 6.283185307179586;
-    double x = 1000.0 + rng.Uniform() * 6000.0;
-    double y = 1000.0 + rng.Uniform() * 6000.0;
-    for (int k = 0; k < 200 && out.size() < n; ++k) {
-      out.push_back(At100mAgl(model, x, y, theta));
-      x += 5.0 * std::cos(theta);
-      y += 5.0 * std::sin(theta);
-    }
-  }
-  return out;
+  return along ? bench::AlongTrajectories(*Model(), n) : bench::RandomConfigurations(*Model(), n);
 }
 
 // A shim (in-process unless --shim) and an engine using only it.

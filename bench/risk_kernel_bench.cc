@@ -5,9 +5,9 @@
 #include <memory>
 #include <vector>
 
+#include "bench/demo_city_configs.h"
 #include "benchmark/benchmark.h"
 #include "core/demo_city.h"
-#include "core/random.h"
 #include "core/risk_model.h"
 
 namespace riskplan {
@@ -22,40 +22,9 @@ const RiskModel& Model() {
 }
 
 // Configurations 100 m above the terrain at (x, y).
-Pose At100mAgl(const RiskModel& model, double x, double y, double theta) {
-  int i = 0;
-  int j = 0;
-  model.map().CellOf(x, y, &i, &j);
-  return Pose{x, y, model.map().terrain(i, j) + 100.0, theta};
-}
-
-std::vector<Pose> AlongTrajectories(size_t n) {
-  const RiskModel& model = Model();
-  Rng rng(1);
-  std::vector<Pose> out;
-  while (out.size() < n) {
-    // A straight 1 km leg in a random direction, sampled every 5 m.
-    const double theta = rng.Uniform() * 6.283185307179586;
-    double x = 1000.0 + rng.Uniform() * 6000.0;
-    double y = 1000.0 + rng.Uniform() * 6000.0;
-    for (int k = 0; k < 200 && out.size() < n; ++k) {
-      out.push_back(At100mAgl(model, x, y, theta));
-      x += 5.0 * std::cos(theta);
-      y += 5.0 * std::sin(theta);
-    }
-  }
-  return out;
-}
-
+std::vector<Pose> AlongTrajectories(size_t n) { return bench::AlongTrajectories(Model(), n); }
 std::vector<Pose> RandomConfigurations(size_t n) {
-  const RiskModel& model = Model();
-  Rng rng(2);
-  std::vector<Pose> out;
-  for (size_t k = 0; k < n; ++k) {
-    out.push_back(At100mAgl(model, 200.0 + rng.Uniform() * 7600.0, 200.0 + rng.Uniform() * 7600.0,
-                            rng.Uniform() * 6.283185307179586));
-  }
-  return out;
+  return bench::RandomConfigurations(Model(), n);
 }
 
 void Run(benchmark::State& state, const std::vector<Pose>& configs) {

@@ -17,7 +17,6 @@
 //
 //   riskplan-bench-rtl [--configs=4096] [--lanes=1,2,4,8,16] [--config=l16-precise]
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -30,8 +29,8 @@
 #include "accel/blobs.h"
 #include "accel/rtl/verilated_component.h"
 #include "accel/shim/mmio_device.h"
+#include "bench/demo_city_configs.h"
 #include "core/demo_city.h"
-#include "core/random.h"
 #include "core/risk_model.h"
 
 ABSL_FLAG(int, configs, 4096, "configurations per pattern");
@@ -40,35 +39,6 @@ ABSL_FLAG(std::string, config, "l16-precise", "verilated configuration (its lane
 
 namespace riskplan::accel {
 namespace {
-
-Pose At100mAgl(const RiskModel& model, double x, double y, double theta) {
-  int i = 0, j = 0;
-  model.map().CellOf(x, y, &i, &j);
-  return Pose{x, y, model.map().terrain(i, j) + 100.0, theta};
-}
-
-// Legs of 200 samples 5 m apart, or uniform configurations (the generators of
-// the accelerator benchmarks).
-std::vector<Pose> Configurations(const RiskModel& model, bool along, size_t n) {
-  Rng rng(along ? 1 : 2);
-  std::vector<Pose> out;
-  while (out.size() < n) {
-    if (!along) {
-      out.push_back(At100mAgl(model, 200.0 + rng.Uniform() * 7600.0,
-                              200.0 + rng.Uniform() * 7600.0, rng.Uniform() * kTwoPi));
-      continue;
-    }
-    const double theta = rng.Uniform() * kTwoPi;
-    double x = 1000.0 + rng.Uniform() * 6000.0;
-    double y = 1000.0 + rng.Uniform() * 6000.0;
-    for (int k = 0; k < 200 && out.size() < n; ++k) {
-      out.push_back(At100mAgl(model, x, y, theta));
-      x += 5.0 * std::cos(theta);
-      y += 5.0 * std::sin(theta);
-    }
-  }
-  return out;
-}
 
 int Main() {
   auto map = MakeDemoCity();
@@ -111,7 +81,8 @@ int Main() {
       "(job) | (bus) | kernel loads | simulated clocks/s |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const bool along : {true, false}) {
-    const std::vector<Pose> poses = Configurations(m, along, n);
+    const std::vector<Pose> poses =
+        along ? bench::AlongTrajectories(m, n) : bench::RandomConfigurations(m, n);
     std::vector<DeviceSite> sites;
     for (const Pose& q : poses) {
       KernelSite s;

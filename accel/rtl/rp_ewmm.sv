@@ -205,12 +205,6 @@ module rp_ewmm #(
       all_in <= 1'b0;
       s1_valid <= 1'b0;
       word_cnt <= '0;
-      for (int l = 0; l < LANES; l++) begin
-        lane_slot[l] <= '0;
-        lane_side[l] <= '0;
-        lane_col[l] <= '0;
-        lane_row[l] <= '0;
-      end
     end else begin
       // Cycles from START to DONE of the last job.
       if (busy) cycles <= cycles + 64'd1;
@@ -239,15 +233,6 @@ module rp_ewmm #(
           AddrLaneMask: lane_mask <= avs_writedata;
           AddrWaddr: waddr <= avs_writedata;
           AddrWdataLo: wdata_lo <= avs_writedata;
-          default: ;
-        endcase
-      end
-      if (lane_write) begin
-        case (avs_address[3:0])
-          4'd0: lane_slot[lane_sel] <= avs_writedata;
-          4'd1: lane_side[lane_sel] <= avs_writedata;
-          4'd2: lane_col[lane_sel] <= avs_writedata;
-          4'd3: lane_row[lane_sel] <= avs_writedata;
           default: ;
         endcase
       end
@@ -283,12 +268,6 @@ module rp_ewmm #(
         all_in <= 1'b0;
         s1_valid <= 1'b0;
         word_cnt <= '0;
-        for (int l = 0; l < LANES; l++) begin
-          lane_slot[l] <= '0;
-          lane_side[l] <= '0;
-          lane_col[l] <= '0;
-          lane_row[l] <= '0;
-        end
       end
       if (ctrl_start) begin
         col_q <= '0;
@@ -309,6 +288,26 @@ module rp_ewmm #(
           cycles <= '0;
         end
       end
+    end
+  end
+
+  // Lane registers: written through the CSR slave, cleared by reset and RESET.
+  always_ff @(posedge clk) begin
+    if (reset || ctrl_reset) begin
+      for (int l = 0; l < LANES; l++) begin
+        lane_slot[l] <= '0;
+        lane_side[l] <= '0;
+        lane_col[l] <= '0;
+        lane_row[l] <= '0;
+      end
+    end else if (lane_write) begin
+      case (avs_address[3:0])
+        4'd0: lane_slot[lane_sel] <= avs_writedata;
+        4'd1: lane_side[lane_sel] <= avs_writedata;
+        4'd2: lane_col[lane_sel] <= avs_writedata;
+        4'd3: lane_row[lane_sel] <= avs_writedata;
+        default: ;
+      endcase
     end
   end
 

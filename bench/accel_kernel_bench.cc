@@ -1,5 +1,6 @@
 // Configuration risks per second on one core: the core's RiskModel::Evaluate
-// against accel's CpuRiskKernel (bit for bit the same results), on demo-city
+// against accel's CpuRiskKernel, exact (bit for bit the same results) and
+// its float32 path (within 1e-5 relative; checked here too), on demo-city
 // at 100 m above ground, for the two access patterns of issue 5:
 //   Along:  samples along 1 km straight legs, 5 m apart (as the planner asks);
 //   Random: configurations uniformly across the map, random headings.
@@ -7,6 +8,7 @@
 // planner's batches are a few hundred; EvaluateRisk's and the engine's chunks
 // up to tens of thousands). Run side by side in one process so that the
 // machine's load affects both alike; quote medians of repetitions.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -113,11 +115,48 @@ void RunCore(benchmark::State& state, const std::vector<Pose>& configs) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * configs.size()));
 }
 
-// Args: batch size, instruction set (0 portable, 1 AVX2, 2 AVX-512).
+accel::KernelWeightsCache& Weights() {
+  static accel::KernelWeightsCache weights(size_t{1} << 30);
+  return weights;
+}
+
+// Aborts unless the float32 path is within 1e-5 relative of
+// RiskModel::Evaluate on every configuration; prints the largest error.
+void CheckFloat32(const char* name, const std::vector<Pose>& configs) {
+  const RiskModel& model = Model();
+  for (accel::Isa isa : {accel::Isa::kPortable, accel::Isa::kAvx2, accel::Isa::kAvx512}) {
+    accel::CpuKernelOptions options;
+    options.isa = isa;
+    options.precision = accel::KernelPrecision::kFloat32;
+    accel::CpuRiskKernel kernel(&Maps(), nullptr, options, &Weights());
+    if (kernel.isa() != isa) continue;
+    std::vector<ConfigurationRisk> out(configs.size());
+    kernel.Evaluate(model, configs, out);
+    double worst = 0.0;
+    for (size_t n = 0; n < configs.size(); ++n) {
+      const ConfigurationRisk want = model.Evaluate(configs[n]);
+      const double error =
+          want.risk == 0.0 ? std::abs(out[n].risk) : std::abs(out[n].risk / want.risk - 1.0);
+      if (want.defined != out[n].defined || !(error <= 1e-5)) {
+        std::fprintf(stderr, "float32 path off by %g relative at %zu\n", error, n);
+        std::abort();
+      }
+      worst = std::max(worst, error);
+    }
+    std::fprintf(stderr, "float32 path, %s, isa %d: largest relative error of M %.3g\n", name,
+                 static_cast<int>(isa), worst);
+  }
+  std::fprintf(stderr, "float32 weights of the table: %zu bytes\n", Weights().MemoryBytes());
+}
+
+// Args: batch size, instruction set (0 portable, 1 AVX2, 2 AVX-512),
+// precision (0 exact, 1 float32).
 void RunKernel(benchmark::State& state, const std::vector<Pose>& configs, bool prepared) {
   static bool checked = [] {
     CheckExact(Along());
     CheckExact(Random());
+    CheckFloat32("along", Along());
+    CheckFloat32("random", Random());
     return true;
   }();
   benchmark::DoNotOptimize(checked);
@@ -126,7 +165,8 @@ void RunKernel(benchmark::State& state, const std::vector<Pose>& configs, bool p
   accel::PreparedMapCache no_maps(0);
   accel::CpuKernelOptions options;
   options.isa = static_cast<accel::Isa>(state.range(1));
-  accel::CpuRiskKernel kernel(prepared ? &Maps() : &no_maps, nullptr, options);
+  options.precision = static_cast<accel::KernelPrecision>(state.range(2));
+  accel::CpuRiskKernel kernel(prepared ? &Maps() : &no_maps, nullptr, options, &Weights());
   if (kernel.isa() != options.isa) {
     state.SkipWithError("instruction set not available");
     return;
@@ -148,8 +188,9 @@ void BM_Core_Along(benchmark::State& state) { RunCore(state, Along()); }
 void BM_Core_Random(benchmark::State& state) { RunCore(state, Random()); }
 void BM_Kernel_Along(benchmark::State& state) { RunKernel(state, Along(), true); }
 void BM_Kernel_Random(benchmark::State& state) { RunKernel(state, Random(), true); }
-void BM_KernelFloat_Along(benchmark::State& state) { RunKernel(state, Along(), false); }
-void BM_KernelFloat_Random(benchmark::State& state) { RunKernel(state, Random(), false); }
+// Without PreparedMap: the map's own layers (4 KiB pages).
+void BM_KernelUnprepared_Along(benchmark::State& state) { RunKernel(state, Along(), false); }
+void BM_KernelUnprepared_Random(benchmark::State& state) { RunKernel(state, Random(), false); }
 
 // The hit path of the site cache: every site of the batch is in the cache
 // (the second and later passes over the same configurations).
@@ -209,15 +250,23 @@ BENCHMARK(BM_Core_Along)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_KernelCacheHits_Along)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Planner_Direct)->Arg(0)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Planner_Engine)->Arg(0)->Arg(64)->Unit(benchmark::kMillisecond);
+// Exact and float32 side by side, by batch size; the portable float32
+// fallback at one size.
 BENCHMARK(BM_Kernel_Along)
-    ->ArgsProduct({{256, 4096, 100000}, {1, 2}})
+    ->ArgsProduct({{256, 1024, 4096, 100000}, {1, 2}, {0, 1}})
+    ->Args({4096, 0, 1})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_KernelFloat_Along)->ArgsProduct({{100000}, {1, 2}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KernelUnprepared_Along)
+    ->ArgsProduct({{100000}, {1, 2}, {0}})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Core_Random)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Kernel_Random)
-    ->ArgsProduct({{256, 4096, 100000}, {1, 2}})
+    ->ArgsProduct({{256, 1024, 4096, 100000}, {1, 2}, {0, 1}})
+    ->Args({4096, 0, 1})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_KernelFloat_Random)->ArgsProduct({{100000}, {1, 2}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KernelUnprepared_Random)
+    ->ArgsProduct({{100000}, {1, 2}, {0}})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace riskplan

@@ -38,6 +38,7 @@
 #include <string_view>
 #include <vector>
 
+#include "accel/batch_locate.h"
 #include "accel/kernel_weights.h"
 #include "accel/prepared_map.h"
 #include "accel/site_cache.h"
@@ -47,12 +48,6 @@
 namespace riskplan::accel {
 
 class FastRiskFinisher;
-
-// A located configuration: its kernel site and its index in the batch.
-struct LocatedSite {
-  KernelSite site;
-  uint32_t index = 0;
-};
 
 // The instruction set of the kernel's loops; every choice gives the same bits.
 enum class Isa { kAuto = -1, kPortable = 0, kAvx2 = 1, kAvx512 = 2 };

@@ -268,7 +268,9 @@ TEST(KernelWeightsTest, AlignedCopiesOfTheTable) {
         EXPECT_EQ(reinterpret_cast<uintptr_t>(f + v * stride) % 64, 0u);
         for (int u = 0; u < stride; ++u) {
           const double w = u < kernel.Stride() ? kernel.weights[v * kernel.Stride() + u] : 0.0;
-          if (u < kernel.Stride()) ASSERT_EQ(d[v * kernel.Stride() + u], w);
+          if (u < kernel.Stride()) {
+            ASSERT_EQ(d[v * kernel.Stride() + u], w);
+          }
           ASSERT_EQ(f[v * stride + u], u < side ? static_cast<float>(w) : 0.0f);
         }
       }

@@ -63,9 +63,9 @@ constexpr size_t kLocateBlock = 64;
 // configurations: the divisions and floors four configurations at a time
 // (vdivpd and vroundpd round like divsd and floor), the table look-ups one
 // by one, the terrain cells prefetched a pass before they are read (at
-// random positions, and along diagonal legs, the terrain read misses). fmod of an integral heading bin by N is the integer remainder (same
-// sign as the dividend) while the quotient fits in 31 bits, else the
-// library's.
+// random positions, and along diagonal legs, the terrain read misses). fmod of an integral heading
+// bin by N is the integer remainder (same sign as the dividend) while the quotient fits in 31 bits,
+// else the library's.
 __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
                                                 std::span<const Pose> configs,
                                                 std::span<ConfigurationRisk> out,
@@ -127,24 +127,24 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
       // map: a prefetch of a cell outside it is wasted, never wrong).
       alignas(16) int32_t cell_i[4];
       alignas(16) int32_t cell_j[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(cell_i),
-                      _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(_mm256_load_pd(fx + t), zero),
-                                                        last_i)));
-      _mm_store_si128(reinterpret_cast<__m128i*>(cell_j),
-                      _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(_mm256_load_pd(fy + t), zero),
-                                                        last_j)));
+      _mm_store_si128(
+          reinterpret_cast<__m128i*>(cell_i),
+          _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(_mm256_load_pd(fx + t), zero), last_i)));
+      _mm_store_si128(
+          reinterpret_cast<__m128i*>(cell_j),
+          _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(_mm256_load_pd(fy + t), zero), last_j)));
       for (int l = 0; l < 4; ++l) {
-        _mm_prefetch(reinterpret_cast<const char*>(c.terrain + int64_t{cell_j[l]} * c.nx_int +
-                                                   cell_i[l]),
-                     _MM_HINT_T0);
+        _mm_prefetch(
+            reinterpret_cast<const char*>(c.terrain + int64_t{cell_j[l]} * c.nx_int + cell_i[l]),
+            _MM_HINT_T0);
       }
     }
     // Pass 2: inside the map, the terrain, h.
     for (size_t t = 0; t < m4; ++t) {
       const Pose& q = configs[base + std::min(t, m - 1)];
       h[t] = 0.0;
-      defined[t] = std::isfinite(q.z) && std::isfinite(q.theta) && fx[t] >= 0.0 &&
-                   fx[t] < c.nx && fy[t] >= 0.0 && fy[t] < c.ny;
+      defined[t] = std::isfinite(q.z) && std::isfinite(q.theta) && fx[t] >= 0.0 && fx[t] < c.nx &&
+                   fy[t] >= 0.0 && fy[t] < c.ny;
       if (!defined[t]) continue;
       const int i = static_cast<int>(fx[t]);
       const int j = static_cast<int>(fy[t]);
@@ -211,8 +211,7 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
 }  // namespace
 
 void LocateSites(const RiskModel& model, std::span<const Pose> configs,
-                 std::span<ConfigurationRisk> out, std::vector<LocatedSite>* sites,
-                 bool use_avx2) {
+                 std::span<ConfigurationRisk> out, std::vector<LocatedSite>* sites, bool use_avx2) {
 #if defined(__x86_64__)
   if (use_avx2) return LocateAvx2(model, configs, out, sites);
 #endif

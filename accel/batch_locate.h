@@ -25,8 +25,7 @@ struct LocatedSite {
 // `use_avx2` (REQUIRES: the CPU has AVX2) or without.
 // REQUIRES: out.size() == configs.size() <= 2^32.
 void LocateSites(const RiskModel& model, std::span<const Pose> configs,
-                 std::span<ConfigurationRisk> out, std::vector<LocatedSite>* sites,
-                 bool use_avx2);
+                 std::span<ConfigurationRisk> out, std::vector<LocatedSite>* sites, bool use_avx2);
 
 }  // namespace riskplan::accel
 

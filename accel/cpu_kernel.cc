@@ -606,9 +606,8 @@ void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> confi
     Sums(model, sites_, impact_, shelter_);
   }
   for (size_t a = 0; a < sites_.size(); ++a) {
-    const ConfigurationRisk r = float32
-                                    ? finisher_->Finish(sites_[a].site, impact_[a], shelter_[a])
-                                    : model.FromSums(sites_[a].site, impact_[a], shelter_[a]);
+    const ConfigurationRisk r = float32 ? finisher_->Finish(sites_[a].site, impact_[a], shelter_[a])
+                                        : model.FromSums(sites_[a].site, impact_[a], shelter_[a]);
     out[sites_[a].index] = r;
     if (cached) {
       const uint64_t key = SiteCache::KeyOf(session, sites_[a].site);

@@ -59,9 +59,9 @@ void FloatEwmmPortable(const FloatWindow* windows, int side, int weight_stride, 
 // product and addition), then is added into a double lane.
 template <int kBlocks, int kN, bool kShared>
 __attribute__((target("avx512f,fma"))) void FloatEwmmAvx512(const FloatWindow* windows, int side,
-                                                        int weight_stride, int64_t map_stride,
-                                                        double* impact_factor,
-                                                        double* expected_shelter) {
+                                                            int weight_stride, int64_t map_stride,
+                                                            double* impact_factor,
+                                                            double* expected_shelter) {
   constexpr int kZ = kBlocks / 2;
   constexpr bool kY = kBlocks % 2 == 1;
   constexpr int kZs = kZ > 0 ? kZ : 1;
@@ -116,13 +116,11 @@ __attribute__((target("avx512f,fma"))) void FloatEwmmAvx512(const FloatWindow* w
 #pragma GCC unroll 4
       for (int b = 0; b < kZ; ++b) {
         dr[c] = _mm512_add_pd(dr[c], _mm512_cvtps_pd(_mm512_castps512_ps256(fr[c][b])));
-        dr[c] = _mm512_add_pd(
-            dr[c], _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd(
-                       _mm512_castps_pd(fr[c][b]), 1))));
+        dr[c] = _mm512_add_pd(dr[c], _mm512_cvtps_pd(_mm256_castpd_ps(
+                                         _mm512_extractf64x4_pd(_mm512_castps_pd(fr[c][b]), 1))));
         ds[c] = _mm512_add_pd(ds[c], _mm512_cvtps_pd(_mm512_castps512_ps256(fs[c][b])));
-        ds[c] = _mm512_add_pd(
-            ds[c], _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd(
-                       _mm512_castps_pd(fs[c][b]), 1))));
+        ds[c] = _mm512_add_pd(ds[c], _mm512_cvtps_pd(_mm256_castpd_ps(
+                                         _mm512_extractf64x4_pd(_mm512_castps_pd(fs[c][b]), 1))));
       }
       if constexpr (kY) {
         dr[c] = _mm512_add_pd(dr[c], _mm512_cvtps_pd(yr[c]));
@@ -270,9 +268,9 @@ void FastRiskFinisher::PrepareFor(const RiskModel& model) {
   for (int b = 1; b <= t.height_bins(); ++b) {
     const HeightBin& bin = t.bin(b);
     const double energy = bin.fall.energy_j;
-    bins_[b - 1] = Bin{bin.exposed_area_m2,
-                       energy > p.beta_j ? 3.0 * std::log(p.beta_j / energy) : 0.0,
-                       energy > p.beta_j};
+    bins_[b - 1] =
+        Bin{bin.exposed_area_m2, energy > p.beta_j ? 3.0 * std::log(p.beta_j / energy) : 0.0,
+            energy > p.beta_j};
   }
 }
 

@@ -43,8 +43,7 @@ struct FloatWindow {
 // impact_factor[c] and expected_shelter[c] belong to windows[c]. Each window
 // reads side rows of ceil(side / 8) * 8 cells.
 using FloatEwmmFn = void (*)(const FloatWindow* windows, int side, int weight_stride,
-                             int64_t map_stride, double* impact_factor,
-                             double* expected_shelter);
+                             int64_t map_stride, double* impact_factor, double* expected_shelter);
 
 // The instruction set the float32 loops use for `isa` (AVX2 needs FMA too).
 Isa FloatIsa(Isa isa);

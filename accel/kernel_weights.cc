@@ -13,8 +13,7 @@ size_t ElementBytes(WeightFormat format) {
 
 // Elements of every kernel of the table, in (b, k) order. Every kernel's size
 // is a whole number of 64-byte rows, so each starts on a 64-byte boundary.
-size_t TotalElements(const ImpactTable& table, WeightFormat format,
-                     std::vector<size_t>* offsets) {
+size_t TotalElements(const ImpactTable& table, WeightFormat format, std::vector<size_t>* offsets) {
   size_t total = 0;
   for (int b = 1; b <= table.height_bins(); ++b) {
     for (int k = 0; k < table.heading_bins(); ++k) {

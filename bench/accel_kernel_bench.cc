@@ -178,8 +178,7 @@ void RunKernel(benchmark::State& state, const std::vector<Pose>& configs, bool p
   double sink = 0.0;
   for (auto _ : state) {
     for (size_t first = 0; first + batch <= configs.size(); first += batch) {
-      kernel.Evaluate(model, std::span<const Pose>(configs).subspan(warm ? 0 : first, batch),
-                      out);
+      kernel.Evaluate(model, std::span<const Pose>(configs).subspan(warm ? 0 : first, batch), out);
       sink += out[0].risk;
     }
   }
@@ -261,7 +260,9 @@ BENCHMARK(BM_Kernel_Along)
     ->ArgsProduct({{256, 1024, 4096, 100000}, {1, 2}, {0, 1}})
     ->Args({4096, 0, 1})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_KernelWarm_Along)->ArgsProduct({{256, 4096}, {2}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KernelWarm_Along)
+    ->ArgsProduct({{256, 4096}, {2}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_KernelUnprepared_Along)
     ->ArgsProduct({{100000}, {1, 2}, {0}})
     ->Unit(benchmark::kMillisecond);

@@ -3,6 +3,8 @@
 // thousands of random and along-trajectory demo-city configurations, on
 // every instruction set, in any visiting order, with and without the site
 // cache; and its weights cache, bounded and never mixed with exact results.
+#include "accel/float_kernel.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -11,7 +13,6 @@
 #include <vector>
 
 #include "accel/cpu_kernel.h"
-#include "accel/float_kernel.h"
 #include "accel/kernel_weights.h"
 #include "accel/risk_engine.h"
 #include "accel_test_util.h"
@@ -116,10 +117,9 @@ Errors ExpectWithinBound(const RiskModel& model, CpuRiskKernel& kernel,
                     impact <= kSumBound && shelter <= kSumBound;
     if (!ok) {
       ++bad;
-      ADD_FAILURE() << "configuration " << n << " (" << configs[n].x << ", " << configs[n].y
-                    << ", " << configs[n].z << ", " << configs[n].theta << "): risk " << got.risk
-                    << " vs " << want.risk << " (" << risk << "), I " << impact << ", S~ "
-                    << shelter;
+      ADD_FAILURE() << "configuration " << n << " (" << configs[n].x << ", " << configs[n].y << ", "
+                    << configs[n].z << ", " << configs[n].theta << "): risk " << got.risk << " vs "
+                    << want.risk << " (" << risk << "), I " << impact << ", S~ " << shelter;
     }
     if (want.defined) ++e.compared;
     e.risk = std::max(e.risk, risk);
@@ -159,8 +159,8 @@ TEST_P(Float32PathTest, WithinTheSpecBoundOfTheExactPath) {
     const Errors e = ExpectWithinBound(model, kernel, configs, static_cast<size_t>(batch));
     EXPECT_GT(e.compared, configs.size() * 9 / 10) << name;
     std::printf("isa %d, %s, batch %d%s: largest relative error M %.3g, I %.3g, S~ %.3g\n",
-                static_cast<int>(isa), name, batch, cached ? ", site cache" : "", e.risk,
-                e.impact, e.shelter);
+                static_cast<int>(isa), name, batch, cached ? ", site cache" : "", e.risk, e.impact,
+                e.shelter);
   }
   if (cached) {
     // Again, now from the site cache: the same bound.

@@ -96,7 +96,8 @@ TEST(Float32KernelTest, FlagIsListedAndChecked) {
   const std::string help = RunCommand(binary + " --help", &status);
   EXPECT_THAT(help, HasSubstr("-cpu_kernel"));
   EXPECT_THAT(help, HasSubstr("float32"));
-  const std::string bad = RunCommand(binary + " --listen=127.0.0.1:0 --cpu_kernel=float16", &status);
+  const std::string bad =
+      RunCommand(binary + " --listen=127.0.0.1:0 --cpu_kernel=float16", &status);
   EXPECT_THAT(bad, HasSubstr("--cpu_kernel=float16: must be exact or float32"));
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 2);

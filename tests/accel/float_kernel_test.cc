@@ -205,6 +205,31 @@ TEST(Float32PathTest, AwkwardAndMixedConfigurations) {
   }
 }
 
+TEST(Float32PathTest, SameBitsWhateverTheBatchAndGrouping) {
+  // A window's sums do not depend on the windows computed beside it (groups
+  // of 1, 2 or 4, sorted or not), so a float32 plan is reproducible on the
+  // same instruction set.
+  const RiskModel& model = *SmallCity();
+  const std::vector<Pose> configs = MixedConfigs(model, 3000, 31);
+  for (Isa isa : {Isa::kPortable, Isa::kAvx2, Isa::kAvx512}) {
+    if (static_cast<int>(isa) > static_cast<int>(CpuRiskKernel::BestIsa())) continue;
+    PreparedMapCache maps(size_t{1} << 30);
+    KernelWeightsCache weights(size_t{1} << 30);
+    CpuKernelOptions options;
+    options.isa = isa;
+    options.precision = KernelPrecision::kFloat32;
+    options.sort_min_configs = 64;
+    CpuRiskKernel kernel(&maps, nullptr, options, &weights);
+    std::vector<ConfigurationRisk> whole(configs.size());
+    kernel.Evaluate(model, configs, whole);
+    for (size_t n = 0; n < configs.size(); n += 7) {
+      ConfigurationRisk one;
+      kernel.Evaluate(model, std::span<const Pose>(&configs[n], 1), std::span(&one, 1));
+      ASSERT_TRUE(SameRisk(one, whole[n])) << "isa " << static_cast<int>(isa) << ", " << n;
+    }
+  }
+}
+
 TEST(Float32PathTest, ExactAndFloat32NeverShareSiteCacheEntries) {
   const RiskModel& model = *SmallCity();
   PreparedMapCache maps(size_t{1} << 30);

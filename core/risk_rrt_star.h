@@ -18,7 +18,16 @@
 //   negative), no edge is evaluated towards a node, and no node is added,
 //   whose risk already reaches the best solution's;
 // - path-biased sampling: a share of the samples is drawn around the current
-//   best trajectory, while uniform samples keep the search complete.
+//   best trajectory, while uniform samples keep the search complete;
+// - a guide route: before the first iteration, the cheapest route over a
+//   coarse grid of configuration risks (core/risk_guide.h) is added to the
+//   tree through the ordinary extension, so that the first solution already
+//   takes the right way around dense areas;
+// - refinement: between iterations, random local edits of the best
+//   trajectory (core/path_refiner.h), accepted only when the exact risk of the
+//   new pieces is lower, are written into the tree.
+// Every reported risk stays the sum of exact piece risks: bit for bit what
+// EvaluateTrajectory gives for the reported waypoints.
 #ifndef RISKPLAN_CORE_RISK_RRT_STAR_H_
 #define RISKPLAN_CORE_RISK_RRT_STAR_H_
 

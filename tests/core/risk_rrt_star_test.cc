@@ -5,6 +5,7 @@
 
 #include "core/trajectory.h"
 #include "gtest/gtest.h"
+#include "tests/core/obstacle_test_maps.h"
 #include "tests/core/planner_test_util.h"
 
 namespace riskplan {
@@ -191,6 +192,26 @@ TEST_F(RiskRrtStarScenarioTest, RefinementAndGuideOffStillPlanDeterministically)
   Outcome e = RunPlanner(model_, sc.start, sc.goal, 800, 5, {{"batch_chunk", 0.0}});
   ASSERT_TRUE(d.result.ok() && e.result.ok());
   EXPECT_EQ(d.result->best->risk, e.result->best->risk);
+}
+
+// Maps whose no-fly areas are walls about one guide cell thick or narrow
+// corridors. The coarse grid closes only cells whose centre cannot be flown,
+// so it may miss a wall; the guide's waypoints that do not connect are then
+// skipped and the tree finds the way as without it. Whatever the guide does,
+// every improvement is exact and admissible.
+TEST(RiskRrtStarObstacleMapTest, ThinWallsAndCorridorsPlanExactlyWithTheGuide) {
+  for (const testing_maps::KnownAnswerMap& m :
+       {testing_maps::Corridor(), testing_maps::WallWithGap(),
+        testing_maps::GoalBehindObstacle()}) {
+    Outcome out = RunPlanner(m.model, m.start, m.goal, 1500, 2);
+    ASSERT_TRUE(out.result.ok()) << out.result.status();
+    ASSERT_TRUE(out.result->best.has_value()) << m.model->map().name();
+    for (const PlanImprovement& i : out.improvements) {
+      bool admissible = false;
+      EXPECT_EQ(i.risk, ReEvaluate(*m.model, i.waypoints, &admissible));
+      EXPECT_TRUE(admissible);
+    }
+  }
 }
 
 TEST_F(RiskRrtStarScenarioTest, InadmissibleStartOrGoalIsAClearError) {

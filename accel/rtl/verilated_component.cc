@@ -110,7 +110,7 @@ class VerilatedBus final : public SimulatedComponentBus {
 
 const std::vector<RtlConfig>& VerilatedConfigs() {
   // Must match the parameters given to verilate() in accel/rtl/CMakeLists.txt
-  // (tests/accel/rtl_component_test.cc reads them back from CAPS and LIMITS).
+  // (tests/rtl/rtl_component_test.cc reads them back from CAPS and LIMITS).
   static const std::vector<RtlConfig>* const configs = new std::vector<RtlConfig>{
       {"l8-board", 8, NumberFormat::Board(), 4, 63, 100'000'000,
        "8 lanes, w32m32a80, 4 kernel slots of 63 x 63: the DE10-Nano build"},

@@ -6,7 +6,7 @@
 // Cycle count of a job (the CYCLES register): one cut cell per clock through
 // the stream (density and shelter side by side) plus kPipelineCycles to drain
 // the lanes' pipeline, which is what the RTL (accel/rtl/rp_ewmm.sv) takes when
-// its stream sink is fed a cell every clock (tests/accel/rtl_component_test.cc
+// its stream sink is fed a cell every clock (tests/rtl/rtl_component_test.cc
 // checks the two agree); 0 for an empty cut. Kernel writes are not counted
 // (they go through the CSR slave, between jobs).
 //

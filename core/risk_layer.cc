@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <thread>
 
 #include "absl/strings/str_format.h"
@@ -15,21 +16,33 @@ void ComputeRows(const RiskModel& model, const RiskLayerOptions& options, const 
                  int row_begin, int row_end, std::vector<double>* risk) {
   const RiskMap& map = model.map();
   const int heading_bins = model.table().heading_bins();
+  const bool max_over_headings = std::isnan(options.heading_rad);
   for (int r = row_begin; r < row_end; ++r) {
-    const int j = r * options.stride;
+    const double y = layer.centre_y(r);
     for (int c = 0; c < layer.nx; ++c) {
-      const int i = c * options.stride;
-      const double x = map.x0() + (i + 0.5) * map.res();
-      const double y = map.y0() + (j + 0.5) * map.res();
-      const double z = static_cast<double>(map.terrain(i, j)) + options.height_agl_m;
-      double m = 0.0;
-      if (std::isnan(options.heading_rad)) {
-        for (int k = 0; k < heading_bins; ++k) {
-          m = std::max(m, model.Evaluate(Pose{x, y, z, k * kTwoPi / heading_bins}).risk);
+      const double x = layer.centre_x(c);
+      // The terrain of the cell the model itself reads (spec step 1), so that
+      // h is height_agl_m even where a centre falls on a cell corner (even
+      // strides).
+      int i = 0;
+      int j = 0;
+      double m = std::nan("");
+      if (map.CellOf(x, y, &i, &j)) {
+        const double z = static_cast<double>(map.terrain(i, j)) + options.height_agl_m;
+        if (max_over_headings) {
+          m = -std::numeric_limits<double>::infinity();
+          for (int k = 0; k < heading_bins; ++k) {
+            const ConfigurationRisk cr = model.Evaluate(Pose{x, y, z, k * kTwoPi / heading_bins});
+            if (!cr.defined) {
+              m = std::nan("");
+              break;
+            }
+            m = std::max(m, cr.risk);
+          }
+        } else {
+          const ConfigurationRisk cr = model.Evaluate(Pose{x, y, z, options.heading_rad});
+          if (cr.defined) m = cr.risk;
         }
-      } else {
-        const ConfigurationRisk cr = model.Evaluate(Pose{x, y, z, options.heading_rad});
-        m = cr.defined ? cr.risk : std::nan("");
       }
       (*risk)[static_cast<size_t>(r) * layer.nx + c] = m;
     }
@@ -54,9 +67,16 @@ absl::StatusOr<RiskLayer> ComputeRiskLayer(const RiskModel& model,
                         options.threads, options.stride));
   }
   const RiskMap& map = model.map();
+  if (options.stride > std::min(map.nx(), map.ny())) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("risk layer: stride %d is larger than the map of %d x %d cells",
+                        options.stride, map.nx(), map.ny()));
+  }
   RiskLayer layer;
-  layer.nx = (map.nx() + options.stride - 1) / options.stride;
-  layer.ny = (map.ny() + options.stride - 1) / options.stride;
+  // Whole blocks only (see risk_layer.h): a partial block would be a cell
+  // reaching past the map, or one smaller than the raster says.
+  layer.nx = map.nx() / options.stride;
+  layer.ny = map.ny() / options.stride;
   layer.x0 = map.x0();
   layer.y0 = map.y0();
   layer.res_m = map.res() * options.stride;

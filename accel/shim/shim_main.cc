@@ -5,18 +5,27 @@
 //   riskplan-fpga-shim --listen=HOST:PORT --device=model [--format=board]
 //   riskplan-fpga-shim --listen=0.0.0.0:7070 --device=mmio --mmio_device=/dev/mem
 //                      --mmio_base=0xff200000
+//   riskplan-fpga-shim --device=verilator [--rtl_config=l8-board] [--report_clock_hz=50e6]
 //
 // Once it listens it prints one line, `riskplan-fpga-shim listening on
 // HOST:PORT`, with the real port (port 0 picks one). SIGTERM or SIGINT stop
-// it.
+// it; it then reports on stderr what the device did: the EVALs and sites
+// served, the component's job cycles (START to DONE, as in every EVAL reply)
+// and, for the verilator backend, every simulated clock of the bus (the jobs
+// and all CSR traffic: kernel loads, lane set-up, status polls, result
+// reads), each as a time at the reported clock (docs/rtl.md, "Cycles").
 #include <signal.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <iostream>
 #include <memory>
+#include <span>
 #include <string>
+#include <utility>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
@@ -25,6 +34,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "accel/shim/component_model.h"
+#include "accel/shim/component_regs.h"
 #include "accel/shim/device.h"
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/register_bus.h"
@@ -48,13 +58,45 @@ ABSL_FLAG(int, model_lanes, 8, "mmio with --mmio_device=model: lanes of the comp
 ABSL_FLAG(std::string, rtl_config, "l8-board",
           "verilator: the verilated configuration of the RTL (l8-board: 8 lanes, w32m32a80; "
           "l16-precise: 16 lanes, w48m48a128)");
-ABSL_FLAG(int, lanes, 0, "mmio, verilator: use at most this many of the component's lanes (0: all)");
+ABSL_FLAG(int, lanes, 0,
+          "mmio, verilator: use at most this many of the component's lanes (0: all)");
+ABSL_FLAG(double, report_clock_hz, 0,
+          "mmio, verilator: the clock, in Hz, at which the shim reports the board's time (in "
+          "HELLO's clock_hz, and in the report when it stops), e.g. 50e6; 0: the component's "
+          "CLOCK_HZ register (100 MHz in the verilated builds). The model backend counts no "
+          "cycles and ignores it");
 ABSL_FLAG(int, store_mb, 1024, "room for blobs (maps and kernel tables, quantised), MiB");
 ABSL_FLAG(int, max_sites, 65536, "largest EVAL, in sites");
 ABSL_FLAG(int, idle_timeout_s, 600, "close connections idle this long, seconds");
 
 namespace riskplan::accel {
 namespace {
+
+// A device whose DeviceInfo reports `clock_hz` (--report_clock_hz) in place
+// of the component's CLOCK_HZ; the cycles are the component's.
+class ReportedClockDevice final : public EwmmDevice {
+ public:
+  ReportedClockDevice(std::unique_ptr<EwmmDevice> device, uint64_t clock_hz)
+      : device_(std::move(device)), info_(device_->info()) {
+    info_.clock_hz = clock_hz;
+  }
+  const DeviceInfo& info() const override { return info_; }
+  absl::Status Evaluate(const QuantizedMap& map, const QuantizedKernelTable& kernels,
+                        std::span<const DeviceSite> sites, std::span<Accumulator> impact,
+                        std::span<Accumulator> shelter, uint64_t* cycles) override {
+    return device_->Evaluate(map, kernels, sites, impact, shelter, cycles);
+  }
+
+ private:
+  const std::unique_ptr<EwmmDevice> device_;
+  DeviceInfo info_;
+};
+
+// The device, and (verilator) the count of every clock its bus simulated.
+struct OpenedDevice {
+  std::unique_ptr<EwmmDevice> device;
+  std::function<uint64_t()> bus_clocks;  // null: the backend cannot count them
+};
 
 MmioOptions MmioOptionsFromFlags(const std::string& backend) {
   MmioOptions options;
@@ -63,11 +105,11 @@ MmioOptions MmioOptionsFromFlags(const std::string& backend) {
   return options;
 }
 
-absl::StatusOr<std::unique_ptr<EwmmDevice>> MakeDevice() {
+absl::StatusOr<OpenedDevice> MakeDevice() {
   const std::string kind = absl::GetFlag(FLAGS_device);
   absl::StatusOr<NumberFormat> format = NumberFormat::Parse(absl::GetFlag(FLAGS_format));
   if (!format.ok()) return format.status();
-  if (kind == "model") return std::unique_ptr<EwmmDevice>(new ModelDevice(*format));
+  if (kind == "model") return OpenedDevice{std::make_unique<ModelDevice>(*format), nullptr};
   if (kind == "mmio") {
     std::unique_ptr<RegisterBus> bus;
     const std::string path = absl::GetFlag(FLAGS_mmio_device);
@@ -82,24 +124,26 @@ absl::StatusOr<std::unique_ptr<EwmmDevice>> MakeDevice() {
         return absl::InvalidArgumentError("--mmio_base is not a hexadecimal address");
       }
       absl::StatusOr<std::unique_ptr<MappedRegisterBus>> mapped =
-          MappedRegisterBus::Open(path, base, 0x1000);
+          MappedRegisterBus::Open(path, base, regs::kSpanBytes);
       if (!mapped.ok()) return mapped.status();
       bus = *std::move(mapped);
     }
     absl::StatusOr<std::unique_ptr<MmioDevice>> device =
         MmioDevice::Open(std::move(bus), MmioOptionsFromFlags("mmio"));
     if (!device.ok()) return device.status();
-    return std::unique_ptr<EwmmDevice>(*std::move(device));
+    return OpenedDevice{*std::move(device), nullptr};
   }
   if (kind == "verilator") {
 #ifdef RISKPLAN_HAVE_VERILATOR
     absl::StatusOr<std::unique_ptr<SimulatedComponentBus>> bus =
         OpenVerilatedComponent(absl::GetFlag(FLAGS_rtl_config));
     if (!bus.ok()) return bus.status();
+    // Owned by the device from here on; read only while no EVAL runs.
+    const SimulatedComponentBus* simulated = bus->get();
     absl::StatusOr<std::unique_ptr<MmioDevice>> device =
         MmioDevice::Open(*std::move(bus), MmioOptionsFromFlags("verilator"));
     if (!device.ok()) return device.status();
-    return std::unique_ptr<EwmmDevice>(*std::move(device));
+    return OpenedDevice{*std::move(device), [simulated] { return simulated->cycles(); }};
 #else
     return absl::UnimplementedError(
         "--device=verilator: this build has no RTL backend (Verilator was not found when it "
@@ -117,17 +161,35 @@ int Main() {
   sigaddset(&stop, SIGINT);
   pthread_sigmask(SIG_BLOCK, &stop, nullptr);
 
-  absl::StatusOr<std::unique_ptr<EwmmDevice>> device = MakeDevice();
-  if (!device.ok()) {
-    std::cerr << "riskplan-fpga-shim: " << device.status().message() << "\n";
+  const double report_clock_hz = absl::GetFlag(FLAGS_report_clock_hz);
+  if (!std::isfinite(report_clock_hz) || report_clock_hz < 0 || report_clock_hz > 1e12) {
+    std::cerr << "riskplan-fpga-shim: --report_clock_hz must be a clock in Hz (0: the "
+                 "component's CLOCK_HZ)\n";
     return 2;
+  }
+  absl::StatusOr<OpenedDevice> opened = MakeDevice();
+  if (!opened.ok()) {
+    std::cerr << "riskplan-fpga-shim: " << opened.status().message() << "\n";
+    return 2;
+  }
+  std::unique_ptr<EwmmDevice> device = std::move(opened->device);
+  const uint64_t wanted_clock_hz = static_cast<uint64_t>(std::llround(report_clock_hz));
+  if (wanted_clock_hz != 0 && device->info().backend == "model") {
+    std::cerr << "riskplan-fpga-shim: --report_clock_hz: the model backend counts no cycles; "
+                 "ignored\n";
+  } else if (wanted_clock_hz != 0) {
+    device = std::make_unique<ReportedClockDevice>(std::move(device), wanted_clock_hz);
   }
   ShimServerOptions options;
   options.limits.store_bytes = uint64_t(absl::GetFlag(FLAGS_store_mb)) << 20;
   options.limits.max_sites_per_eval = static_cast<uint32_t>(absl::GetFlag(FLAGS_max_sites));
   options.idle_timeout = absl::Seconds(absl::GetFlag(FLAGS_idle_timeout_s));
-  const DeviceInfo info = (*device)->info();
-  ShimServer server(*std::move(device), options);
+  const DeviceInfo info = device->info();
+  const std::function<uint64_t()> bus_clocks = opened->bus_clocks;
+  // The clocks of the reset and of reading the component's identity are not
+  // the EVALs'.
+  const uint64_t bus_clocks_before = bus_clocks ? bus_clocks() : 0;
+  ShimServer server(std::move(device), options);
   absl::StatusOr<std::string> bound = server.Start(absl::GetFlag(FLAGS_listen));
   if (!bound.ok()) {
     std::cerr << "riskplan-fpga-shim: " << bound.status().message() << "\n";
@@ -135,21 +197,33 @@ int Main() {
   }
   std::cerr << "riskplan-fpga-shim: device " << info.backend << " (" << info.device << ", "
             << info.firmware << "), format " << info.format.Name() << ", " << info.lanes
-            << " lane(s)\n";
+            << " lane(s)";
+  if (info.clock_hz > 0) {
+    std::cerr << ", times reported at " << static_cast<double>(info.clock_hz) / 1e6 << " MHz";
+  }
+  std::cerr << "\n";
   std::cout << "riskplan-fpga-shim listening on " << *bound << std::endl;
   int signal = 0;
   sigwait(&stop, &signal);
   server.Stop();
-  // What the device did, and what it would take at its clock.
+  // What the device did, and what it would take at the reported clock.
   const ShimContext& served = server.context();
   const uint64_t sites = served.sites.load(), cycles = served.device_cycles.load();
+  const auto report = [&](const char* what, uint64_t count) {
+    std::cerr << "; " << what << " " << count << " cycles = "
+              << 1e3 * static_cast<double>(count) / static_cast<double>(info.clock_hz) << " ms at "
+              << static_cast<double>(info.clock_hz) / 1e6 << " MHz ("
+              << static_cast<double>(count) / static_cast<double>(std::max<uint64_t>(sites, 1))
+              << " per site)";
+  };
   std::cerr << "riskplan-fpga-shim: served " << served.evals.load() << " EVAL(s), " << sites
             << " site(s)";
   if (cycles > 0 && info.clock_hz > 0) {
-    std::cerr << "; device " << cycles << " cycles = "
-              << 1e3 * static_cast<double>(cycles) / static_cast<double>(info.clock_hz)
-              << " ms at " << static_cast<double>(info.clock_hz) / 1e6 << " MHz ("
-              << static_cast<double>(cycles) / static_cast<double>(sites) << " cycles per site)";
+    report("jobs (START to DONE)", cycles);
+    if (bus_clocks) {
+      report("bus (every simulated clock, CSR accesses included)",
+             bus_clocks() - bus_clocks_before);
+    }
   }
   std::cerr << "\n";
   return 0;

@@ -1,0 +1,165 @@
+// What riskplan-fpga-shim --device=verilator reports: HELLO's clock and the
+// report it prints when it stops (the component's job cycles and every
+// simulated clock of the bus, each as a time at the reported clock), with
+// the component's CLOCK_HZ and with --report_clock_hz.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "absl/strings/numbers.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
+#include "accel/risk_engine.h"
+#include "bench/demo_city_configs.h"
+#include "gtest/gtest.h"
+#include "tests/accel/accel_test_util.h"
+
+namespace riskplan::accel {
+namespace {
+
+struct ShimRun {
+  uint64_t hello_clock_hz = 0;
+  int exit_status = -1;
+  std::string report;  // the shim's stderr
+};
+
+// Starts the shim with `args`, evaluates `configs` through it (every batch
+// on the board), stops it with SIGTERM and returns what it said. With
+// `expect_up` false the shim is expected to refuse its flags and exit.
+ShimRun RunShim(const std::vector<std::string>& args, const std::vector<Pose>& configs,
+                bool expect_up = true) {
+  ShimRun run;
+  char err_path[] = "/tmp/riskplan-shim-report-XXXXXX";
+  const int err_fd = mkstemp(err_path);
+  int out[2];
+  if (err_fd < 0 || pipe2(out, O_CLOEXEC) != 0) {
+    ADD_FAILURE() << "no temporary file or pipe";
+    return run;
+  }
+  const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-fpga-shim";
+  std::vector<std::string> argv_text = {binary, "--listen=127.0.0.1:0"};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    dup2(out[1], STDOUT_FILENO);
+    dup2(err_fd, STDERR_FILENO);
+    execv(binary.c_str(), argv.data());
+    _exit(127);
+  }
+  close(out[1]);
+  close(err_fd);
+  std::string text;
+  const absl::Time deadline = absl::Now() + absl::Seconds(20);
+  while (text.find('\n') == std::string::npos && absl::Now() < deadline) {
+    pollfd p{out[0], POLLIN, 0};
+    if (poll(&p, 1, 100) <= 0) continue;
+    char buf[256];
+    const ssize_t got = read(out[0], buf, sizeof(buf));
+    if (got <= 0) break;
+    text.append(buf, static_cast<size_t>(got));
+  }
+  close(out[0]);
+  const std::string marker = "riskplan-fpga-shim listening on ";
+  const size_t at = text.find(marker), end = text.find('\n');
+  if (at != std::string::npos && end != std::string::npos) {
+    RiskEngineOptions options;
+    options.cpu_workers = 0;
+    options.caller_runs = false;
+    options.fpga_shims = {text.substr(at + marker.size(), end - at - marker.size())};
+    auto engine = RiskEngine::Create(options);
+    EXPECT_TRUE(engine.ok());
+    if (engine.ok()) {
+      EXPECT_TRUE(
+          testing::WaitFor([&] { return (*engine)->Stats().fpga[0].state == WorkerState::kUp; }));
+      std::unique_ptr<RiskEvaluator> evaluator = (*engine)->NewEvaluator();
+      std::vector<ConfigurationRisk> risks(configs.size());
+      EXPECT_TRUE(evaluator->EvaluateBatch(*testing::SmallCity(), configs, risks).ok());
+      run.hello_clock_hz = (*engine)->Stats().fpga[0].hello.clock_hz;
+    }
+  } else if (expect_up) {
+    ADD_FAILURE() << "riskplan-fpga-shim did not come up: '" << text << "'";
+  }
+  kill(pid, SIGTERM);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  run.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_path);
+  std::stringstream all;
+  all << in.rdbuf();
+  run.report = all.str();
+  unlink(err_path);
+  return run;
+}
+
+// The count after `label` in the report ("<label> N cycles = ...").
+uint64_t CountAfter(const std::string& report, const std::string& label) {
+  const size_t at = report.find(label + " ");
+  if (at == std::string::npos) return 0;
+  const size_t start = at + label.size() + 1;
+  uint64_t count = 0;
+  if (!absl::SimpleAtoi(report.substr(start, report.find(' ', start) - start), &count)) return 0;
+  return count;
+}
+
+std::vector<Pose> Leg() {
+  // 240 samples 5 m apart, 100 m above ground, across the small city.
+  std::vector<Pose> configs;
+  for (int s = 0; s < 240; ++s) {
+    configs.push_back(
+        bench::At100mAgl(*testing::SmallCity(), 600.0 + 5.0 * s, 900.0 + 3.0 * s, 0.54));
+  }
+  return configs;
+}
+
+constexpr char kJobs[] = "jobs (START to DONE)";
+constexpr char kBus[] = "bus (every simulated clock, CSR accesses included)";
+
+TEST(ShimReportTest, ReportsJobAndBusCyclesAtTheComponentsClock) {
+  const ShimRun run = RunShim({"--device=verilator"}, Leg());
+  EXPECT_EQ(run.exit_status, 0) << run.report;
+  EXPECT_EQ(run.hello_clock_hz, 100'000'000u);
+  const uint64_t jobs = CountAfter(run.report, kJobs), bus = CountAfter(run.report, kBus);
+  EXPECT_GT(jobs, 0u) << run.report;
+  // The bus's clocks hold the jobs' and the CSR traffic around them.
+  EXPECT_GT(bus, jobs) << run.report;
+  EXPECT_NE(run.report.find("times reported at 100 MHz"), std::string::npos) << run.report;
+  EXPECT_NE(run.report.find(" ms at 100 MHz"), std::string::npos) << run.report;
+  std::cout << run.report;
+}
+
+TEST(ShimReportTest, ReportClockHzSetsTheClockOfHelloAndTheReport) {
+  const ShimRun run = RunShim({"--device=verilator", "--report_clock_hz=50e6"}, Leg());
+  EXPECT_EQ(run.exit_status, 0) << run.report;
+  EXPECT_EQ(run.hello_clock_hz, 50'000'000u);
+  const uint64_t jobs = CountAfter(run.report, kJobs);
+  ASSERT_GT(jobs, 0u) << run.report;
+  // "<jobs> cycles = <jobs / 50e3> ms at 50 MHz".
+  std::ostringstream want;
+  want << kJobs << " " << jobs << " cycles = " << 1e3 * static_cast<double>(jobs) / 50e6
+       << " ms at 50 MHz";
+  EXPECT_NE(run.report.find(want.str()), std::string::npos) << run.report;
+  EXPECT_GT(CountAfter(run.report, kBus), jobs) << run.report;
+}
+
+TEST(ShimReportTest, RefusesAClockThatIsNotOne) {
+  const ShimRun run = RunShim({"--device=verilator", "--report_clock_hz=-1"}, {}, false);
+  EXPECT_EQ(run.exit_status, 2);
+  EXPECT_NE(run.report.find("--report_clock_hz"), std::string::npos) << run.report;
+}
+
+}  // namespace
+}  // namespace riskplan::accel

@@ -49,6 +49,12 @@ absl::Status WriteHeatMapPng(const RiskLayer& layer, const std::string& path) {
     for (int c = 0; c < layer.nx; ++c) {
       const double m = layer.risk[static_cast<size_t>(r) * layer.nx + c];
       png_byte* px = &rgb[(static_cast<size_t>(row) * layer.nx + c) * 3];
+      if (std::isnan(m)) {
+        px[0] = 128;
+        px[1] = 128;
+        px[2] = 128;
+        continue;
+      }
       if (!(m > 0.0)) {
         px[0] = 10;
         px[1] = 20;
@@ -83,6 +89,43 @@ absl::Status WriteHeatMapPng(const RiskLayer& layer, const std::string& path) {
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::string> LocalAzimuthalEquidistantWkt(const GeoReference& geo,
+                                                         const std::string& map_name, double x0_m,
+                                                         double y0_m) {
+  const double lat = geo.origin_lat_deg;
+  const double lon = geo.origin_lon_deg;
+  if (!(lat >= -90.0 && lat <= 90.0) || !(lon >= -180.0 && lon <= 180.0) || !std::isfinite(x0_m) ||
+      !std::isfinite(y0_m)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "geo-reference: origin (%.9g, %.9g) deg must have a latitude in [-90, 90] and a longitude "
+        "in [-180, 180]",
+        lat, lon));
+  }
+  // %.17g: every double round-trips, so the false origin is exactly the .asc's
+  // frame. Map names are [a-z0-9._-], safe inside a WKT string.
+  return absl::StrFormat(
+      "PROJCS[\"riskplan_%s_local_AEQD\","
+      "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\","
+      "SPHEROID[\"WGS_1984\",6378137.0,298.257223563]],"
+      "PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]],"
+      "PROJECTION[\"Azimuthal_Equidistant\"],"
+      "PARAMETER[\"False_Easting\",%.17g],"
+      "PARAMETER[\"False_Northing\",%.17g],"
+      "PARAMETER[\"Central_Meridian\",%.17g],"
+      "PARAMETER[\"Latitude_Of_Origin\",%.17g],"
+      "UNIT[\"Meter\",1.0]]",
+      map_name, x0_m, y0_m, lon, lat);
+}
+
+absl::Status WriteTextFile(const std::string& text, const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
+  if (f == nullptr) return absl::InternalError(absl::StrFormat("cannot write '%s'", path));
+  if (std::fwrite(text.data(), 1, text.size(), f.get()) != text.size() || std::ferror(f.get())) {
+    return absl::InternalError(absl::StrFormat("error writing '%s'", path));
+  }
   return absl::OkStatus();
 }
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,7 +53,9 @@ ABSL_FLAG(std::string, heading_deg, "0",
           "risk-layer: heading in degrees counter-clockwise from east, or 'max' for the maximum "
           "over all heading bins");
 ABSL_FLAG(int, threads, 1, "risk-layer: worker threads");
-ABSL_FLAG(int, stride, 1, "risk-layer: compute every stride-th cell in each direction");
+ABSL_FLAG(int, stride, 1,
+          "risk-layer: layer cell side in map cells; each value is M at the centre of its "
+          "stride x stride block, and a partial block at the east or north edge is left out");
 
 namespace riskplan {
 namespace {
@@ -65,7 +68,8 @@ constexpr char kUsage[] =
     "  write-map  write the built-in demo-city as a map bundle (--out=DIR)\n"
     "  info       describe a map\n"
     "  risk-layer configuration risk of every cell at a height above ground, as a PNG\n"
-    "             heat map (PREFIX.png) and an ESRI ASCII grid (PREFIX.asc)\n"
+    "             heat map (PREFIX.png) and an ESRI ASCII grid (PREFIX.asc), plus its\n"
+    "             projection (PREFIX.prj) when the map has a geo-reference\n"
     "\n"
     "Examples:\n"
     "  riskplan-tool evaluate --waypoints='1000,1000,250,0; 7000,7000,250,1.57'\n"
@@ -280,22 +284,56 @@ int RiskLayerCommand() {
   if (!map.ok()) return Fail(map.status());
   auto model = RiskModel::Create(*map, *params);
   if (!model.ok()) return Fail(model.status());
+  // The .prj is checked before the long computation, so a bad geo-reference
+  // costs nothing.
+  const std::optional<GeoReference>& geo = (*map)->header().geo;
+  std::string wkt;
+  if (geo.has_value()) {
+    auto text = LocalAzimuthalEquidistantWkt(*geo, (*map)->name(), (*map)->x0(), (*map)->y0());
+    if (!text.ok()) return Fail(text.status());
+    wkt = *std::move(text);
+  }
   const absl::Time start = absl::Now();
   auto layer = ComputeRiskLayer(**model, options);
   if (!layer.ok()) return Fail(layer.status());
   const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
   if (absl::Status s = WriteHeatMapPng(*layer, out + ".png"); !s.ok()) return Fail(s);
   if (absl::Status s = WriteAsciiGrid(*layer, out + ".asc"); !s.ok()) return Fail(s);
+  const std::string prj = out + ".prj";
+  bool removed_stale_prj = false;
+  if (geo.has_value()) {
+    if (absl::Status s = WriteTextFile(wkt, prj); !s.ok()) return Fail(s);
+  } else {
+    // A .prj left by an earlier run would place this .asc wrongly in a GIS.
+    removed_stale_prj = std::remove(prj.c_str()) == 0;
+  }
   const int64_t cells = static_cast<int64_t>(layer->nx) * layer->ny;
-  std::printf("risk layer of %s: %d x %d cells at %.0f m AGL, heading %s\n", (*map)->name().c_str(),
-              layer->nx, layer->ny, options.height_agl_m,
+  std::printf("risk layer of %s: %d x %d cells of %g m at %.0f m AGL, heading %s\n",
+              (*map)->name().c_str(), layer->nx, layer->ny, layer->res_m, options.height_agl_m,
               heading == "max" ? "max over bins" : (heading + " deg").c_str());
+  if (layer->nx * options.stride != (*map)->nx() || layer->ny * options.stride != (*map)->ny()) {
+    std::printf("stride %d leaves out the last %d column(s) and %d row(s) of the map\n",
+                options.stride, (*map)->nx() - layer->nx * options.stride,
+                (*map)->ny() - layer->ny * options.stride);
+  }
   std::printf(
       "computed %lld configuration risks in %.3f s on %d thread(s): %.0f cells/s, "
       "%.0f risks/s per thread\n",
       static_cast<long long>(layer->evaluations), seconds, options.threads, cells / seconds,
       layer->evaluations / seconds / options.threads);
-  std::printf("wrote %s.png and %s.asc\n", out.c_str(), out.c_str());
+  if (geo.has_value()) {
+    std::printf(
+        "wrote %s.png, %s.asc and %s (azimuthal equidistant on WGS84 centred at "
+        "%.9g, %.9g deg = map point (%g, %g) m; map crs '%s')\n",
+        out.c_str(), out.c_str(), prj.c_str(), geo->origin_lat_deg, geo->origin_lon_deg,
+        (*map)->x0(), (*map)->y0(), geo->crs.c_str());
+  } else {
+    std::printf(
+        "wrote %s.png and %s.asc; no .prj: the map has no geo-reference, so the grid is "
+        "in the map's local metres only%s\n",
+        out.c_str(), out.c_str(),
+        removed_stale_prj ? (" (removed a stale " + prj + ")").c_str() : "");
+  }
   return 0;
 }
 

@@ -160,23 +160,32 @@ absl::StatusOr<QuantizedKernelTable> QuantizeKernelsBlob(absl::string_view blob,
 
 std::shared_ptr<const Blob> BlobCache::Get(const std::shared_ptr<const void>& owner,
                                            const std::function<Blob()>& build) {
-  const auto find = [&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) -> std::shared_ptr<const Blob> {
+  // True with *hit set (null for a refused owner) when `owner` is known.
+  const auto find = [&](std::shared_ptr<const Blob>* hit) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     for (auto it = entries_.begin(); it != entries_.end(); ++it) {
       if (it->key == owner.get() && it->owner.lock() == owner) {
         entries_.splice(entries_.begin(), entries_, it);
-        return it->blob;
+        *hit = it->blob;
+        return true;
       }
     }
-    return nullptr;
+    for (const Entry& e : refused_) {
+      if (e.key == owner.get() && e.owner.lock() == owner) {
+        *hit = nullptr;
+        return true;
+      }
+    }
+    return false;
   };
+  std::shared_ptr<const Blob> hit;
   {
     absl::MutexLock lock(&mu_);
-    if (auto hit = find()) return hit;
+    if (find(&hit)) return hit;
   }
   absl::MutexLock build_lock(&build_mu_);
   {
     absl::MutexLock lock(&mu_);
-    if (auto hit = find()) return hit;
+    if (find(&hit)) return hit;
   }
   auto blob = std::make_shared<const Blob>(build());
   absl::MutexLock lock(&mu_);
@@ -187,6 +196,11 @@ std::shared_ptr<const Blob> BlobCache::Get(const std::shared_ptr<const void>& ow
     } else {
       ++it;
     }
+  }
+  refused_.remove_if([](const Entry& e) { return e.owner.expired(); });
+  if (blob->bytes.size() > budget_bytes_) {
+    refused_.push_back(Entry{owner.get(), owner, nullptr});
+    return nullptr;
   }
   while (!entries_.empty() && bytes_ + blob->bytes.size() > budget_bytes_) {
     bytes_ -= entries_.back().blob->bytes.size();

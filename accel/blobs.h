@@ -82,11 +82,14 @@ class BlobCache {
   // The blob of `map` / `table`, built on first use (tens of milliseconds
   // for demo-city). Never keeps the map or table alive. Entries beyond the
   // budget are dropped, least recently used first (the one returned is kept
-  // alive by its shared_ptr).
+  // alive by its shared_ptr). Null when the blob alone is larger than the
+  // budget: it is not kept, and later calls for the same map or table return
+  // null at once (no rebuild), so the cache never holds more than its budget.
   std::shared_ptr<const Blob> MapBlob(const std::shared_ptr<const RiskMap>& map);
   std::shared_ptr<const Blob> KernelsBlob(const std::shared_ptr<const ImpactTable>& table);
 
   size_t MemoryBytes() const;
+  size_t budget_bytes() const { return budget_bytes_; }
 
  private:
   struct Entry {
@@ -101,6 +104,8 @@ class BlobCache {
   absl::Mutex build_mu_ ABSL_ACQUIRED_BEFORE(mu_);
   mutable absl::Mutex mu_;
   std::list<Entry> entries_ ABSL_GUARDED_BY(mu_);
+  // Owners whose blob exceeded the whole budget (blob left null).
+  std::list<Entry> refused_ ABSL_GUARDED_BY(mu_);
   size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
 };
 

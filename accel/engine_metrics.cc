@@ -58,6 +58,9 @@ std::vector<MetricSample> EngineMetrics(const RiskEngineStats& stats) {
     add("riskplan_accel_worker_unsupported_total", Type::kCounter, {{"worker", w.name}},
         w.unsupported);
     add("riskplan_accel_blob_uploads_total", Type::kCounter, {{"worker", w.name}}, w.uploads);
+    add("riskplan_accel_audited_sites_total", Type::kCounter, {{"worker", w.name}}, w.audited);
+    add("riskplan_accel_audit_failures_total", Type::kCounter, {{"worker", w.name}},
+        w.audit_failures);
     add("riskplan_accel_device_cycles_total", Type::kCounter, {{"worker", w.name}},
         w.device_cycles);
     up += w.state == WorkerState::kUp;
@@ -73,6 +76,14 @@ std::vector<MetricSample> EngineMetrics(const RiskEngineStats& stats) {
   add("riskplan_accel_cache_bytes", Type::kGauge, {{"cache", "blob"}}, stats.blob_cache_bytes);
   add("riskplan_accel_cache_bytes", Type::kGauge, {{"cache", "kernel_weights"}},
       stats.kernel_weights_bytes);
+  add("riskplan_accel_cache_limit_bytes", Type::kGauge, {{"cache", "site"}},
+      stats.site_cache_limit_bytes);
+  add("riskplan_accel_cache_limit_bytes", Type::kGauge, {{"cache", "prepared_map"}},
+      stats.prepared_map_limit_bytes);
+  add("riskplan_accel_cache_limit_bytes", Type::kGauge, {{"cache", "blob"}},
+      stats.blob_cache_limit_bytes);
+  add("riskplan_accel_cache_limit_bytes", Type::kGauge, {{"cache", "kernel_weights"}},
+      stats.kernel_weights_limit_bytes);
   return out;
 }
 

@@ -12,11 +12,14 @@
 //   riskplan_accel_worker_failures_total{worker}      counter  failed requests
 //   riskplan_accel_worker_unsupported_total{worker}   counter  chunks left to the CPU
 //   riskplan_accel_blob_uploads_total{worker}         counter
+//   riskplan_accel_audited_sites_total{worker}        counter  sites spot-checked on the CPU
+//   riskplan_accel_audit_failures_total{worker}       counter  replies the spot check refused
 //   riskplan_accel_device_cycles_total{worker}        counter  as the board reports them
 //   riskplan_accel_fpga_workers_up                    gauge
 //   riskplan_accel_site_cache_lookups_total{result}   counter  result: hit, miss
 //   riskplan_accel_cache_bytes{cache}                 gauge    cache: site, prepared_map, blob,
 //                                                              kernel_weights
+//   riskplan_accel_cache_limit_bytes{cache}           gauge    the bound of each (its flag)
 //
 // Counters are totals since the engine started: export them as gauges, or
 // as counters incremented by the difference from the last export.

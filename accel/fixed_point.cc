@@ -38,6 +38,11 @@ absl::Status NumberFormat::Validate() const {
   return absl::OkStatus();
 }
 
+double FixedPointSumBound(const NumberFormat& format, int exponent, double value_sum, int cells) {
+  const double w = std::ldexp(1.0, -format.weight_frac_bits);
+  return w * value_sum + std::ldexp(1.0, -(exponent + 1)) * (1.0 + cells * w);
+}
+
 int LayerExponent(double max_value, int cell_bits) {
   if (!(max_value > 0.0)) return cell_bits;
   int e = 0;

@@ -63,6 +63,13 @@ inline constexpr int kMaxWindowCells = 64 * 64;
 // [-200, 200]; cell_bits for an all-zero layer.
 int LayerExponent(double max_value, int cell_bits);
 
+// The documented bound of |board sum - exact sum| for one layer of a window
+// of `cells` cells whose values add up to `value_sum` (>= 0), the layer
+// quantised with `exponent`:
+//   2^-W * value_sum + 2^-(exponent+1) * (1 + cells * 2^-W)
+// (the conversion to double adds at most 2^-53 relative on top).
+double FixedPointSumBound(const NumberFormat& format, int exponent, double value_sum, int cells);
+
 // q = round(v * 2^exponent), v >= 0 finite. REQUIRES: the result fits 63 bits.
 uint64_t QuantizeCell(double v, int exponent);
 // q_w = min(round(w * 2^W), 2^W - 1), w in [0, 1].

@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "accel/board_audit.h"
 #include "accel/known_answer.h"
 
 namespace riskplan::accel {
@@ -32,7 +33,8 @@ FpgaWorker::FpgaWorker(std::string endpoint, const FpgaWorkerOptions& options, W
       queue_(queue),
       blobs_(blobs),
       on_event_(std::move(on_event)),
-      backoff_(options.backoff_initial) {
+      backoff_(options.backoff_initial),
+      rng_(std::hash<std::string>()(endpoint_)) {
   stats_.name = name_;
   stats_.endpoint = endpoint_;
   stats_.state = WorkerState::kProbing;
@@ -68,7 +70,11 @@ void FpgaWorker::SetState(WorkerState to, std::string reason) {
     event = WorkerEvent{name_, stats_.state, to, std::move(reason)};
     stats_.state = to;
     ++stats_.state_changes;
-    if (to != WorkerState::kUp && !event.reason.empty()) stats_.last_error = event.reason;
+    // Going down or suspect is what an operator wants to know the reason of
+    // (probing only says the back-off elapsed).
+    if ((to == WorkerState::kDown || to == WorkerState::kSuspect) && !event.reason.empty()) {
+      stats_.last_error = event.reason;
+    }
   }
   // The queue counts the workers that are up: callers without CPU workers
   // fall back to running chunks themselves when none is.
@@ -112,13 +118,7 @@ absl::Status FpgaWorker::Probe() {
   return RunKnownAnswer(*owned_client_);
 }
 
-absl::Status FpgaWorker::Recheck() {
-  if (absl::Status s = Connect(); !s.ok()) return s;
-  return owned_client_->Ping();
-}
-
 void FpgaWorker::Run() {
-  std::mt19937_64 jitter(std::hash<std::string>()(endpoint_));
   while (!stop_.load()) {
     WorkerState state;
     {
@@ -130,7 +130,6 @@ void FpgaWorker::Run() {
         absl::Status s = Probe();
         if (stop_.load()) break;
         if (s.ok()) {
-          backoff_ = options_.backoff_initial;
           SetState(WorkerState::kUp, "handshake and known-answer batch passed");
         } else {
           DropClient();
@@ -141,17 +140,17 @@ void FpgaWorker::Run() {
       case WorkerState::kDown: {
         // Back-off with +-20 % jitter so that boards restarted together are
         // not all probed at once.
-        const double factor = 0.8 + 0.4 * std::uniform_real_distribution<double>()(jitter);
+        const double factor = 0.8 + 0.4 * std::uniform_real_distribution<double>()(rng_);
         Sleep(backoff_ * factor);
         backoff_ = std::min(backoff_ * 2, options_.backoff_max);
         if (!stop_.load()) SetState(WorkerState::kProbing, "back-off elapsed");
         break;
       }
       case WorkerState::kSuspect: {
-        absl::Status s = Recheck();
+        absl::Status s = Probe();
         if (stop_.load()) break;
         if (s.ok()) {
-          SetState(WorkerState::kUp, "reconnected and answered a ping");
+          SetState(WorkerState::kUp, "reconnected, handshake and known-answer batch passed");
         } else {
           DropClient();
           SetState(WorkerState::kDown, absl::StrCat("recheck failed: ", s.message()));
@@ -173,6 +172,8 @@ void FpgaWorker::Run() {
         absl::Status s = RunChunk(chunk, &unsupported);
         const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
         if (s.ok()) {
+          consecutive_failures_ = 0;
+          backoff_ = options_.backoff_initial;
           {
             absl::MutexLock lock(&mu_);
             ++stats_.chunks;
@@ -194,7 +195,13 @@ void FpgaWorker::Run() {
         queue_->Requeue(chunk);
         if (!unsupported) {
           DropClient();
-          if (!stop_.load()) SetState(WorkerState::kSuspect, std::string(s.message()));
+          if (stop_.load()) break;
+          if (++consecutive_failures_ >= options_.max_consecutive_failures) {
+            SetState(WorkerState::kDown, absl::StrFormat("%d chunks failed in a row, the last: %s",
+                                                         consecutive_failures_, s.message()));
+          } else {
+            SetState(WorkerState::kSuspect, std::string(s.message()));
+          }
         }
         break;
       }
@@ -242,6 +249,11 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
   }
   std::shared_ptr<const Blob> map = blobs_->MapBlob(model.map_ptr());
   std::shared_ptr<const Blob> kernels = blobs_->KernelsBlob(model.table_ptr());
+  if (map == nullptr || kernels == nullptr) {
+    return absl::ResourceExhaustedError(
+        absl::StrFormat("the model's %s blob is larger than the blob cache (%d bytes)",
+                        map == nullptr ? "map" : "kernels", blobs_->budget_bytes()));
+  }
   if (map->bytes.size() > hello.store_bytes || kernels->bytes.size() > hello.store_bytes) {
     return absl::ResourceExhaustedError("the model's blobs exceed the board's store");
   }
@@ -252,9 +264,10 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
   const NumberFormat& format = hello.format;
   // The scales the board must report (its exponent rule is part of the
   // format), and the largest sums the quantised inputs allow.
-  const int impact_scale =
-      format.weight_frac_bits + LayerExponent(map->max_density, format.cell_bits);
-  const int shelter_scale = format.weight_frac_bits + LayerExponent(10.0, format.cell_bits);
+  const BoardScales scales{format, LayerExponent(map->max_density, format.cell_bits),
+                           LayerExponent(10.0, format.cell_bits)};
+  const int impact_scale = format.weight_frac_bits + scales.density_exponent;
+  const int shelter_scale = format.weight_frac_bits + scales.shelter_exponent;
   const double weight_sum_max = 1.0 + kMaxWindowCells * std::ldexp(1.0, -format.weight_frac_bits);
   const double margin = 1.0 + std::ldexp(1.0, 2 - format.cell_bits);
   const double impact_max = weight_sum_max * map->max_density * margin;
@@ -287,6 +300,26 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
       }
       const LocatedSite& s = sites_[first + a];
       out[s.index] = model.FromSums(s.site, impact, shelter);
+    }
+    // Spot checks: a few sites recomputed on the CPU (the reply is refused
+    // whole when one is off).
+    const int audits = static_cast<int>(std::min<size_t>(options_.audited_sites_per_eval, n));
+    for (int k = 0; k < audits; ++k) {
+      const size_t a = std::uniform_int_distribution<size_t>(0, n - 1)(rng_);
+      absl::Status audit = AuditBoardSums(model, sites_[first + a].site, scales,
+                                          AccumulatorToDouble(reply->impact[a], impact_scale),
+                                          AccumulatorToDouble(reply->shelter[a], shelter_scale));
+      if (!audit.ok()) {
+        absl::MutexLock lock(&mu_);
+        stats_.audited += k + 1;
+        ++stats_.audit_failures;
+        return absl::DataLossError(
+            absl::StrCat("shim ", endpoint_, " failed a spot check: ", audit.message()));
+      }
+    }
+    {
+      absl::MutexLock lock(&mu_);
+      stats_.audited += audits;
     }
     cycles += reply->device_cycles;
   }

@@ -8,13 +8,24 @@
 //   probing  connect, HELLO (protocol version, number format, limits), then
 //            the known-answer batch; success -> up, failure -> down
 //   up       takes chunks; pings the board when idle for ping_interval;
-//            a failed request -> suspect (the chunk goes back to the queue)
-//   suspect  reconnects once and pings; success -> up, failure -> down
+//            a failed request -> suspect (the chunk goes back to the queue),
+//            or -> down once max_consecutive_failures chunks in a row have
+//            failed
+//   suspect  reconnects, HELLO and the known-answer batch again; success ->
+//            up, failure -> down
 //   down     waits a back-off (doubling from backoff_initial to backoff_max,
-//            with jitter), then -> probing
+//            with jitter), then -> probing. The back-off starts again from
+//            backoff_initial only when the board completes a chunk, so a
+//            board that passes its checks but keeps failing real work is
+//            tried ever less often (at most one failed chunk per
+//            backoff_max).
+// A request fails on a connection or deadline error, a corrupt frame, an
+// ERROR reply, wrong scales, implausible sums, or sums that the spot check
+// finds outside the format's error bound (accel/board_audit.h).
 // A chunk whose model the board cannot serve (kernel wider than the board's
-// largest side, too many bins, or blobs too large for its store) goes back
-// to the queue marked CPU-only, and the worker stays up.
+// largest side, too many bins, blobs too large for its store or for the
+// server's blob cache) goes back to the queue marked CPU-only, and the
+// worker stays up.
 //
 // Thread-safe: the worker runs on its own thread; Stats() and Stop() may be
 // called from any thread.
@@ -25,6 +36,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -58,6 +70,12 @@ struct FpgaWorkerOptions {
   absl::Duration ping_interval = absl::Seconds(2);
   // A chunk that failed on FPGA workers this often is left to the CPU.
   int max_failures_per_chunk = 2;
+  // Chunks failed in a row (none completed in between) after which the
+  // worker goes down instead of suspect.
+  int max_consecutive_failures = 2;
+  // Sites of every EVAL reply recomputed on the CPU and compared within the
+  // number format's error bound (0: no spot checks). Chosen at random.
+  int audited_sites_per_eval = 2;
 };
 
 struct FpgaWorkerStats {
@@ -71,8 +89,10 @@ struct FpgaWorkerStats {
   uint64_t failures = 0;     // failed requests (chunks given back)
   uint64_t unsupported = 0;  // chunks given back as CPU-only
   uint64_t state_changes = 0;
-  uint64_t uploads = 0;        // blobs uploaded
-  uint64_t device_cycles = 0;  // as reported by the board
+  uint64_t audited = 0;         // sites spot-checked against the CPU
+  uint64_t audit_failures = 0;  // replies refused by the spot check
+  uint64_t uploads = 0;         // blobs uploaded
+  uint64_t device_cycles = 0;   // as reported by the board
   double busy_seconds = 0.0;
   std::string last_error;
 };
@@ -95,11 +115,13 @@ class FpgaWorker {
 
  private:
   void Run();
+  // Connect, HELLO and the known-answer batch (probing and suspect).
   absl::Status Probe();
-  absl::Status Recheck();
   absl::Status Connect();
-  // Evaluates a chunk; writes its results only on success. `unsupported` is
-  // set when the failure is the model's, not the board's.
+  // Evaluates a chunk, writing results as the board's replies arrive (a
+  // failed chunk is given back and redone whole, so partial results are
+  // overwritten). `unsupported` is set when the failure is the model's, not
+  // the board's.
   absl::Status RunChunk(Chunk* chunk, bool* unsupported);
   absl::StatusOr<EvalReply> EvalWithUploads(const Blob& map, const Blob& kernels,
                                             std::span<const DeviceSite> sites);
@@ -121,6 +143,8 @@ class FpgaWorker {
   std::vector<LocatedSite> sites_;
   std::vector<DeviceSite> device_sites_;
   absl::Duration backoff_;
+  int consecutive_failures_ = 0;
+  std::mt19937_64 rng_;  // jitter and the sites to spot-check
 
   mutable absl::Mutex mu_;
   absl::CondVar stop_changed_;

@@ -238,6 +238,10 @@ RiskEngineStats RiskEngine::Stats() const {
   s.prepared_map_bytes = prepared_maps_.MemoryBytes();
   s.blob_cache_bytes = blobs_.MemoryBytes();
   s.kernel_weights_bytes = kernel_weights_.MemoryBytes();
+  s.site_cache_limit_bytes = options_.site_cache_bytes;
+  s.prepared_map_limit_bytes = options_.prepared_map_bytes;
+  s.blob_cache_limit_bytes = options_.blob_cache_bytes;
+  s.kernel_weights_limit_bytes = options_.kernel_weights_bytes;
   return s;
 }
 

@@ -94,6 +94,11 @@ struct RiskEngineStats {
   size_t prepared_map_bytes = 0;
   size_t blob_cache_bytes = 0;
   size_t kernel_weights_bytes = 0;
+  // The bounds of the same caches (RiskEngineOptions).
+  size_t site_cache_limit_bytes = 0;
+  size_t prepared_map_limit_bytes = 0;
+  size_t blob_cache_limit_bytes = 0;
+  size_t kernel_weights_limit_bytes = 0;
   std::vector<CpuWorkerStats> cpu;
   std::vector<FpgaWorkerStats> fpga;
 };

@@ -211,6 +211,9 @@ enum class Misbehaviour {
   kGarbageValues,  // big EVALs: a valid frame with absurd sums
   kWrongVersion,   // every reply in protocol version 2
   kCloseOnEval,    // big EVALs: the connection is closed
+  kSilent,         // accepts connections, never answers anything (not even HELLO)
+  kCorruptHeader,  // big EVALs: a header byte flipped (header checksum mismatch)
+  kWrongSums,      // big EVALs: a valid frame, every impact sum off by 2^-20 (plausible)
 };
 
 // An in-process shim serving ShimSession over a ModelDevice, misbehaving as
@@ -265,9 +268,13 @@ class FakeShim {
                .ok()) {
         break;
       }
+      const Misbehaviour m = misbehaviour_.load();
+      if (m == Misbehaviour::kSilent) {
+        ++misbehaved_;
+        continue;
+      }
       bool close = false;
       std::string reply = session.Handle(header, payload, &close);
-      const Misbehaviour m = misbehaviour_.load();
       const bool big = header.type == MessageType::kEval && payload.size() > 68 + 12 * kBigEval;
       if (m == Misbehaviour::kWrongVersion) {
         ++misbehaved_;
@@ -282,6 +289,18 @@ class FakeShim {
       } else if (big && m == Misbehaviour::kCorruptFrame) {
         ++misbehaved_;
         reply[kFrameHeaderBytes + reply.size() / 3] ^= 0x10;
+      } else if (big && m == Misbehaviour::kCorruptHeader) {
+        ++misbehaved_;
+        reply[17] ^= 0x01;  // payload_bytes (offset 16, little endian)
+      } else if (big && m == Misbehaviour::kWrongSums) {
+        ++misbehaved_;
+        EvalReply r;
+        if (DecodeEvalReply(absl::string_view(reply).substr(kFrameHeaderBytes), &r).ok()) {
+          // Right scales, values in range, each I off by about 1e-6 (a
+          // broken low-order lane bit): only a recomputation can tell.
+          for (Accumulator& a : r.impact) a ^= Accumulator{1} << (r.impact_scale - 20);
+          reply = EncodeFrame(MessageType::kEvalReply, header.request_id, EncodeEvalReply(r));
+        }
       } else if (big && m == Misbehaviour::kGarbageValues) {
         ++misbehaved_;
         EvalReply r;

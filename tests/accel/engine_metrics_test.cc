@@ -24,9 +24,12 @@ TEST(EngineMetricsTest, ReportsRunnersWorkersAndCaches) {
   board.state = WorkerState::kSuspect;
   board.configurations = 30;
   board.failures = 1;
+  board.audited = 12;
+  board.audit_failures = 1;
   stats.fpga.push_back(board);
   stats.cache_hits = 7;
   stats.site_cache_bytes = 1 << 20;
+  stats.blob_cache_limit_bytes = 256 << 20;
   const std::vector<MetricSample> m = EngineMetrics(stats);
   ASSERT_NE(Find(m, "riskplan_accel_configurations_total", {{"runner", "cpu-0"}}), nullptr);
   EXPECT_EQ(Find(m, "riskplan_accel_configurations_total", {{"runner", "fpga:h:1"}})->value, 30);
@@ -41,6 +44,11 @@ TEST(EngineMetricsTest, ReportsRunnersWorkersAndCaches) {
   EXPECT_EQ(Find(m, "riskplan_accel_cache_bytes", {{"cache", "site"}})->value, 1 << 20);
   EXPECT_EQ(Find(m, "riskplan_accel_worker_failures_total", {{"worker", "fpga:h:1"}})->type,
             MetricSample::Type::kCounter);
+  EXPECT_EQ(Find(m, "riskplan_accel_audited_sites_total", {{"worker", "fpga:h:1"}})->value, 12);
+  EXPECT_EQ(Find(m, "riskplan_accel_audit_failures_total", {{"worker", "fpga:h:1"}})->value, 1);
+  EXPECT_EQ(Find(m, "riskplan_accel_cache_limit_bytes", {{"cache", "blob"}})->value, 256 << 20);
+  EXPECT_EQ(Find(m, "riskplan_accel_cache_limit_bytes", {{"cache", "site"}})->type,
+            MetricSample::Type::kGauge);
 }
 
 TEST(EngineMetricsTest, EventsAsJson) {

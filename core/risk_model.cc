@@ -257,4 +257,8 @@ ConfigurationRisk RiskModel::Evaluate(const Pose& q) const {
   return FromSums(site, impact_factor, shelter);
 }
 
+size_t RiskModel::MemoryBytes() const {
+  return table_->MemoryBytes() + (own_glide_ ? own_glide_->size() * sizeof(double) : 0);
+}
+
 }  // namespace riskplan

@@ -94,6 +94,10 @@ class RiskModel {
   // REQUIRES: map().Contains(i, j).
   double SafeAltitude(int i, int j) const;
 
+  // Bytes this model holds beyond its map: the impact table (which other
+  // models may share) and a glide layer of its own, if it has one.
+  size_t MemoryBytes() const;
+
  private:
   RiskModel() = default;
 

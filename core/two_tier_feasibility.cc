@@ -303,4 +303,10 @@ FeasibilityResult TwoTierFeasibility::CheckTrajectory(std::span<const Trajectory
   return result;
 }
 
+size_t TwoTierFeasibility::MemoryBytes() const {
+  return (detailed_.floor.size() + detailed_.ceiling.size() + coarse_.floor.size() +
+          coarse_.ceiling.size()) *
+         sizeof(float);
+}
+
 }  // namespace riskplan

@@ -89,6 +89,8 @@ class TwoTierFeasibility {
   TwoTierFeasibility(const RiskModel& model, TwoTierOptions options = {});
 
   const TwoTierOptions& options() const { return options_; }
+  // Bytes of both tiers' layers.
+  size_t MemoryBytes() const;
 
   // A polyline: segment k joins path[k] and path[k + 1], z linear along it.
   // Stops at the first collision unless `count_all`, which counts every

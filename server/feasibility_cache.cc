@@ -40,6 +40,7 @@ FeasibilityCache::Stats FeasibilityCache::stats() const {
   absl::MutexLock lock(&mu_);
   Stats stats = stats_;
   stats.cached = entries_.size();
+  for (const auto& [key, entry] : entries_) stats.bytes += entry->checker.MemoryBytes();
   return stats;
 }
 

@@ -54,8 +54,10 @@ class FeasibilityCache {
     uint64_t builds = 0;
     uint64_t evictions = 0;
     size_t cached = 0;
+    size_t bytes = 0;  // layers of the cached checkers
   };
   Stats stats() const;
+  size_t capacity() const { return capacity_; }
 
  private:
   using Key = std::tuple<const RiskModel*, int, int, int, int>;

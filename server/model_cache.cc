@@ -11,6 +11,7 @@ namespace riskplan::server {
 struct RiskModelCache::Entry {
   absl::Notification built;
   absl::StatusOr<std::shared_ptr<const RiskModel>> model;  // valid once `built` is notified
+  size_t bytes = 0;  // what the model holds that the default model does not share
 };
 
 absl::StatusOr<std::unique_ptr<RiskModelCache>> RiskModelCache::Create(const MapRegistry& registry,
@@ -100,6 +101,9 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskM
     entry->model = absl::NotFoundError(absl::StrFormat("map '%s' is not served", map.name()));
   } else {
     entry->model = RiskModel::Create(map_ptr, params, table);
+    if (entry->model.ok()) {
+      entry->bytes = (*entry->model)->MemoryBytes() - (table != nullptr ? table->MemoryBytes() : 0);
+    }
   }
   {
     absl::MutexLock lock(&mu_);
@@ -133,6 +137,8 @@ RiskModelCache::Stats RiskModelCache::stats() const {
   absl::MutexLock lock(&mu_);
   Stats s = stats_;
   s.overridden_cached = lru_.size();
+  for (const std::string& key : lru_) s.overridden_bytes += entries_.at(key)->bytes;
+  for (const auto& [name, model] : defaults_) s.default_bytes += model->MemoryBytes();
   return s;
 }
 

@@ -53,6 +53,10 @@ class RiskModelCache {
     uint64_t builds = 0;
     uint64_t evictions = 0;
     size_t overridden_cached = 0;
+    // Impact tables and glide layers of the default models (kept for ever),
+    // and what the cached overridden models hold beyond them.
+    size_t default_bytes = 0;
+    size_t overridden_bytes = 0;
   };
   Stats stats() const;
 

@@ -24,7 +24,10 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
   UnaryCall(const char* method, grpc::CallbackServerContext* ctx, ServerMetrics* metrics,
             OpenCalls* open_calls)
-      : method_(method), started_(absl::Now()), ctx_(ctx), metrics_(metrics),
+      : method_(method),
+        started_(absl::Now()),
+        ctx_(ctx),
+        metrics_(metrics),
         open_calls_(open_calls) {
     open_calls_->Opened();
   }
@@ -99,7 +102,7 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
       models_(models),
       metrics_(metrics),
       options_(options),
-      checkers_(options.max_cached_checkers),
+      checkers_(std::make_shared<FeasibilityCache>(options.max_cached_checkers)),
       active_(options.max_running_plans),
       eval_pool_(options.eval_threads, options.max_queued_evals),
       plan_pool_(options.plan_threads) {
@@ -169,7 +172,7 @@ grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerConte
   }
   const bool queued = eval_pool_.TrySubmit([this, call, response, spec = *std::move(spec)] {
     absl::Status status =
-        Evaluate(models_, checkers_, options_.engine, options_.limits, spec, response);
+        Evaluate(models_, *checkers_, options_.engine, options_.limits, spec, response);
     call->Complete(ToGrpcStatus(status), spec.map->name());
   });
   if (!queued) {

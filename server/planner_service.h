@@ -20,8 +20,8 @@
 #include "server/feasibility_cache.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
-#include "server/open_calls.h"
 #include "server/model_cache.h"
+#include "server/open_calls.h"
 #include "server/plan_call.h"
 #include "server/request_validation.h"
 #include "server/thread_pool.h"
@@ -72,13 +72,15 @@ class PlannerService final : public v1::Planner::CallbackService {
   ActivePlans& active_plans() { return active_; }
   // Calls of this service gRPC has not finished with (plans, evaluations...).
   const OpenCalls& open_calls() const { return open_calls_; }
+  // The two-tier checkers of EvaluateRisk (for the cache metrics).
+  std::shared_ptr<const FeasibilityCache> checkers() const { return checkers_; }
 
  private:
   const MapRegistry& maps_;
   RiskModelCache& models_;
   ServerMetrics& metrics_;
   const ServiceOptions options_;
-  FeasibilityCache checkers_;
+  const std::shared_ptr<FeasibilityCache> checkers_;
   v1::ListMapsResponse map_list_;  // built once
   std::atomic<bool> draining_{false};
   ActivePlans active_;

@@ -26,6 +26,7 @@
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/health_check_service_interface.h"
 #include "server/accel_metrics.h"
+#include "server/cache_metrics.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
@@ -63,6 +64,9 @@ ABSL_FLAG(int, max_request_bytes, 4 << 20,
           "Largest request message, bytes; larger ones get RESOURCE_EXHAUSTED from gRPC");
 ABSL_FLAG(int, model_cache_size, 4,
           "Risk models kept for overridden model parameters (each about 25 MB on an 8 km map)");
+ABSL_FLAG(int, feasibility_cache_size, 8,
+          "Two-tier feasibility checkers kept for EvaluateRisk (each about 8 bytes per map cell: "
+          "20 MB on an 8 km map)");
 ABSL_FLAG(int64_t, grace_period_ms, 10000,
           "On SIGTERM/SIGINT: time running plans get to finish; the last second of it (or "
           "its last half, if shorter) is left for stopping them and sending their best "
@@ -91,6 +95,14 @@ ABSL_FLAG(std::string, cpu_kernel, "exact",
           "(plans are reproducible against it); float32: EWMM sums in float32 with fused "
           "multiply-add, within 1e-5 relative of exact (docs/risk-model.md), faster. float32 "
           "starts the engine even without --cpu_workers (callers compute)");
+ABSL_FLAG(int, prepared_map_cache_mb, 256,
+          "Accelerator engine: bound of the CPU kernel's copies of the maps' layers on huge "
+          "pages (8 bytes per padded cell: 24 MB for an 8 km map; a map that does not fit is "
+          "read from its own layers), MiB");
+ABSL_FLAG(int, blob_cache_mb, 256,
+          "Accelerator engine: bound of the map and kernel blobs kept for uploads to FPGA "
+          "boards (49 MB for an 8 km map with the default parameters; a model whose blob "
+          "does not fit is left to the CPU), MiB");
 ABSL_FLAG(int, kernel_weights_cache_mb, 128,
           "Accelerator engine: bound of the CPU kernel's aligned weight copies (one per impact "
           "table in use: 34 MB for the exact kernel, 19 MB for float32 with the default "
@@ -154,9 +166,17 @@ int Main() {
     return Fail(2, absl::StrFormat("--cpu_kernel=%s: must be exact or float32",
                                    absl::GetFlag(FLAGS_cpu_kernel)));
   }
-  if (absl::GetFlag(FLAGS_kernel_weights_cache_mb) < 0 || absl::GetFlag(FLAGS_risk_cache_mb) < 0) {
-    return Fail(2, "--kernel_weights_cache_mb and --risk_cache_mb must be >= 0");
+  for (const auto* flag : {&FLAGS_kernel_weights_cache_mb, &FLAGS_risk_cache_mb,
+                           &FLAGS_prepared_map_cache_mb, &FLAGS_blob_cache_mb}) {
+    if (absl::GetFlag(*flag) < 0) {
+      return Fail(
+          2, absl::StrFormat("--%s must be >= 0", absl::GetFlagReflectionHandle(*flag).Name()));
+    }
   }
+  if (absl::GetFlag(FLAGS_feasibility_cache_size) < 1) {
+    return Fail(2, "--feasibility_cache_size must be >= 1");
+  }
+  options.max_cached_checkers = static_cast<size_t>(absl::GetFlag(FLAGS_feasibility_cache_size));
   SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
 
   // Every thread created from here on inherits the blocked signals, so that
@@ -195,6 +215,9 @@ int Main() {
     engine_options.kernel.precision = cpu_kernel;
     engine_options.kernel_weights_bytes =
         static_cast<size_t>(absl::GetFlag(FLAGS_kernel_weights_cache_mb)) << 20;
+    engine_options.prepared_map_bytes =
+        static_cast<size_t>(absl::GetFlag(FLAGS_prepared_map_cache_mb)) << 20;
+    engine_options.blob_cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_blob_cache_mb)) << 20;
     for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
       engine_options.fpga_shims.emplace_back(s);
     }
@@ -224,6 +247,9 @@ int Main() {
   }
 
   PlannerService service(**maps, **models, metrics, options);
+  metrics.AddCollectable(std::make_shared<CacheMetrics>(
+      models->get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
+      service.checkers()));
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
@@ -276,9 +302,9 @@ int Main() {
   // open after the grace period are cancelled). Waiting on gRPC's Shutdown
   // deadline alone would also wait for idle clients to acknowledge GOAWAY.
   const bool none_open = service.open_calls().WaitUntilNone(drain_start + grace);
-  server->Shutdown(absl::ToChronoTime(none_open ? absl::Now()
-                                                : std::max(drain_start + grace,
-                                                           absl::Now() + absl::Milliseconds(200))));
+  server->Shutdown(absl::ToChronoTime(
+      none_open ? absl::Now()
+                : std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
   LogEvent("stopped",
            absl::StrFormat("seconds=%.3f", absl::ToDoubleSeconds(absl::Now() - drain_start)));
   return 0;

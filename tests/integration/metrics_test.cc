@@ -16,11 +16,8 @@ TEST(MetricsTest, CountsRpcsByMethodAndCodeAndPlans) {
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
   // The metrics address is logged before the readiness line.
-  std::smatch match;
-  const std::string log = server->Stderr();
-  ASSERT_TRUE(std::regex_search(
-      log, match, std::regex("\"event\":\"metrics_listening\",\"detail\":\"([0-9.:]+)\"")));
-  const std::string metrics_address = match[1];
+  const std::string metrics_address = MetricsAddress(server->Stderr());
+  ASSERT_FALSE(metrics_address.empty()) << server->Stderr();
 
   client::RiskplanClient client(server->address());
   ASSERT_TRUE(client.Ping().ok());
@@ -42,6 +39,42 @@ TEST(MetricsTest, CountsRpcsByMethodAndCodeAndPlans) {
   EXPECT_THAT(*text,
               HasSubstr("riskplan_plan_duration_seconds_count{end_reason=\"BUDGET_EXHAUSTED\"} 1"));
   EXPECT_THAT(*text, HasSubstr("riskplan_map_memory_bytes{map=\"demo-city\"}"));
+}
+
+TEST(MetricsTest, ReportsTheMemoryAndBoundsOfTheServersCaches) {
+  auto started = ServerProcess::Start(
+      {"--metrics_listen=127.0.0.1:0", "--model_cache_size=3", "--feasibility_cache_size=2"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
+  const std::string metrics_address = MetricsAddress(server->Stderr());
+  ASSERT_FALSE(metrics_address.empty()) << server->Stderr();
+  const auto metric = [&](const std::string& series) {
+    absl::StatusOr<std::string> text = HttpGet(metrics_address, "/metrics");
+    EXPECT_TRUE(text.ok()) << text.status();
+    return text.ok() ? MetricValue(*text, series) : std::nullopt;
+  };
+  // The default model (impact table) is built at start-up; nothing else yet.
+  EXPECT_GT(metric("riskplan_model_cache_bytes{kind=\"default\"}").value_or(0), 1e6);
+  EXPECT_EQ(metric("riskplan_model_cache_bytes{kind=\"overridden\"}"), 0.0);
+  EXPECT_EQ(metric("riskplan_model_cache_limit_models"), 3.0);
+  EXPECT_EQ(metric("riskplan_feasibility_cache_bytes"), 0.0);
+  EXPECT_EQ(metric("riskplan_feasibility_cache_limit_checkers"), 2.0);
+
+  client::RiskplanClient client(server->address());
+  // An evaluation with the two-tier check builds a checker (8 bytes per
+  // cell of the 400 x 400 map and its coarse tier); one with overridden
+  // glide parameters builds a model with its own glide layer.
+  v1::EvaluateRiskRequest two_tier = SmallCityPolyline();
+  two_tier.mutable_two_tier()->set_enabled(true);
+  v1::EvaluateRiskResponse response;
+  ASSERT_TRUE(client.EvaluateRisk(two_tier, &response).ok());
+  EXPECT_EQ(metric("riskplan_feasibility_cache_checkers"), 1.0);
+  EXPECT_GE(metric("riskplan_feasibility_cache_bytes").value_or(0), 400.0 * 400 * 8);
+  v1::EvaluateRiskRequest overridden = SmallCityPolyline();
+  overridden.mutable_model_params()->set_glide_ratio(12.0);
+  ASSERT_TRUE(client.EvaluateRisk(overridden, &response).ok());
+  EXPECT_EQ(metric("riskplan_model_cache_models"), 1.0);
+  EXPECT_GE(metric("riskplan_model_cache_bytes{kind=\"overridden\"}").value_or(0), 400.0 * 400 * 8);
 }
 
 }  // namespace

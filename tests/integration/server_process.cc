@@ -12,21 +12,22 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/time/clock.h"
 
 extern char** environ;
 
 namespace riskplan::testing {
 namespace {
-
-constexpr char kReadyPrefix[] = "riskplan-server listening on ";
 
 int PollMs(absl::Duration left) {
   return static_cast<int>(std::max<int64_t>(0, absl::ToInt64Milliseconds(left)));
@@ -36,6 +37,26 @@ int PollMs(absl::Duration left) {
 
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<std::string> flags,
                                                                     absl::Duration timeout) {
+  std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-server",
+                                   "--listen=127.0.0.1:0"};
+  bool has_maps = false;
+  for (const std::string& f : flags) has_maps = has_maps || absl::StartsWith(f, "--maps=");
+  if (!has_maps) args.push_back(absl::StrCat("--demo_city_size_m=", kSmallCitySizeM));
+  args.insert(args.end(), flags.begin(), flags.end());
+  return Spawn(std::move(args), "riskplan-server listening on ", timeout);
+}
+
+absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartShim(
+    std::vector<std::string> flags, absl::Duration timeout) {
+  std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-fpga-shim",
+                                   "--listen=127.0.0.1:0"};
+  args.insert(args.end(), flags.begin(), flags.end());
+  return Spawn(std::move(args), "riskplan-fpga-shim listening on ", timeout);
+}
+
+absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Spawn(std::vector<std::string> args,
+                                                                    const std::string& ready_prefix,
+                                                                    absl::Duration timeout) {
   std::unique_ptr<ServerProcess> server(new ServerProcess);
   char stderr_template[] = "/tmp/riskplan-server-stderr-XXXXXX";
   const int stderr_fd = mkstemp(stderr_template);
@@ -44,12 +65,6 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<
   int out[2];
   if (pipe2(out, O_CLOEXEC) != 0) return absl::InternalError("pipe failed");
 
-  std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-server",
-                                   "--listen=127.0.0.1:0"};
-  bool has_maps = false;
-  for (const std::string& f : flags) has_maps = has_maps || absl::StartsWith(f, "--maps=");
-  if (!has_maps) args.push_back(absl::StrCat("--demo_city_size_m=", kSmallCitySizeM));
-  args.insert(args.end(), flags.begin(), flags.end());
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -76,8 +91,8 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<
     if (newline != std::string::npos) {
       const std::string line = text.substr(0, newline);
       text.erase(0, newline + 1);
-      if (absl::StartsWith(line, kReadyPrefix)) {
-        server->address_ = line.substr(sizeof(kReadyPrefix) - 1);
+      if (absl::StartsWith(line, ready_prefix)) {
+        server->address_ = line.substr(ready_prefix.size());
         break;
       }
       continue;
@@ -86,16 +101,14 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<
     if (poll(&p, 1, PollMs(deadline - absl::Now())) <= 0) {
       close(out[0]);
       return absl::DeadlineExceededError(
-          "riskplan-server did not print its readiness line; "
-          "stderr:\n" +
-          server->Stderr());
+          absl::StrCat(args[0], " did not print its readiness line; stderr:\n", server->Stderr()));
     }
     char buffer[512];
     const ssize_t n = read(out[0], buffer, sizeof(buffer));
     if (n <= 0) {
       close(out[0]);
-      return absl::UnavailableError("riskplan-server exited before serving; stderr:\n" +
-                                    server->Stderr());
+      return absl::UnavailableError(
+          absl::StrCat(args[0], " exited before serving; stderr:\n", server->Stderr()));
     }
     text.append(buffer, static_cast<size_t>(n));
   }
@@ -179,6 +192,53 @@ CommandResult RunCommand(const std::string& command) {
   const int status = pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
+}
+
+std::string MetricsAddress(const std::string& log) {
+  std::smatch match;
+  if (!std::regex_search(
+          log, match,
+          std::regex("\\{[^\n]*\"detail\":\"([0-9.:]+)\"[^\n]*\"event\":\"metrics_listening\"|"
+                     "\"event\":\"metrics_listening\",\"detail\":\"([0-9.:]+)\""))) {
+    return "";
+  }
+  return match[1].matched ? match[1] : match[2];
+}
+
+namespace {
+
+// "name{a=\"1\",b=\"2\"}" -> name and its labels in sorted order, so that two
+// spellings of a series compare equal whatever their label order.
+std::string CanonicalSeries(const std::string& series) {
+  const size_t brace = series.find('{');
+  if (brace == std::string::npos) return series;
+  std::vector<std::string> labels;
+  const std::string body = series.substr(brace + 1, series.rfind('}') - brace - 1);
+  size_t start = 0;
+  bool quoted = false;
+  for (size_t i = 0; i <= body.size(); ++i) {
+    if (i < body.size() && body[i] == '"' && (i == 0 || body[i - 1] != '\\')) quoted = !quoted;
+    if (i == body.size() || (body[i] == ',' && !quoted)) {
+      if (i > start) labels.push_back(body.substr(start, i - start));
+      start = i + 1;
+    }
+  }
+  std::sort(labels.begin(), labels.end());
+  return absl::StrCat(series.substr(0, brace), "{", absl::StrJoin(labels, ","), "}");
+}
+
+}  // namespace
+
+std::optional<double> MetricValue(const std::string& text, const std::string& series) {
+  const std::string want = CanonicalSeries(series);
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const size_t space = line.rfind(' ');
+    if (space == std::string::npos) continue;
+    if (CanonicalSeries(line.substr(0, space)) == want) return std::stod(line.substr(space + 1));
+  }
+  return std::nullopt;
 }
 
 }  // namespace riskplan::testing

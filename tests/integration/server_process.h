@@ -23,6 +23,10 @@ class ServerProcess {
   // second). Fails if the readiness line does not come within `timeout`.
   static absl::StatusOr<std::unique_ptr<ServerProcess>> Start(
       std::vector<std::string> flags = {}, absl::Duration timeout = absl::Seconds(60));
+  // Starts RISKPLAN_BIN_DIR/riskplan-fpga-shim --listen=127.0.0.1:0 with
+  // `flags` (e.g. --device=model), up to its readiness line.
+  static absl::StatusOr<std::unique_ptr<ServerProcess>> StartShim(
+      std::vector<std::string> flags, absl::Duration timeout = absl::Seconds(60));
 
   // Kills the server (SIGKILL) if it still runs.
   ~ServerProcess();
@@ -39,6 +43,11 @@ class ServerProcess {
 
  private:
   ServerProcess() = default;
+  // Spawns `args` (args[0] the program) and reads its stdout up to the line
+  // starting with `ready_prefix`, whose rest is the address.
+  static absl::StatusOr<std::unique_ptr<ServerProcess>> Spawn(std::vector<std::string> args,
+                                                              const std::string& ready_prefix,
+                                                              absl::Duration timeout);
 
   pid_t pid_ = -1;
   int pidfd_ = -1;
@@ -56,6 +65,15 @@ CommandResult RunCommand(const std::string& command);
 
 // GET http://ADDRESS/PATH (HTTP/1.0); the response body, or an error.
 absl::StatusOr<std::string> HttpGet(const std::string& address, const std::string& path);
+
+// The metrics address a server started with --metrics_listen logged (its
+// "metrics_listening" event, whatever the order of the line's keys), or "".
+std::string MetricsAddress(const std::string& log);
+
+// The value of the Prometheus sample `series` (name and labels exactly as
+// exposed, e.g. `riskplan_accel_worker_state{state="up",worker="fpga:..."}`)
+// in an exposition text, or nullopt when it is absent.
+std::optional<double> MetricValue(const std::string& text, const std::string& series);
 
 // The demo-city of 2 km that ServerProcess serves by default, and poses on it
 // that are admissible under the default model parameters.

@@ -1,0 +1,52 @@
+#include "server/cache_metrics.h"
+
+#include <string>
+#include <utility>
+
+namespace riskplan::server {
+namespace {
+
+prometheus::MetricFamily Gauge(std::string name, std::string help) {
+  prometheus::MetricFamily family;
+  family.name = std::move(name);
+  family.help = std::move(help);
+  family.type = prometheus::MetricType::Gauge;
+  return family;
+}
+
+void Add(prometheus::MetricFamily* family, double value,
+         std::vector<prometheus::ClientMetric::Label> labels = {}) {
+  prometheus::ClientMetric metric;
+  metric.label = std::move(labels);
+  metric.gauge.value = value;
+  family->metric.push_back(std::move(metric));
+}
+
+}  // namespace
+
+std::vector<prometheus::MetricFamily> CacheMetrics::Collect() const {
+  const RiskModelCache::Stats models = models_->stats();
+  const FeasibilityCache::Stats checkers = checkers_->stats();
+  std::vector<prometheus::MetricFamily> out;
+  out.push_back(
+      Gauge("riskplan_model_cache_bytes",
+            "Impact tables and glide layers of risk models, by kind (default, overridden)"));
+  Add(&out.back(), static_cast<double>(models.default_bytes), {{"kind", "default"}});
+  Add(&out.back(), static_cast<double>(models.overridden_bytes), {{"kind", "overridden"}});
+  out.push_back(Gauge("riskplan_model_cache_models", "Models for overridden parameters cached"));
+  Add(&out.back(), static_cast<double>(models.overridden_cached));
+  out.push_back(Gauge("riskplan_model_cache_limit_models",
+                      "Most models for overridden parameters kept (--model_cache_size)"));
+  Add(&out.back(), static_cast<double>(model_limit_));
+  out.push_back(
+      Gauge("riskplan_feasibility_cache_bytes", "Layers of the cached two-tier checkers"));
+  Add(&out.back(), static_cast<double>(checkers.bytes));
+  out.push_back(Gauge("riskplan_feasibility_cache_checkers", "Two-tier checkers cached"));
+  Add(&out.back(), static_cast<double>(checkers.cached));
+  out.push_back(Gauge("riskplan_feasibility_cache_limit_checkers",
+                      "Most two-tier checkers kept (--feasibility_cache_size)"));
+  Add(&out.back(), static_cast<double>(checkers_->capacity()));
+  return out;
+}
+
+}  // namespace riskplan::server

@@ -153,6 +153,7 @@ TEST(ShimReportTest, ReportClockHzSetsTheClockOfHelloAndTheReport) {
        << " ms at 50 MHz";
   EXPECT_NE(run.report.find(want.str()), std::string::npos) << run.report;
   EXPECT_GT(CountAfter(run.report, kBus), jobs) << run.report;
+  std::cout << run.report;
 }
 
 TEST(ShimReportTest, RefusesAClockThatIsNotOne) {

@@ -594,6 +594,26 @@ void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> confi
     }
   }
 
+  // A site equal to the one before it (consecutive samples of a trajectory
+  // that fall in the same impact cell with the same bins) has the same
+  // result, bit for bit: it is computed once and copied.
+  repeats_.clear();
+  if (!sites_.empty()) {
+    size_t kept = 1;
+    for (size_t a = 1; a < sites_.size(); ++a) {
+      const KernelSite& p = sites_[kept - 1].site;
+      const KernelSite& q = sites_[a].site;
+      if (q.impact_i == p.impact_i && q.impact_j == p.impact_j && q.height_bin == p.height_bin &&
+          q.heading_bin == p.heading_bin) {
+        repeats_.push_back({sites_[a].index, sites_[kept - 1].index});
+      } else {
+        sites_[kept++] = sites_[a];
+      }
+    }
+    sites_.resize(kept);
+    stats_.repeats += repeats_.size();
+  }
+
   impact_.resize(sites_.size());
   shelter_.resize(sites_.size());
   // The float32 path needs its weights; without them everything is exact.
@@ -617,6 +637,7 @@ void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> confi
       }
     }
   }
+  for (const Repeat& r : repeats_) out[r.index] = out[r.same_as];
 }
 
 }  // namespace riskplan::accel

@@ -77,7 +77,8 @@ struct CpuKernelOptions {
 struct CpuKernelStats {
   uint64_t configurations = 0;  // all, defined or not
   uint64_t cache_hits = 0;
-  uint64_t ewmms = 0;  // windows computed
+  uint64_t repeats = 0;  // sites equal to the one before them, copied
+  uint64_t ewmms = 0;    // windows computed
 };
 
 class CpuRiskKernel {
@@ -138,6 +139,11 @@ class CpuRiskKernel {
   // Scratch.
   std::vector<LocatedSite> sites_;
   std::vector<LocatedSite> ordered_;
+  struct Repeat {
+    uint32_t index;    // a configuration whose site equals the one before it
+    uint32_t same_as;  // the configuration its result is copied from
+  };
+  std::vector<Repeat> repeats_;
   std::vector<uint64_t> keys_;
   std::vector<uint32_t> counts_;
   std::vector<double> impact_;

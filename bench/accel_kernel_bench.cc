@@ -185,6 +185,9 @@ void RunKernel(benchmark::State& state, const std::vector<Pose>& configs, bool p
   benchmark::DoNotOptimize(sink);
   state.SetItemsProcessed(
       static_cast<int64_t>(state.iterations() * (configs.size() / batch * batch)));
+  // Sites equal to the one before them (computed once, copied).
+  state.counters["repeat_share"] = static_cast<double>(kernel.stats().repeats) /
+                                   static_cast<double>(kernel.stats().configurations);
 }
 
 void BM_Core_Along(benchmark::State& state) { RunCore(state, Along()); }

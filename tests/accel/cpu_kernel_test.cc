@@ -3,6 +3,7 @@
 // order, and on the awkward configurations.
 #include "accel/cpu_kernel.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <tuple>
@@ -31,6 +32,33 @@ void ExpectExact(const RiskModel& model, CpuRiskKernel& kernel, const std::vecto
                     << " vs " << want.risk;
     }
   }
+}
+
+// Consecutive configurations with the same kernel site (the same impact
+// cell and bins: samples of a trajectory closer than a cell, or the same pose
+// twice) are computed once and copied; every result is still exact, whatever
+// the precision, and only equal sites are copied.
+TEST(CpuKernelTest, RepeatedSitesAreComputedOnceWithTheSameResults) {
+  const RiskModel& model = *SmallCity();
+  std::vector<Pose> configs;
+  for (const Pose& q : MixedConfigs(model, 3000, 41)) {
+    configs.push_back(q);
+    // The same pose, and a pose 1 cm away (nearly always the same site).
+    configs.push_back(q);
+    configs.push_back(Pose{q.x + 0.01, q.y, q.z, q.theta});
+  }
+  CpuRiskKernel kernel(nullptr, nullptr);
+  ExpectExact(model, kernel, configs);
+  EXPECT_GT(kernel.stats().repeats, 5000u);
+  EXPECT_EQ(kernel.stats().ewmms + kernel.stats().repeats,
+            static_cast<uint64_t>(std::count_if(configs.begin(), configs.end(), [&](const Pose& q) {
+              KernelSite site;
+              return model.Locate(q, &site);
+            })));
+  // Samples 5 m apart along legs rarely repeat a site, and never wrongly.
+  CpuRiskKernel along(nullptr, nullptr);
+  ExpectExact(model, along, MixedConfigs(model, 20000, 42));
+  EXPECT_LT(along.stats().repeats, 2000u);
 }
 
 // (instruction set, prepared maps and aligned weights, site cache, sort

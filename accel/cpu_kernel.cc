@@ -619,21 +619,31 @@ void CpuRiskKernel::Evaluate(const RiskModel& model, std::span<const Pose> confi
   // The float32 path needs its weights; without them everything is exact.
   const bool float32 = options_.precision == KernelPrecision::kFloat32 &&
                        WeightsFor(model, WeightFormat::kFloat32) != nullptr;
-  if (float32) {
-    finisher_->PrepareFor(model);
-    SumsFloat32(model, sites_, impact_, shelter_);
-  } else {
-    Sums(model, sites_, impact_, shelter_);
-  }
-  for (size_t a = 0; a < sites_.size(); ++a) {
-    const ConfigurationRisk r = float32 ? finisher_->Finish(sites_[a].site, impact_[a], shelter_[a])
-                                        : model.FromSums(sites_[a].site, impact_[a], shelter_[a]);
-    out[sites_[a].index] = r;
-    if (cached) {
-      const uint64_t key = SiteCache::KeyOf(session, sites_[a].site);
-      if (key != 0) {
-        site_cache_->Insert(session, key,
-                            {r.impact_factor, r.expected_shelter, r.casualty_probability});
+  if (float32) finisher_->PrepareFor(model);
+  // Sums and finishing a block at a time, so that a large batch's sums are
+  // still in the caches when they are finished.
+  constexpr size_t kBlock = 4096;
+  for (size_t first = 0; first < sites_.size(); first += kBlock) {
+    const size_t n = std::min(kBlock, sites_.size() - first);
+    const std::span<const LocatedSite> block(sites_.data() + first, n);
+    if (float32) {
+      SumsFloat32(model, block, std::span(impact_).subspan(first, n),
+                  std::span(shelter_).subspan(first, n));
+    } else {
+      Sums(model, block, std::span(impact_).subspan(first, n),
+           std::span(shelter_).subspan(first, n));
+    }
+    for (size_t a = first; a < first + n; ++a) {
+      const ConfigurationRisk r = float32
+                                      ? finisher_->Finish(sites_[a].site, impact_[a], shelter_[a])
+                                      : model.FromSums(sites_[a].site, impact_[a], shelter_[a]);
+      out[sites_[a].index] = r;
+      if (cached) {
+        const uint64_t key = SiteCache::KeyOf(session, sites_[a].site);
+        if (key != 0) {
+          site_cache_->Insert(session, key,
+                              {r.impact_factor, r.expected_shelter, r.casualty_probability});
+        }
       }
     }
   }

@@ -15,8 +15,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <fstream>
 #include <list>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -123,6 +125,28 @@ class ShimProcess {
   // Null (with a test failure) when the shim does not come up within 20 s.
   static std::unique_ptr<ShimProcess> Start(const std::vector<std::string>& args,
                                             const std::string& listen = "127.0.0.1:0") {
+    std::unique_ptr<ShimProcess> shim = Launch(args, listen, /*capture_stderr=*/false);
+    if (shim == nullptr || shim->endpoint().empty()) {
+      ADD_FAILURE() << "riskplan-fpga-shim did not come up: '"
+                    << (shim == nullptr ? "" : shim->stdout_) << "'";
+      return nullptr;
+    }
+    return shim;
+  }
+  // Like Start, but returns the process whether or not it came up (then
+  // endpoint() is empty: it refused its flags, say); with `capture_stderr`
+  // its stderr goes to a file that Stderr() reads. Null only when no process
+  // could be started.
+  static std::unique_ptr<ShimProcess> Launch(const std::vector<std::string>& args,
+                                             const std::string& listen, bool capture_stderr) {
+    auto shim = std::unique_ptr<ShimProcess>(new ShimProcess());
+    int err_fd = -1;
+    if (capture_stderr) {
+      char path[] = "/tmp/riskplan-shim-stderr-XXXXXX";
+      err_fd = mkstemp(path);
+      if (err_fd < 0) return nullptr;
+      shim->stderr_path_ = path;
+    }
     int out[2];
     if (pipe2(out, O_CLOEXEC) != 0) return nullptr;
     const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-fpga-shim";
@@ -134,16 +158,16 @@ class ShimProcess {
     const pid_t pid = fork();
     if (pid == 0) {
       dup2(out[1], STDOUT_FILENO);
+      if (err_fd >= 0) dup2(err_fd, STDERR_FILENO);
       execv(binary.c_str(), argv.data());
       _exit(127);
     }
     close(out[1]);
-    auto shim = std::unique_ptr<ShimProcess>(new ShimProcess());
+    if (err_fd >= 0) close(err_fd);
     shim->pid_ = pid;
     // Read up to the readiness line, with a deadline.
-    std::string text;
+    std::string& text = shim->stdout_;
     const absl::Time deadline = absl::Now() + absl::Seconds(20);
-    const std::string marker = "riskplan-fpga-shim listening on ";
     while (text.find('\n') == std::string::npos && absl::Now() < deadline) {
       pollfd p{out[0], POLLIN, 0};
       if (poll(&p, 1, 100) <= 0) continue;
@@ -153,16 +177,18 @@ class ShimProcess {
       text.append(buf, static_cast<size_t>(got));
     }
     close(out[0]);
+    const std::string marker = "riskplan-fpga-shim listening on ";
     const size_t at = text.find(marker);
     const size_t end = text.find('\n');
-    if (at == std::string::npos || end == std::string::npos) {
-      ADD_FAILURE() << "riskplan-fpga-shim did not come up: '" << text << "'";
-      return nullptr;
+    if (at != std::string::npos && end != std::string::npos) {
+      shim->endpoint_ = text.substr(at + marker.size(), end - at - marker.size());
     }
-    shim->endpoint_ = text.substr(at + marker.size(), end - at - marker.size());
     return shim;
   }
-  ~ShimProcess() { Kill(); }
+  ~ShimProcess() {
+    Kill();
+    if (!stderr_path_.empty()) unlink(stderr_path_.c_str());
+  }
   const std::string& endpoint() const { return endpoint_; }
   // SIGKILL and reap.
   void Kill() {
@@ -171,10 +197,29 @@ class ShimProcess {
     waitpid(pid_, nullptr, 0);
     pid_ = -1;
   }
+  // SIGTERM, then waits for it to exit: its exit code (-1: killed by a
+  // signal, or already gone).
+  int Terminate() {
+    if (pid_ <= 0) return -1;
+    kill(pid_, SIGTERM);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  // What it wrote to stderr so far (Launch with capture_stderr only).
+  std::string Stderr() const {
+    std::ifstream in(stderr_path_);
+    std::stringstream all;
+    all << in.rdbuf();
+    return all.str();
+  }
 
  private:
   int pid_ = -1;
   std::string endpoint_;
+  std::string stdout_;
+  std::string stderr_path_;
 };
 
 // What a board with `format` must answer for q: the model's fixed-point

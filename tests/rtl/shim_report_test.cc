@@ -2,15 +2,7 @@
 // report it prints when it stops (the component's job cycles and every
 // simulated clock of the bus, each as a time at the reported clock), with
 // the component's CLOCK_HZ and with --report_clock_hz.
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cstdio>
-#include <cstdlib>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -18,8 +10,6 @@
 #include <vector>
 
 #include "absl/strings/numbers.h"
-#include "absl/time/clock.h"
-#include "absl/time/time.h"
 #include "accel/risk_engine.h"
 #include "bench/demo_city_configs.h"
 #include "gtest/gtest.h"
@@ -40,46 +30,17 @@ struct ShimRun {
 ShimRun RunShim(const std::vector<std::string>& args, const std::vector<Pose>& configs,
                 bool expect_up = true) {
   ShimRun run;
-  char err_path[] = "/tmp/riskplan-shim-report-XXXXXX";
-  const int err_fd = mkstemp(err_path);
-  int out[2];
-  if (err_fd < 0 || pipe2(out, O_CLOEXEC) != 0) {
-    ADD_FAILURE() << "no temporary file or pipe";
+  std::unique_ptr<testing::ShimProcess> shim =
+      testing::ShimProcess::Launch(args, "127.0.0.1:0", /*capture_stderr=*/true);
+  if (shim == nullptr) {
+    ADD_FAILURE() << "riskplan-fpga-shim could not be started";
     return run;
   }
-  const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-fpga-shim";
-  std::vector<std::string> argv_text = {binary, "--listen=127.0.0.1:0"};
-  argv_text.insert(argv_text.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : argv_text) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(out[1], STDOUT_FILENO);
-    dup2(err_fd, STDERR_FILENO);
-    execv(binary.c_str(), argv.data());
-    _exit(127);
-  }
-  close(out[1]);
-  close(err_fd);
-  std::string text;
-  const absl::Time deadline = absl::Now() + absl::Seconds(20);
-  while (text.find('\n') == std::string::npos && absl::Now() < deadline) {
-    pollfd p{out[0], POLLIN, 0};
-    if (poll(&p, 1, 100) <= 0) continue;
-    char buf[256];
-    const ssize_t got = read(out[0], buf, sizeof(buf));
-    if (got <= 0) break;
-    text.append(buf, static_cast<size_t>(got));
-  }
-  close(out[0]);
-  const std::string marker = "riskplan-fpga-shim listening on ";
-  const size_t at = text.find(marker), end = text.find('\n');
-  if (at != std::string::npos && end != std::string::npos) {
+  if (!shim->endpoint().empty()) {
     RiskEngineOptions options;
     options.cpu_workers = 0;
     options.caller_runs = false;
-    options.fpga_shims = {text.substr(at + marker.size(), end - at - marker.size())};
+    options.fpga_shims = {shim->endpoint()};
     auto engine = RiskEngine::Create(options);
     EXPECT_TRUE(engine.ok());
     if (engine.ok()) {
@@ -91,17 +52,10 @@ ShimRun RunShim(const std::vector<std::string>& args, const std::vector<Pose>& c
       run.hello_clock_hz = (*engine)->Stats().fpga[0].hello.clock_hz;
     }
   } else if (expect_up) {
-    ADD_FAILURE() << "riskplan-fpga-shim did not come up: '" << text << "'";
+    ADD_FAILURE() << "riskplan-fpga-shim did not come up: " << shim->Stderr();
   }
-  kill(pid, SIGTERM);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  run.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_path);
-  std::stringstream all;
-  all << in.rdbuf();
-  run.report = all.str();
-  unlink(err_path);
+  run.exit_status = shim->Terminate();
+  run.report = shim->Stderr();
   return run;
 }
 

@@ -30,6 +30,7 @@
 #include "accel/blobs.h"
 #include "accel/fixed_point.h"
 #include "accel/net.h"
+#include "accel/risk_engine.h"
 #include "accel/shim/device.h"
 #include "accel/shim/shim_session.h"
 #include "core/demo_city.h"
@@ -221,6 +222,27 @@ class ShimProcess {
   std::string stdout_;
   std::string stderr_path_;
 };
+
+// An engine whose only worker is the board at `endpoint` (no CPU workers,
+// callers do not compute while it is up: every chunk goes to the board),
+// returned once that worker is up. Null, with a test failure, when the
+// engine cannot be made; a test failure when the board never comes up.
+inline std::unique_ptr<RiskEngine> BoardOnlyEngine(const std::string& endpoint,
+                                                   int min_chunk_configs = 512) {
+  RiskEngineOptions options;
+  options.cpu_workers = 0;
+  options.caller_runs = false;
+  options.min_chunk_configs = min_chunk_configs;
+  options.fpga_shims = {endpoint};
+  absl::StatusOr<std::unique_ptr<RiskEngine>> engine = RiskEngine::Create(options);
+  if (!engine.ok()) {
+    ADD_FAILURE() << engine.status();
+    return nullptr;
+  }
+  EXPECT_TRUE(WaitFor([&] { return (*engine)->Stats().fpga[0].state == WorkerState::kUp; }))
+      << "the board at " << endpoint << " never came up";
+  return *std::move(engine);
+}
 
 // What a board with `format` must answer for q: the model's fixed-point
 // sums, converted and finished on the server like FpgaWorker does.

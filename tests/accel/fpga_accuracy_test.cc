@@ -21,21 +21,6 @@ using testing::SameRisk;
 using testing::ShimProcess;
 using testing::SmallCity;
 
-// An engine whose only worker is the board at `endpoint`.
-std::unique_ptr<RiskEngine> FpgaOnlyEngine(const std::string& endpoint) {
-  RiskEngineOptions options;
-  options.cpu_workers = 0;
-  options.caller_runs = false;
-  options.min_chunk_configs = 2000;
-  options.fpga_shims = {endpoint};
-  auto engine = RiskEngine::Create(options);
-  EXPECT_TRUE(engine.ok()) << engine.status();
-  EXPECT_TRUE(testing::WaitFor([&] {
-    return (*engine)->Stats().fpga[0].state == WorkerState::kUp;
-  })) << "the board never came up";
-  return *std::move(engine);
-}
-
 // Window sums of density and shelter for the bound (spec's out-of-map values).
 void WindowSums(const RiskModel& model, const KernelSite& s, double* sum_rho, double* sum_s,
                 int* cells) {
@@ -55,7 +40,8 @@ void CheckBoard(const std::vector<std::string>& shim_args, const NumberFormat& f
                 double risk_tolerance) {
   auto shim = ShimProcess::Start(shim_args);
   ASSERT_NE(shim, nullptr);
-  auto engine = FpgaOnlyEngine(shim->endpoint());
+  std::unique_ptr<RiskEngine> engine = testing::BoardOnlyEngine(shim->endpoint(), 2000);
+  ASSERT_NE(engine, nullptr);
   const RiskModel& model = *SmallCity();
   const std::vector<Pose> configs = MixedConfigs(model, 6000, 21);
   std::vector<ConfigurationRisk> out(configs.size());

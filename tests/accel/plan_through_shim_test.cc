@@ -102,21 +102,15 @@ double CompareWithBoard(const std::string& format, double risk_tolerance) {
   auto shim = ShimProcess::Start({"--device=model", "--format=" + format});
   EXPECT_NE(shim, nullptr);
   if (shim == nullptr) return 0;
-  RiskEngineOptions options;
-  options.cpu_workers = 0;
-  options.caller_runs = false;  // every batch to the board
-  options.fpga_shims = {shim->endpoint()};
-  auto engine = RiskEngine::Create(options);
-  EXPECT_TRUE(engine.ok());
-  EXPECT_TRUE(
-      testing::WaitFor([&] { return (*engine)->Stats().fpga[0].state == WorkerState::kUp; }));
+  std::unique_ptr<RiskEngine> engine = testing::BoardOnlyEngine(shim->endpoint());
+  if (engine == nullptr) return 0;
   const std::vector<PlanningProblem> problems = Problems();
   EXPECT_GE(problems.size(), 6u);
   int matches = 0;
   double worst = 0.0;
   for (size_t p = 0; p < problems.size(); ++p) {
     auto cpu = PlanWith(nullptr, problems[p]);
-    std::unique_ptr<RiskEvaluator> engine_evaluator = (*engine)->NewEvaluator();
+    std::unique_ptr<RiskEvaluator> engine_evaluator = engine->NewEvaluator();
     ComparingEvaluator evaluator(engine_evaluator.get());
     auto board = PlanWith(&evaluator, problems[p]);
     EXPECT_TRUE(cpu.ok() && board.ok());
@@ -145,7 +139,7 @@ double CompareWithBoard(const std::string& format, double risk_tolerance) {
     }
   }
   // Every batch went to the board.
-  EXPECT_EQ((*engine)->Stats().caller_configurations, 0u);
+  EXPECT_EQ(engine->Stats().caller_configurations, 0u);
   std::cout << "format " << format << ": " << matches << " of " << problems.size()
             << " trajectories identical to the CPU path; largest relative error of M " << worst
             << "\n";

@@ -41,21 +41,15 @@ BoardRun PlanThroughShim(const std::vector<std::string>& args,
   auto shim = ShimProcess::Start(args);
   EXPECT_NE(shim, nullptr);
   if (shim == nullptr) return run;
-  RiskEngineOptions options;
-  options.cpu_workers = 0;
-  options.caller_runs = false;
-  options.fpga_shims = {shim->endpoint()};
-  auto engine = RiskEngine::Create(options);
-  EXPECT_TRUE(engine.ok());
-  EXPECT_TRUE(
-      testing::WaitFor([&] { return (*engine)->Stats().fpga[0].state == WorkerState::kUp; }));
+  std::unique_ptr<RiskEngine> engine = testing::BoardOnlyEngine(shim->endpoint());
+  if (engine == nullptr) return run;
   for (const PlanningProblem& problem : problems) {
-    std::unique_ptr<RiskEvaluator> evaluator = (*engine)->NewEvaluator();
+    std::unique_ptr<RiskEvaluator> evaluator = engine->NewEvaluator();
     auto plan = PlanWith(evaluator.get(), problem, iterations);
     EXPECT_TRUE(plan.ok()) << plan.status();
     run.plans.push_back(plan.ok() ? *std::move(plan) : PlanResult{});
   }
-  const RiskEngineStats stats = (*engine)->Stats();
+  const RiskEngineStats stats = engine->Stats();
   EXPECT_EQ(stats.caller_configurations, 0u);
   run.device_cycles = stats.fpga[0].device_cycles;
   run.backend = stats.fpga[0].hello.backend;
@@ -80,7 +74,8 @@ TEST(PlanThroughRtlTest, BoardBuildGivesTheModelBackendsTrajectories) {
   problems.resize(2);
   const BoardRun rtl =
       PlanThroughShim({"--device=verilator", "--rtl_config=l8-board"}, problems, kIterations);
-  const BoardRun model = PlanThroughShim({"--device=model", "--format=board"}, problems, kIterations);
+  const BoardRun model =
+      PlanThroughShim({"--device=model", "--format=board"}, problems, kIterations);
   EXPECT_EQ(rtl.backend, "verilator");
   EXPECT_EQ(rtl.lanes, 8u);
   EXPECT_EQ(model.backend, "model");

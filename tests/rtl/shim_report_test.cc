@@ -37,19 +37,12 @@ ShimRun RunShim(const std::vector<std::string>& args, const std::vector<Pose>& c
     return run;
   }
   if (!shim->endpoint().empty()) {
-    RiskEngineOptions options;
-    options.cpu_workers = 0;
-    options.caller_runs = false;
-    options.fpga_shims = {shim->endpoint()};
-    auto engine = RiskEngine::Create(options);
-    EXPECT_TRUE(engine.ok());
-    if (engine.ok()) {
-      EXPECT_TRUE(
-          testing::WaitFor([&] { return (*engine)->Stats().fpga[0].state == WorkerState::kUp; }));
-      std::unique_ptr<RiskEvaluator> evaluator = (*engine)->NewEvaluator();
+    std::unique_ptr<RiskEngine> engine = testing::BoardOnlyEngine(shim->endpoint());
+    if (engine != nullptr) {
+      std::unique_ptr<RiskEvaluator> evaluator = engine->NewEvaluator();
       std::vector<ConfigurationRisk> risks(configs.size());
       EXPECT_TRUE(evaluator->EvaluateBatch(*testing::SmallCity(), configs, risks).ok());
-      run.hello_clock_hz = (*engine)->Stats().fpga[0].hello.clock_hz;
+      run.hello_clock_hz = engine->Stats().fpga[0].hello.clock_hz;
     }
   } else if (expect_up) {
     ADD_FAILURE() << "riskplan-fpga-shim did not come up: " << shim->Stderr();

@@ -1,4 +1,5 @@
 #include "accel/batch_locate.h"
+#include "core/base/check.h"
 
 #include <algorithm>
 #include <cmath>
@@ -212,6 +213,7 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
 
 void LocateSites(const RiskModel& model, std::span<const Pose> configs,
                  std::span<ConfigurationRisk> out, std::vector<LocatedSite>* sites, bool use_avx2) {
+  RISKPLAN_DCHECK(out.size() == configs.size() && configs.size() <= (size_t{1} << 32));
 #if defined(__x86_64__)
   if (use_avx2) return LocateAvx2(model, configs, out, sites);
 #endif

@@ -8,8 +8,8 @@
 #include <span>
 #include <vector>
 
-#include "core/geometry.h"
-#include "core/risk_model.h"
+#include "core/base/geometry.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::accel {
 

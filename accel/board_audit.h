@@ -11,7 +11,7 @@
 
 #include "absl/status/status.h"
 #include "accel/fixed_point.h"
-#include "core/risk_model.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::accel {
 

@@ -42,8 +42,8 @@
 #include "accel/kernel_weights.h"
 #include "accel/prepared_map.h"
 #include "accel/site_cache.h"
-#include "core/geometry.h"
-#include "core/risk_model.h"
+#include "core/base/geometry.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::accel {
 

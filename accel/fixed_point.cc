@@ -6,6 +6,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "core/base/check.h"
 
 namespace riskplan::accel {
 
@@ -54,6 +55,8 @@ int LayerExponent(double max_value, int cell_bits) {
 }
 
 uint64_t QuantizeCell(double v, int exponent) {
+  RISKPLAN_DCHECK(v >= 0.0 && std::isfinite(v));
+  RISKPLAN_DCHECK(std::ldexp(v, exponent) < 0x1p63);
   // v * 2^E is exact (a power-of-two scaling of a float), and so is + 0.5
   // below 2^52.
   return static_cast<uint64_t>(std::floor(std::ldexp(v, exponent) + 0.5));

@@ -1,4 +1,5 @@
 #include "accel/float_kernel.h"
+#include "core/base/check.h"
 
 #include <algorithm>
 #include <array>
@@ -286,6 +287,8 @@ double FastRiskFinisher::CasualtyProbability(int height_bin, double expected_she
 
 ConfigurationRisk FastRiskFinisher::Finish(const KernelSite& site, double impact_factor,
                                            double expected_shelter) const {
+  // PrepareFor(model) ran: the site's height bin has its constants.
+  RISKPLAN_DCHECK(site.height_bin >= 1 && static_cast<size_t>(site.height_bin) <= bins_.size());
   ConfigurationRisk out;
   out.impact_factor = impact_factor;
   out.expected_shelter = expected_shelter;

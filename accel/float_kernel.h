@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "accel/cpu_kernel.h"
-#include "core/risk_model.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::accel {
 

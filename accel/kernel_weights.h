@@ -26,7 +26,8 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 #include "accel/prepared_map.h"
-#include "core/impact_table.h"
+#include "core/risk/impact_table.h"
+#include "core/base/check.h"
 
 namespace riskplan::accel {
 
@@ -46,16 +47,23 @@ class KernelWeights {
   // r * StrideFor(side) elements; entries past the side are 0.
   // REQUIRES: the matching format; 1 <= b <= height bins, 0 <= k < heading bins.
   const double* doubles(int b, int k) const {
+    RISKPLAN_DCHECK(format_ == WeightFormat::kDouble);
     return static_cast<const double*>(buffer_.data()) + offsets_[Index(b, k)];
   }
   const float* floats(int b, int k) const {
+    RISKPLAN_DCHECK(format_ == WeightFormat::kFloat32);
     return static_cast<const float*>(buffer_.data()) + offsets_[Index(b, k)];
   }
   size_t MemoryBytes() const { return buffer_.size(); }
 
  private:
   KernelWeights() = default;
-  size_t Index(int b, int k) const { return static_cast<size_t>(b - 1) * heading_bins_ + k; }
+  size_t Index(int b, int k) const {
+    RISKPLAN_DCHECK(b >= 1 && k >= 0 && k < heading_bins_);
+    const size_t index = static_cast<size_t>(b - 1) * heading_bins_ + k;
+    RISKPLAN_DCHECK(index < offsets_.size());  // b <= height bins
+    return index;
+  }
 
   WeightFormat format_ = WeightFormat::kDouble;
   int heading_bins_ = 0;

@@ -1,7 +1,7 @@
 #include "accel/known_answer.h"
 
 #include "absl/strings/str_format.h"
-#include "core/random.h"
+#include "core/base/random.h"
 
 namespace riskplan::accel {
 namespace {

@@ -22,7 +22,7 @@
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
-#include "core/risk_map.h"
+#include "core/map/risk_map.h"
 
 namespace riskplan::accel {
 

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "absl/strings/str_cat.h"
+#include "core/base/check.h"
 
 namespace riskplan::accel {
 namespace {
@@ -74,6 +75,7 @@ absl::StatusOr<std::unique_ptr<RiskEngine>> RiskEngine::Create(const RiskEngineO
 }
 
 RiskEngine::~RiskEngine() {
+  RISKPLAN_DCHECK(evaluating_.load() == 0);
   queue_.Stop();
   for (std::thread& t : cpu_threads_) t.join();
   std::vector<std::unique_ptr<FpgaWorker>> fpga;
@@ -166,6 +168,11 @@ absl::Status RiskEngine::Evaluate(const RiskModel& model, std::span<const Pose> 
         "RiskEngine::Evaluate: batch of more than 2^32 configurations");
   }
   if (configs.empty()) return absl::OkStatus();
+  evaluating_.fetch_add(1, std::memory_order_relaxed);
+  struct Done {
+    std::atomic<int>* count;
+    ~Done() { count->fetch_sub(1, std::memory_order_relaxed); }
+  } done{&evaluating_};
   const size_t n = configs.size();
   const size_t workers =
       std::max<size_t>(1, static_cast<size_t>(options_.cpu_workers + queue_.fpga_up() +

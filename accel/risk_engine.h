@@ -24,6 +24,7 @@
 #ifndef RISKPLAN_ACCEL_RISK_ENGINE_H_
 #define RISKPLAN_ACCEL_RISK_ENGINE_H_
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -42,7 +43,7 @@
 #include "accel/prepared_map.h"
 #include "accel/site_cache.h"
 #include "accel/work_queue.h"
-#include "core/risk_evaluator.h"
+#include "core/risk/risk_evaluator.h"
 
 namespace riskplan::accel {
 
@@ -138,6 +139,8 @@ class RiskEngine {
   void ReturnKernel(std::unique_ptr<CpuRiskKernel> kernel);
 
   const RiskEngineOptions options_;
+  // Evaluate() calls in progress: the destructor checks there are none.
+  std::atomic<int> evaluating_{0};
   SiteCache site_cache_;
   PreparedMapCache prepared_maps_;
   KernelWeightsCache kernel_weights_;

@@ -1,4 +1,5 @@
 #include "accel/site_cache.h"
+#include "core/base/check.h"
 
 #include <algorithm>
 #include <bit>
@@ -74,6 +75,7 @@ void SiteCache::Prefetch(uint64_t key) const {
 }
 
 bool SiteCache::Lookup(const Session& session, uint64_t key, Values* values) const {
+  RISKPLAN_DCHECK(key != 0);
   const Slot& slot = SlotOf(key);
   if (slot.key.load(std::memory_order_acquire) != key) return false;
   const uint64_t impact = slot.impact_bits.load(std::memory_order_relaxed);
@@ -90,6 +92,7 @@ bool SiteCache::Lookup(const Session& session, uint64_t key, Values* values) con
 }
 
 void SiteCache::Insert(const Session& session, uint64_t key, const Values& values) {
+  RISKPLAN_DCHECK(key != 0);
   Slot& slot = SlotOf(key);
   uint64_t old = slot.key.load(std::memory_order_relaxed);
   if (old == kBusy || old == key) return;

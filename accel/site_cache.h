@@ -29,7 +29,7 @@
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
-#include "core/risk_model.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::accel {
 

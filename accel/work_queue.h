@@ -26,8 +26,8 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
-#include "core/geometry.h"
-#include "core/risk_model.h"
+#include "core/base/geometry.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::accel {
 

@@ -20,10 +20,10 @@
 #include "accel/risk_engine.h"
 #include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
-#include "core/demo_city.h"
-#include "core/planner.h"
-#include "core/random.h"
-#include "core/risk_model.h"
+#include "core/map/demo_city.h"
+#include "core/planners/planner.h"
+#include "core/base/random.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan {
 namespace {

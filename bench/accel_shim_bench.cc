@@ -21,7 +21,7 @@
 #include "accel/shim/shim_server.h"
 #include "bench/demo_city_configs.h"
 #include "benchmark/benchmark.h"
-#include "core/demo_city.h"
+#include "core/map/demo_city.h"
 
 namespace riskplan {
 namespace {

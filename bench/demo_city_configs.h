@@ -8,9 +8,9 @@
 #include <cmath>
 #include <vector>
 
-#include "core/geometry.h"
-#include "core/random.h"
-#include "core/risk_model.h"
+#include "core/base/geometry.h"
+#include "core/base/random.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::bench {
 

@@ -20,8 +20,8 @@
 #include "absl/flags/usage.h"
 #include "absl/strings/str_split.h"
 #include "bench/scenarios.h"
-#include "core/demo_city.h"
-#include "core/planner.h"
+#include "core/map/demo_city.h"
+#include "core/planners/planner.h"
 
 ABSL_FLAG(int, seeds, 5, "seeds per scenario");
 ABSL_FLAG(double, budget_s, 3.0, "wall-time budget per run, s");

@@ -7,8 +7,8 @@
 
 #include "bench/demo_city_configs.h"
 #include "benchmark/benchmark.h"
-#include "core/demo_city.h"
-#include "core/risk_model.h"
+#include "core/map/demo_city.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan {
 namespace {

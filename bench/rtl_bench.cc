@@ -31,8 +31,8 @@
 #include "accel/rtl/verilated_component.h"
 #include "accel/shim/mmio_device.h"
 #include "bench/demo_city_configs.h"
-#include "core/demo_city.h"
-#include "core/risk_model.h"
+#include "core/map/demo_city.h"
+#include "core/risk/risk_model.h"
 
 ABSL_FLAG(int, configs, 4096, "configurations per pattern");
 ABSL_FLAG(std::string, lanes, "1,2,4,8,16", "lane counts to measure (at most the config's)");

@@ -6,7 +6,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git
-  libabsl-dev libeigen3-dev nlohmann-json3-dev libssl-dev libpng-dev
+  libabsl-dev nlohmann-json3-dev libssl-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   prometheus-cpp-dev

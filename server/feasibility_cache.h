@@ -24,8 +24,8 @@
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
-#include "core/risk_model.h"
-#include "core/two_tier_feasibility.h"
+#include "core/risk/risk_model.h"
+#include "core/planners/two_tier_feasibility.h"
 
 namespace riskplan::server {
 

@@ -4,7 +4,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "core/map_bundle.h"
+#include "core/map/map_bundle.h"
 
 namespace riskplan::server {
 

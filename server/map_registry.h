@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "core/demo_city.h"
-#include "core/risk_map.h"
+#include "core/map/demo_city.h"
+#include "core/map/risk_map.h"
 
 namespace riskplan::server {
 

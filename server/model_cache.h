@@ -21,9 +21,9 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
-#include "core/model_params.h"
-#include "core/risk_map.h"
-#include "core/risk_model.h"
+#include "core/base/model_params.h"
+#include "core/map/risk_map.h"
+#include "core/risk/risk_model.h"
 #include "server/map_registry.h"
 
 namespace riskplan::server {

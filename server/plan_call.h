@@ -29,7 +29,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "accel/risk_engine.h"
-#include "core/planner.h"
+#include "core/planners/planner.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
 #include "server/metrics.h"

@@ -1,12 +1,13 @@
 #include "server/planner_service.h"
 
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
-#include "core/trajectory.h"
+#include "core/flight/trajectory.h"
 #include "server/proto_convert.h"
 #include "server/rpc_log.h"
 #include "server/status_util.h"
@@ -72,7 +73,8 @@ absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel:
   int64_t samples = 0;
   double length_m = 0.0;
   for (const TrajectoryPiece& piece : *pieces) {
-    samples += PartCount(piece.Length(), params.sample_step_m);
+    // Saturates at kMaxPartCount, so no sum of counts can wrap past the limit.
+    samples += std::min(PartCount(piece.Length(), params.sample_step_m), kMaxPartCount - samples);
     length_m += piece.Length();
   }
   if (absl::Status s =

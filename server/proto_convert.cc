@@ -54,7 +54,7 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samp
     v1::PieceEvaluation* p = out->add_pieces();
     p->set_risk(piece.risk);
     p->set_length_m(piece.length_m);
-    p->set_parts(piece.parts);
+    p->set_parts(static_cast<int32_t>(piece.parts));  // bounded by --max_eval_samples
     p->set_admissible(piece.admissible);
     samples += piece.parts;
   }

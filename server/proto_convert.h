@@ -7,12 +7,12 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "core/geometry.h"
-#include "core/model_params.h"
-#include "core/planner.h"
-#include "core/risk_map.h"
-#include "core/trajectory.h"
-#include "core/two_tier_feasibility.h"
+#include "core/base/geometry.h"
+#include "core/base/model_params.h"
+#include "core/planners/planner.h"
+#include "core/map/risk_map.h"
+#include "core/flight/trajectory.h"
+#include "core/planners/two_tier_feasibility.h"
 #include "riskplan/v1/planner.pb.h"
 
 namespace riskplan::server {

@@ -20,11 +20,11 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "core/geometry.h"
-#include "core/model_params.h"
-#include "core/planner.h"
-#include "core/risk_map.h"
-#include "core/two_tier_feasibility.h"
+#include "core/base/geometry.h"
+#include "core/base/model_params.h"
+#include "core/planners/planner.h"
+#include "core/map/risk_map.h"
+#include "core/planners/two_tier_feasibility.h"
 #include "riskplan/v1/planner.pb.h"
 #include "server/map_registry.h"
 

@@ -21,7 +21,7 @@
 #include "absl/time/time.h"
 #include "accel/engine_metrics.h"
 #include "accel/risk_engine.h"
-#include "core/planner.h"
+#include "core/planners/planner.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/health_check_service_interface.h"

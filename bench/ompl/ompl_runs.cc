@@ -9,7 +9,7 @@
 #include "bench/ompl/grid_nearest_neighbors.h"
 #include "bench/ompl/risk_objective.h"
 #include "bench/ompl/risk_state_space.h"
-#include "core/trajectory.h"
+#include "core/flight/trajectory.h"
 #include "ompl/base/PlannerData.h"
 #include "ompl/base/ProblemDefinition.h"
 #include "ompl/base/ScopedState.h"

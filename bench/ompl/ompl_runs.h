@@ -19,7 +19,7 @@
 #include "absl/status/statusor.h"
 #include "bench/ompl/run_record.h"
 #include "bench/scenarios.h"
-#include "core/risk_model.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::bench {
 

@@ -13,17 +13,10 @@ bool Admissible(const RiskModel& model, const Pose& q) {
 
 }  // namespace
 
-EdgeSamples SampleEdge(const RiskModel& model, const Pose& a, const Pose& b) {
+PieceRisk EdgeRule(const RiskModel& model, const Pose& a, const Pose& b) {
   const ModelParams& p = model.params();
-  EdgeSamples edge{TrajectoryPiece::Manoeuvre(a, b, p.turn_radius_m, p.max_climb_rad), {}, 0.0};
-  // The same parts as EvaluateTrajectory: K = ceil(L / d_step), midpoints
-  // at (i + 0.5) * L / K.
-  const int parts = PartCount(edge.piece.Length(), p.sample_step_m);
-  edge.ds_m = parts > 0 ? edge.piece.Length() / parts : 0.0;
-  edge.midpoints.reserve(parts);
-  for (int i = 0; i < parts; ++i)
-    edge.midpoints.push_back(edge.piece.PoseAt((i + 0.5) * edge.ds_m));
-  return edge;
+  return PieceRisk(TrajectoryPiece::Manoeuvre(a, b, p.turn_radius_m, p.max_climb_rad),
+                   p.sample_step_m, p);
 }
 
 bool RiskValidityChecker::isValid(const ob::State* state) const {
@@ -39,21 +32,22 @@ bool RiskMotionValidator::checkMotion(const ob::State* s1, const ob::State* s2,
                                       std::pair<ob::State*, double>& last_valid) const {
   const Pose a = DubinsAirplaneSpace::ToPose(s1);
   const Pose b = DubinsAirplaneSpace::ToPose(s2);
-  const EdgeSamples edge = SampleEdge(model_, a, b);
-  const double length = edge.piece.Length();
-  // In order of arc length: start, midpoints, end.
+  const PieceRisk edge = EdgeRule(model_, a, b);
+  const double length = edge.piece().Length();
+  // The admissibility samples in order of arc length: start, midpoints, end.
   Pose previous = a;
   double previous_s = 0.0;
-  bool ok = Admissible(model_, a);
-  for (size_t i = 0; ok && i < edge.midpoints.size(); ++i) {
-    if (!Admissible(model_, edge.midpoints[i])) {
+  bool ok = true;
+  for (int64_t i = 0; i < edge.admissibility_samples(); ++i) {
+    double s = 0.0;
+    const Pose q = edge.AdmissibilitySample(i, &s);
+    if (!Admissible(model_, q)) {
       ok = false;
       break;
     }
-    previous = edge.midpoints[i];
-    previous_s = (i + 0.5) * edge.ds_m;
+    previous = q;
+    previous_s = s;
   }
-  if (ok) ok = Admissible(model_, b);
   if (ok) {
     ++valid_;
     return true;
@@ -80,22 +74,18 @@ ob::Cost RiskObjective::motionCostHeuristic(const ob::State* /*s1*/,
 
 ob::Cost RiskObjective::motionCost(const ob::State* s1, const ob::State* s2) const {
   ++edges_;
-  const EdgeSamples edge =
-      SampleEdge(model_, DubinsAirplaneSpace::ToPose(s1), DubinsAirplaneSpace::ToPose(s2));
+  PieceRisk edge =
+      EdgeRule(model_, DubinsAirplaneSpace::ToPose(s1), DubinsAirplaneSpace::ToPose(s2));
+  std::vector<Pose> midpoints;
+  edge.AppendMidpoints(0, edge.parts(), &midpoints);
   // Admissibility first (cheap): an inadmissible edge is never evaluated.
-  for (const Pose& q : edge.midpoints) {
+  for (const Pose& q : midpoints) {
     if (!Admissible(model_, q)) return infiniteCost();
   }
-  double sum = 0.0;
-  for (const Pose& q : edge.midpoints) {
-    const ConfigurationRisk r = model_.Evaluate(q);
-    if (r.defined) sum += r.risk;
-  }
-  configurations_ += edge.midpoints.size();
-  const ModelParams& p = model_.params();
-  // Exactly EvaluateTrajectory's piece risk: (lambda / v) * sum * ds.
-  const double per_metre = p.failure_rate_per_s / p.airspeed_mps;
-  return ob::Cost(per_metre * sum * edge.ds_m);
+  for (const Pose& q : midpoints) edge.Add(model_.Evaluate(q));
+  configurations_ += midpoints.size();
+  // Exactly EvaluateTrajectory's piece risk.
+  return ob::Cost(edge.Risk());
 }
 
 }  // namespace riskplan::bench

@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/risk_model.h"
-#include "core/trajectory.h"
+#include "core/risk/risk_model.h"
+#include "core/flight/trajectory.h"
 #include "ompl/base/MotionValidator.h"
 #include "ompl/base/OptimizationObjective.h"
 #include "ompl/base/SpaceInformation.h"
@@ -19,14 +19,9 @@
 
 namespace riskplan::bench {
 
-// The spec section 4 samples of the manoeuvre from `a` to `b`: its piece, the
-// K midpoints in order and the length of one part.
-struct EdgeSamples {
-  TrajectoryPiece piece;
-  std::vector<Pose> midpoints;
-  double ds_m = 0.0;
-};
-EdgeSamples SampleEdge(const RiskModel& model, const Pose& a, const Pose& b);
+// The piece-risk rule (core/flight/piece_risk.h) of the manoeuvre from `a`
+// to `b`: the same samples and sum as EvaluateTrajectory's.
+PieceRisk EdgeRule(const RiskModel& model, const Pose& a, const Pose& b);
 
 // A state is valid when its configuration is admissible (spec section 6).
 class RiskValidityChecker final : public ompl::base::StateValidityChecker {

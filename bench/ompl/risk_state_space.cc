@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <limits>
 
-#include "core/dubins.h"
+#include "core/flight/dubins.h"
 #include "ompl/base/spaces/RealVectorStateSpace.h"
 #include "ompl/base/spaces/SE2StateSpace.h"
 

@@ -13,8 +13,8 @@
 
 #include <memory>
 
-#include "core/geometry.h"
-#include "core/risk_model.h"
+#include "core/base/geometry.h"
+#include "core/risk/risk_model.h"
 #include "ompl/base/StateSampler.h"
 #include "ompl/base/StateSpace.h"
 

@@ -9,9 +9,9 @@
 #include "bench/ompl/risk_objective.h"
 #include "bench/ompl/risk_state_space.h"
 #include "bench/scenarios.h"
-#include "core/dubins.h"
-#include "core/random.h"
-#include "core/trajectory.h"
+#include "core/flight/dubins.h"
+#include "core/base/random.h"
+#include "core/flight/trajectory.h"
 #include "ompl/base/ScopedState.h"
 #include "ompl/datastructures/NearestNeighborsLinear.h"
 

@@ -14,7 +14,7 @@
 
 #include <memory>
 
-#include "core/risk_model.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan::bench {
 

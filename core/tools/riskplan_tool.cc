@@ -21,13 +21,13 @@
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
-#include "core/demo_city.h"
-#include "core/map_bundle.h"
-#include "core/risk_layer.h"
-#include "core/risk_model.h"
+#include "core/map/demo_city.h"
+#include "core/map/map_bundle.h"
+#include "core/risk/risk_layer.h"
+#include "core/risk/risk_model.h"
 #include "core/tools/layer_writers.h"
-#include "core/trajectory.h"
-#include "core/trajectory_io.h"
+#include "core/flight/trajectory.h"
+#include "core/flight/trajectory_io.h"
 #include "nlohmann/json.hpp"
 
 ABSL_FLAG(std::string, map, "",
@@ -149,8 +149,8 @@ void PrintText(const RiskMap& map, const TrajectoryInput& input, const Trajector
     std::printf("violation   %s\n", e.first_violation->ToString().c_str());
   }
   for (size_t p = 0; p < e.pieces.size(); ++p) {
-    std::printf("  piece %zu: length %.1f m, %d samples, risk %.6e%s\n", p, e.pieces[p].length_m,
-                e.pieces[p].parts, e.pieces[p].risk,
+    std::printf("  piece %zu: length %.1f m, %lld samples, risk %.6e%s\n", p, e.pieces[p].length_m,
+                static_cast<long long>(e.pieces[p].parts), e.pieces[p].risk,
                 e.pieces[p].admissible ? "" : ", inadmissible");
   }
   if (samples) {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "accel/blobs.h"
-#include "core/random.h"
+#include "core/base/random.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::accel {

@@ -16,7 +16,7 @@
 #include "accel/kernel_weights.h"
 #include "accel/risk_engine.h"
 #include "accel_test_util.h"
-#include "core/demo_city.h"
+#include "core/map/demo_city.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::accel {

@@ -11,7 +11,7 @@
 
 #include "accel/shim/component_model.h"
 #include "accel/shim/component_regs.h"
-#include "core/random.h"
+#include "core/base/random.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::accel {

@@ -9,7 +9,7 @@
 
 #include "accel_test_util.h"
 #include "bench/scenarios.h"
-#include "core/planner.h"
+#include "core/planners/planner.h"
 
 namespace riskplan::accel::testing {
 

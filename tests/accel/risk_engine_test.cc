@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "accel_test_util.h"
-#include "core/planner.h"
+#include "core/planners/planner.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::accel {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "accel_test_util.h"
-#include "core/random.h"
+#include "core/base/random.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::accel {

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "core/planner.h"
-#include "core/risk_map.h"
-#include "core/risk_model.h"
-#include "core/trajectory.h"
+#include "core/planners/planner.h"
+#include "core/map/risk_map.h"
+#include "core/risk/risk_model.h"
+#include "core/flight/trajectory.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::testing_maps {

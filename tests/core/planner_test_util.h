@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "bench/scenarios.h"
-#include "core/demo_city.h"
-#include "core/planner.h"
-#include "core/risk_model.h"
+#include "core/map/demo_city.h"
+#include "core/planners/planner.h"
+#include "core/risk/risk_model.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::testing_planner {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/planner.h"
+#include "core/planners/planner.h"
 #include "gtest/gtest.h"
 #include "tests/core/obstacle_test_maps.h"
 

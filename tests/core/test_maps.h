@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "core/risk_map.h"
+#include "core/map/risk_map.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::testing_maps {

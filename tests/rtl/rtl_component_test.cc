@@ -20,7 +20,7 @@
 #include "accel/shim/component_regs.h"
 #include "accel/shim/device.h"
 #include "accel/shim/mmio_device.h"
-#include "core/random.h"
+#include "core/base/random.h"
 #include "gtest/gtest.h"
 #include "tests/rtl/rtl_test_util.h"
 

@@ -13,7 +13,7 @@
 #include "accel/fixed_point.h"
 #include "accel/shim/device.h"
 #include "accel/shim/mmio_device.h"
-#include "core/random.h"
+#include "core/base/random.h"
 #include "gtest/gtest.h"
 #include "tests/rtl/rtl_test_util.h"
 

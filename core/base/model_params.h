@@ -1,0 +1,88 @@
+// The parameters of the ground-risk model and of the aircraft.
+//
+// Defaults are exactly the table "Default parameters" of shared/spec/risk-model.md.
+// Every field may be overridden per request; ValidateModelParams() says which
+// values are usable.
+#ifndef RISKPLAN_CORE_BASE_MODEL_PARAMS_H_
+#define RISKPLAN_CORE_BASE_MODEL_PARAMS_H_
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+
+namespace riskplan {
+
+struct ModelParams {
+  // Aircraft.
+  double mass_kg = 10.0;                    // m
+  double drag_coefficient = 0.8;            // c_d, ballistic
+  double frontal_area_m2 = 0.2;             // A_f, in ballistic fall
+  double airspeed_mps = 18.0;               // v, cruise (no wind: ground speed)
+  double uav_radius_m = 1.0;                // r_uav
+  double turn_radius_m = 50.0;              // R, minimum turning radius
+  double max_climb_rad = 0.15;              // gamma_max, climb or descent
+  double failure_rate_per_s = 5e-3 / 3600;  // lambda (5e-3 per flight hour)
+
+  // Physics.
+  double gravity_mps2 = 9.81;
+  double air_density_kgpm3 = 1.225;
+
+  // Casualty model.
+  double person_radius_m = 0.3;  // r_p
+  double person_height_m = 1.8;  // h_p
+  double alpha_j = 1e6;          // alpha
+  double beta_j = 100.0;         // beta
+
+  // Impact dispersion.
+  double sigma_pos_m = 5.0;
+  double sigma_speed_mps = 2.0;
+  double sigma_wind_mps = 2.0;
+
+  // Impact table discretisation.
+  int heading_bins = 72;              // N_theta
+  double height_bin_m = 5.0;          // Delta h
+  double table_max_height_m = 300.0;  // h_table_max (a multiple of height_bin_m)
+  int max_half_width = 31;            // hw_max: kernel at most 63 x 63 cells
+
+  // Trajectory sampling and flight band.
+  double sample_step_m = 5.0;  // d_step
+  double min_agl_m = 30.0;
+  double max_agl_m = 150.0;
+
+  // Safe-altitude map (emergency glide to a landing site).
+  double glide_ratio = 10.0;        // G
+  double glide_clearance_m = 10.0;  // clearance over terrain during a glide
+
+  // Number of height bins of the impact table: h_table_max / Delta h.
+  int HeightBins() const;
+};
+
+// Returns OK when every field is finite and inside the range riskplan accepts,
+// else InvalidArgument naming the first offending field and its value.
+absl::Status ValidateModelParams(const ModelParams& params);
+
+// Sets the field called `name` (the field names above, e.g. "mass_kg") to
+// `value`. Integer fields take integral values only. Returns InvalidArgument for
+// an unknown name or a non-integral value for an integer field; the range is
+// checked by ValidateModelParams().
+absl::Status SetModelParam(ModelParams* params, std::string_view name, double value);
+
+// Reads the field called `name`; NotFound for an unknown name.
+absl::StatusOr<double> GetModelParam(const ModelParams& params, std::string_view name);
+
+// Every settable field name, in declaration order.
+const std::vector<std::string_view>& ModelParamNames();
+
+// True when the two parameter sets give the same impact table for the same map
+// resolution (every field the table depends on is equal).
+bool SameImpactTableParams(const ModelParams& a, const ModelParams& b);
+
+// True when the two parameter sets give the same glide-altitude layer.
+bool SameGlideParams(const ModelParams& a, const ModelParams& b);
+
+}  // namespace riskplan
+
+#endif  // RISKPLAN_CORE_BASE_MODEL_PARAMS_H_

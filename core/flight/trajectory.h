@@ -1,0 +1,85 @@
+// Trajectories and their risk (spec sections 4 and 6).
+//
+// A trajectory is a sequence of pieces (core/flight/trajectory_piece.h):
+// straight segments (polyline input) or Dubins-airplane manoeuvres (waypoint
+// input). Each piece is sampled, summed and checked by the one piece-risk
+// rule, PieceRisk (core/flight/piece_risk.h).
+#ifndef RISKPLAN_CORE_FLIGHT_TRAJECTORY_H_
+#define RISKPLAN_CORE_FLIGHT_TRAJECTORY_H_
+
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/base/geometry.h"
+#include "core/flight/piece_risk.h"
+#include "core/flight/trajectory_piece.h"
+#include "core/risk/risk_evaluator.h"
+#include "core/risk/risk_model.h"
+
+namespace riskplan {
+
+// Builds pieces from input, rejecting (InvalidArgument, naming the index and
+// the value) fewer than 2 points, non-finite coordinates and more than
+// `max_points` points. Headings of waypoints are normalised to [0, 2 pi).
+absl::StatusOr<std::vector<TrajectoryPiece>> PiecesFromWaypoints(std::span<const Pose> waypoints,
+                                                                 const ModelParams& params,
+                                                                 size_t max_points = 100000);
+absl::StatusOr<std::vector<TrajectoryPiece>> PiecesFromPolyline(std::span<const Point3> points,
+                                                                size_t max_points = 100000);
+
+// The first sample, in order of arc length, that breaks a rule of spec section 6.
+struct Violation {
+  ViolationKind kind = ViolationKind::kNone;
+  Pose pose;                  // where
+  double arc_length_m = 0.0;  // from the start of the trajectory
+  int piece = 0;              // index of the piece
+  double limit_m = 0.0;       // altitude limit broken (NaN when the kind has none)
+  // E.g. "BELOW_SAFE_ALTITUDE at (1200.0, 3400.0, 160.0) m, arc length 812.5 m
+  // (piece 2): altitude 160.0 m < safe altitude 171.3 m".
+  std::string ToString() const;
+};
+
+struct PieceEvaluation {
+  double risk = 0.0;      // lambda * sum M * ds / v over defined samples
+  double length_m = 0.0;  // 3-D length
+  int64_t parts = 0;      // K
+  bool admissible = true;
+};
+
+struct SampleEvaluation {
+  Pose pose;
+  double arc_length_m = 0.0;  // from the start of the trajectory
+  int piece = 0;
+  ConfigurationRisk risk;
+};
+
+struct TrajectoryEvaluation {
+  // Sum of piece risks (expected casualties per flight). Where a sample's M is
+  // undefined (outside the map, at or below terrain) it adds nothing; such a
+  // trajectory is never admissible, and a planner treats it as infinite risk.
+  double risk = 0.0;
+  double length_m = 0.0;
+  bool admissible = true;
+  std::optional<Violation> first_violation;
+  std::vector<PieceEvaluation> pieces;
+  std::vector<SampleEvaluation> samples;  // only when asked for
+};
+
+struct EvaluationOptions {
+  bool keep_samples = false;
+};
+
+// Evaluates the risk, length and admissibility of `pieces`. The configuration
+// risks are computed in one batch through `evaluator` (DirectRiskEvaluator when
+// null). Fails only when the evaluator does.
+absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
+                                                        std::span<const TrajectoryPiece> pieces,
+                                                        const EvaluationOptions& options = {},
+                                                        RiskEvaluator* evaluator = nullptr);
+
+}  // namespace riskplan
+
+#endif  // RISKPLAN_CORE_FLIGHT_TRAJECTORY_H_

@@ -1,0 +1,360 @@
+#include "core/map/risk_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "core/base/check.h"
+
+namespace riskplan {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Values in messages: %.9g shows every float exactly enough to tell 10 from
+// 10.000001, and prints "nan"/"inf" for non-finite values.
+std::string FloatText(double v) { return absl::StrFormat("%.9g", v); }
+std::string DoubleText(double v) { return absl::StrFormat("%.17g", v); }
+
+bool ValidNameChar(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
+}
+
+absl::Status CellError(const char* layer, int i, int j, double value, const char* rule) {
+  return absl::InvalidArgumentError(absl::StrCat("layer '", layer, "': cell (", i, ", ", j,
+                                                 ") has value ", FloatText(value), "; ", rule));
+}
+
+absl::Status CheckLayerSize(const char* layer, size_t actual, int64_t expected) {
+  if (static_cast<int64_t>(actual) == expected) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrCat("layer '", layer, "' has ", actual, " entries; expected nx*ny = ", expected));
+}
+
+// Scans a layer in index order so that the reported cell is the first bad one
+// (south-west first), which makes messages reproducible.
+template <typename T, typename Ok>
+absl::Status CheckLayerValues(const char* layer, const std::vector<T>& values, int nx, Ok ok,
+                              const char* rule) {
+  for (size_t k = 0; k < values.size(); ++k) {
+    if (!ok(values[k])) {
+      const int i = static_cast<int>(k % nx);
+      const int j = static_cast<int>(k / nx);
+      return CellError(layer, i, j, static_cast<double>(values[k]), rule);
+    }
+  }
+  return absl::OkStatus();
+}
+
+// Copies one layer into the centre of a padded raster whose border holds
+// `fill` (the spec's out-of-map value).
+std::vector<float> PadLayer(const std::vector<float>& layer, int nx, int ny, float fill) {
+  const int pnx = nx + 2 * RiskMap::kPad;
+  const int pny = ny + 2 * RiskMap::kPad;
+  std::vector<float> padded(static_cast<size_t>(pnx) * pny, fill);
+  for (int j = 0; j < ny; ++j) {
+    const float* src = layer.data() + static_cast<size_t>(j) * nx;
+    float* dst = padded.data() + static_cast<size_t>(j + RiskMap::kPad) * pnx + RiskMap::kPad;
+    std::copy(src, src + nx, dst);
+  }
+  return padded;
+}
+
+// Binary min-heap of (altitude, cell) entries. Besides push and pop it offers
+// ReplaceTop(), a pop followed by a push in one sift.
+class GlideHeap {
+ public:
+  struct Entry {
+    double alt;
+    uint32_t index;
+  };
+
+  bool empty() const { return heap_.empty(); }
+  const Entry& Top() const { return heap_.front(); }
+
+  void Push(Entry e) {
+    size_t at = heap_.size();
+    heap_.push_back(e);
+    while (at > 0) {
+      const size_t parent = (at - 1) / 2;
+      if (!(e.alt < heap_[parent].alt)) break;
+      heap_[at] = heap_[parent];
+      at = parent;
+    }
+    heap_[at] = e;
+  }
+
+  // REQUIRES: !empty().
+  void Pop() {
+    RISKPLAN_DCHECK(!heap_.empty());
+    const Entry last = heap_.back();
+    heap_.pop_back();
+    if (!heap_.empty()) SiftDown(last);
+  }
+
+  // REQUIRES: !empty(). Removes the top and inserts e.
+  void ReplaceTop(Entry e) {
+    RISKPLAN_DCHECK(!heap_.empty());
+    SiftDown(e);
+  }
+
+ private:
+  // Places e from the root down, Floyd's way: the entries placed here are a
+  // popped heap's last entry, or a neighbour one climb step above the popped
+  // altitude, so both belong near the bottom. The hole goes down to a leaf
+  // along the smaller children without comparing with e (a select rather than
+  // a hard-to-predict branch), and e climbs back the short way.
+  void SiftDown(Entry e) {
+    const size_t n = heap_.size();
+    size_t at = 0;
+    while (2 * at + 2 < n) {
+      const size_t left = 2 * at + 1;
+      const size_t child = left + (heap_[left + 1].alt < heap_[left].alt ? 1 : 0);
+      heap_[at] = heap_[child];
+      at = child;
+    }
+    if (2 * at + 1 < n) {
+      heap_[at] = heap_[2 * at + 1];
+      at = 2 * at + 1;
+    }
+    while (at > 0) {
+      const size_t parent = (at - 1) / 2;
+      if (!(e.alt < heap_[parent].alt)) break;
+      heap_[at] = heap_[parent];
+      at = parent;
+    }
+    heap_[at] = e;
+  }
+
+  std::vector<Entry> heap_;
+};
+
+}  // namespace
+
+absl::Status ValidateMapHeader(const MapHeader& header) {
+  const std::string& name = header.name;
+  bool name_ok = !name.empty() && name.size() <= 64;
+  for (char c : name) name_ok = name_ok && ValidNameChar(c);
+  if (!name_ok) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "map header: name '", name, "' is invalid; it must be 1 to 64 characters of [a-z0-9._-]"));
+  }
+  if (!(std::isfinite(header.res) && header.res > 0.0)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "map header: res has value ", DoubleText(header.res), "; res must be > 0 and finite"));
+  }
+  if (!std::isfinite(header.x0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("map header: x0 has value ", DoubleText(header.x0), "; x0 must be finite"));
+  }
+  if (!std::isfinite(header.y0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("map header: y0 has value ", DoubleText(header.y0), "; y0 must be finite"));
+  }
+  for (auto [field, value] : {std::pair{"nx", header.nx}, std::pair{"ny", header.ny}}) {
+    if (value <= 0 || value > kMaxMapSide) {
+      return absl::InvalidArgumentError(absl::StrCat("map header: ", field, " has value ", value,
+                                                     "; ", field, " must be in [1, ", kMaxMapSide,
+                                                     "]"));
+    }
+  }
+  const int64_t cells = static_cast<int64_t>(header.nx) * header.ny;
+  if (cells > kMaxMapCells) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("map header: nx*ny = ", cells, " cells exceeds the limit of ", kMaxMapCells));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::shared_ptr<const RiskMap>> RiskMap::Create(MapHeader header, MapLayers layers,
+                                                               double glide_ratio,
+                                                               double glide_clearance_m) {
+  if (absl::Status s = ValidateMapHeader(header); !s.ok()) return s;
+  if (!(std::isfinite(glide_ratio) && glide_ratio > 0.0)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "glide_ratio has value ", DoubleText(glide_ratio), "; glide_ratio must be > 0 and finite"));
+  }
+  if (!(std::isfinite(glide_clearance_m) && glide_clearance_m >= 0.0)) {
+    return absl::InvalidArgumentError(absl::StrCat("glide_clearance_m has value ",
+                                                   DoubleText(glide_clearance_m),
+                                                   "; glide_clearance_m must be >= 0 and finite"));
+  }
+
+  const int nx = header.nx;
+  const int ny = header.ny;
+  const int64_t cells = static_cast<int64_t>(nx) * ny;
+  for (absl::Status s : {CheckLayerSize("density", layers.density.size(), cells),
+                         CheckLayerSize("shelter", layers.shelter.size(), cells),
+                         CheckLayerSize("terrain", layers.terrain.size(), cells),
+                         CheckLayerSize("nofly", layers.nofly.size(), cells)}) {
+    if (!s.ok()) return s;
+  }
+
+  // std::isfinite on float is exact; the negated comparisons also reject NaN.
+  if (absl::Status s = CheckLayerValues(
+          "density", layers.density, nx, [](float v) { return std::isfinite(v) && v >= 0.0f; },
+          "density must be >= 0 and finite");
+      !s.ok()) {
+    return s;
+  }
+  if (absl::Status s = CheckLayerValues(
+          "shelter", layers.shelter, nx, [](float v) { return v >= 0.0f && v <= 10.0f; },
+          "shelter must be in [0, 10] and finite");
+      !s.ok()) {
+    return s;
+  }
+  if (absl::Status s = CheckLayerValues(
+          "terrain", layers.terrain, nx, [](float v) { return std::isfinite(v); },
+          "terrain must be finite");
+      !s.ok()) {
+    return s;
+  }
+  if (absl::Status s = CheckLayerValues(
+          "nofly", layers.nofly, nx, [](uint8_t v) { return v <= 1; }, "nofly must be 0 or 1");
+      !s.ok()) {
+    return s;
+  }
+  for (const LandingSite& site : layers.landing_sites) {
+    if (site.i < 0 || site.j < 0 || site.i >= nx || site.j >= ny) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("layer 'landing_sites': site '", site.name, "' at cell (", site.i, ", ",
+                       site.j, ") is outside the map of ", nx, " x ", ny, " cells"));
+    }
+  }
+
+  // The constructor is private, so make_shared cannot reach it.
+  std::shared_ptr<RiskMap> map(new RiskMap());
+  map->glide_altitude_ = ComputeGlideAltitude(nx, ny, header.res, layers.terrain, layers.nofly,
+                                              layers.landing_sites, glide_ratio, glide_clearance_m);
+  map->padded_density_ = PadLayer(layers.density, nx, ny, 0.0f);
+  map->padded_shelter_ = PadLayer(layers.shelter, nx, ny, 10.0f);
+  map->glide_ratio_ = glide_ratio;
+  map->glide_clearance_m_ = glide_clearance_m;
+  map->header_ = std::move(header);
+  map->layers_ = std::move(layers);
+  return std::shared_ptr<const RiskMap>(std::move(map));
+}
+
+bool RiskMap::CellOf(double x, double y, int* i, int* j) const {
+  const double fx = std::floor((x - header_.x0) / header_.res);
+  const double fy = std::floor((y - header_.y0) / header_.res);
+  // Compare as doubles before converting: a far-away or NaN coordinate must not
+  // reach the (undefined) double-to-int conversion. NaN fails every comparison.
+  if (!(fx >= 0.0 && fx < header_.nx && fy >= 0.0 && fy < header_.ny)) return false;
+  *i = static_cast<int>(fx);
+  *j = static_cast<int>(fy);
+  return true;
+}
+
+double RiskMap::SafeAltitude(int i, int j, double min_agl_m) const {
+  RISKPLAN_DCHECK(Contains(i, j));
+  const double floor_alt = static_cast<double>(terrain(i, j)) + min_agl_m;
+  if (layers_.landing_sites.empty()) return floor_alt;
+  return std::max(floor_alt, glide_altitude_[Index(i, j)]);
+}
+
+size_t RiskMap::MemoryBytes() const {
+  size_t bytes = sizeof(*this);
+  bytes += layers_.density.capacity() * sizeof(float);
+  bytes += layers_.shelter.capacity() * sizeof(float);
+  bytes += layers_.terrain.capacity() * sizeof(float);
+  bytes += layers_.nofly.capacity() * sizeof(uint8_t);
+  bytes += layers_.landing_sites.capacity() * sizeof(LandingSite);
+  for (const LandingSite& site : layers_.landing_sites) bytes += site.name.capacity();
+  bytes += padded_density_.capacity() * sizeof(float);
+  bytes += padded_shelter_.capacity() * sizeof(float);
+  bytes += glide_altitude_.capacity() * sizeof(double);
+  return bytes;
+}
+
+std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
+                                         const std::vector<float>& terrain,
+                                         const std::vector<uint8_t>& nofly,
+                                         const std::vector<LandingSite>& sites, double glide_ratio,
+                                         double clearance_m) {
+  RISKPLAN_DCHECK(terrain.size() == static_cast<size_t>(nx) * static_cast<size_t>(ny));
+  RISKPLAN_DCHECK(nofly.size() == terrain.size());
+  RISKPLAN_DCHECK(glide_ratio > 0.0);
+  const size_t cells = static_cast<size_t>(nx) * static_cast<size_t>(ny);
+  // Everything a relaxation reads about a cell sits in one 16-byte record: the
+  // frontiers around dozens of sites grow at once, all over the map, and three
+  // separate arrays cost three cache misses per neighbour instead of one.
+  // floor = T + clearance, or +infinity for a no-fly cell, which then can
+  // never be lowered below its initial +infinity, i.e. is never entered.
+  struct Cell {
+    double glide;
+    double floor;
+  };
+  std::vector<Cell> work(cells);
+  for (size_t k = 0; k < cells; ++k) {
+    work[k] = {kInf, nofly[k] != 0 ? kInf : static_cast<double>(terrain[k]) + clearance_m};
+  }
+
+  // Lazy-deletion Dijkstra on (altitude, index) pairs. The update
+  // max(T(c) + clearance, glide(n) + d/G) never lowers a value below the value
+  // it came from, so the first pop of a cell is final, and the result is the
+  // unique fixed point of the recurrence whatever order ties are popped in.
+  GlideHeap heap;
+  for (const LandingSite& site : sites) {
+    if (site.i < 0 || site.j < 0 || site.i >= nx || site.j >= ny) continue;
+    const size_t k = static_cast<size_t>(site.j) * nx + site.i;
+    if (work[k].floor < work[k].glide) {  // false for no-fly cells and repeated sites
+      work[k].glide = work[k].floor;
+      heap.Push({work[k].floor, static_cast<uint32_t>(k)});
+    }
+  }
+
+  // dist(c, n) / G, computed the way the spec writes it.
+  const double straight_climb = res / glide_ratio;
+  const double diagonal_climb = (res * std::numbers::sqrt2) / glide_ratio;
+  constexpr int kDi[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+  constexpr int kDj[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+
+  while (!heap.empty()) {
+    const GlideHeap::Entry top = heap.Top();
+    // Stale entries (a cell lowered after it was pushed) are skipped by value
+    // rather than with a settled flag per cell.
+    if (top.alt > work[top.index].glide) {
+      heap.Pop();
+      continue;
+    }
+    // The top stays in the heap until the first improved neighbour replaces
+    // it: one sift instead of a pop and a push. Most cells are settled this
+    // way, as a cell is pushed about once on average.
+    bool top_replaced = false;
+    const int ci = static_cast<int>(top.index % static_cast<uint32_t>(nx));
+    const int cj = static_cast<int>(top.index / static_cast<uint32_t>(nx));
+    for (int d = 0; d < 8; ++d) {
+      const int ni = ci + kDi[d];
+      const int nj = cj + kDj[d];
+      if (ni < 0 || nj < 0 || ni >= nx || nj >= ny) continue;
+      const uint32_t nk = static_cast<uint32_t>(nj) * static_cast<uint32_t>(nx) + ni;
+      Cell& n = work[nk];
+      const double alt = std::max(n.floor, top.alt + (d < 4 ? straight_climb : diagonal_climb));
+      if (alt < n.glide) {
+        n.glide = alt;
+        if (top_replaced) {
+          heap.Push({alt, nk});
+        } else {
+          heap.ReplaceTop({alt, nk});
+          top_replaced = true;
+        }
+      }
+    }
+    if (!top_replaced) heap.Pop();
+  }
+
+  std::vector<double> glide(cells);
+  for (size_t k = 0; k < cells; ++k) glide[k] = work[k].glide;
+  return glide;
+}
+
+}  // namespace riskplan

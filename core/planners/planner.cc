@@ -1,0 +1,153 @@
+#include "core/planners/planner.h"
+
+#include <cmath>
+
+#include "absl/strings/str_format.h"
+#include "core/planners/genetic_planner.h"
+#include "core/planners/harmonic_planner.h"
+#include "core/planners/risk_rrt_star.h"
+#include "core/planners/rrt_planner.h"
+#include "core/flight/trajectory.h"
+
+namespace riskplan {
+
+std::string_view PlannerAlgorithmName(PlannerAlgorithm algorithm) {
+  switch (algorithm) {
+    case PlannerAlgorithm::kRiskRrtStar:
+      return "RISK_RRT_STAR";
+    case PlannerAlgorithm::kRrt:
+      return "RRT";
+    case PlannerAlgorithm::kGenetic:
+      return "GENETIC";
+    case PlannerAlgorithm::kHarmonic:
+      return "HARMONIC";
+  }
+  return "UNKNOWN";
+}
+
+std::string_view StopReasonName(StopReason reason) {
+  switch (reason) {
+    case StopReason::kBudgetExhausted:
+      return "BUDGET_EXHAUSTED";
+    case StopReason::kConverged:
+      return "CONVERGED";
+    case StopReason::kCancelled:
+      return "CANCELLED";
+    case StopReason::kNoSolution:
+      return "NO_SOLUTION";
+  }
+  return "UNKNOWN";
+}
+
+absl::StatusOr<std::unique_ptr<Planner>> MakePlanner(PlannerAlgorithm algorithm,
+                                                     RiskEvaluator* evaluator) {
+  switch (algorithm) {
+    case PlannerAlgorithm::kRiskRrtStar:
+      return std::unique_ptr<Planner>(new RiskRrtStar(evaluator));
+    case PlannerAlgorithm::kRrt:
+      return std::unique_ptr<Planner>(new RrtPlanner(evaluator));
+    case PlannerAlgorithm::kGenetic:
+      return std::unique_ptr<Planner>(new GeneticPlanner(evaluator));
+    case PlannerAlgorithm::kHarmonic:
+      return std::unique_ptr<Planner>(new HarmonicPlanner(evaluator));
+  }
+  return absl::InvalidArgumentError(
+      absl::StrFormat("unknown planner algorithm %d", static_cast<int>(algorithm)));
+}
+
+const std::vector<PlannerParamInfo>& PlannerParams(PlannerAlgorithm algorithm) {
+  switch (algorithm) {
+    case PlannerAlgorithm::kRiskRrtStar:
+      return RiskRrtStar::ParamInfo();
+    case PlannerAlgorithm::kRrt:
+      return RrtPlanner::ParamInfo();
+    case PlannerAlgorithm::kGenetic:
+      return GeneticPlanner::ParamInfo();
+    case PlannerAlgorithm::kHarmonic:
+      return HarmonicPlanner::ParamInfo();
+  }
+  static const auto* empty = new std::vector<PlannerParamInfo>;
+  return *empty;
+}
+
+namespace {
+
+absl::Status CheckEndpoint(const RiskModel& model, const Pose& pose, const char* which) {
+  for (auto [field, value] :
+       {std::pair{"x", pose.x}, {"y", pose.y}, {"z", pose.z}, {"theta", pose.theta}}) {
+    if (!std::isfinite(value)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s.%s is %g; it must be finite", which, field, value));
+    }
+  }
+  double limit = 0.0;
+  const ViolationKind kind = model.CheckConfiguration(pose, &limit);
+  if (kind == ViolationKind::kNone) return absl::OkStatus();
+  Violation v{kind, pose, 0.0, 0, limit};
+  std::string detail = v.ToString();
+  // Drop the arc-length part, which means nothing for a single pose.
+  if (size_t cut = detail.find(", arc length"); cut != std::string::npos) {
+    size_t colon = detail.find(':', cut);
+    detail = detail.substr(0, cut) + (colon == std::string::npos ? "" : detail.substr(colon));
+  }
+  return absl::InvalidArgumentError(
+      absl::StrFormat("%s pose (%.1f, %.1f, %.1f) on map '%s' is not admissible: %s", which, pose.x,
+                      pose.y, pose.z, model.map().name(), detail));
+}
+
+}  // namespace
+
+absl::Status CheckEndpoints(const PlanningProblem& problem) {
+  if (problem.model == nullptr) return absl::InvalidArgumentError("planning problem has no model");
+  if (absl::Status s = CheckEndpoint(*problem.model, problem.start, "start"); !s.ok()) return s;
+  return CheckEndpoint(*problem.model, problem.goal, "goal");
+}
+
+absl::Status CheckRequestObstacles(PlannerAlgorithm algorithm, const PlanOptions& options) {
+  const std::string_view name = PlannerAlgorithmName(algorithm);
+  if (!options.obstacle_points.empty() && algorithm == PlannerAlgorithm::kRiskRrtStar) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("obstacle_points: %s does not take request obstacles; RRT, GENETIC and "
+                        "HARMONIC do",
+                        name));
+  }
+  if (!options.dynamic_obstacles.empty() && algorithm != PlannerAlgorithm::kHarmonic) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "dynamic_obstacles: %s does not take obstacles that appear while it runs; HARMONIC does",
+        name));
+  }
+  if (options.obstacle_points.size() > kMaxObstaclePoints) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("obstacle_points: %d given; at most %d are accepted",
+                        options.obstacle_points.size(), kMaxObstaclePoints));
+  }
+  if (options.dynamic_obstacles.size() > kMaxDynamicObstacles) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("dynamic_obstacles: %d given; at most %d are accepted",
+                        options.dynamic_obstacles.size(), kMaxDynamicObstacles));
+  }
+  for (size_t k = 0; k < options.obstacle_points.size(); ++k) {
+    const Point2& p = options.obstacle_points[k];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "obstacle_points[%d] is (%g, %g); coordinates must be finite", k, p.x, p.y));
+    }
+  }
+  for (size_t k = 0; k < options.dynamic_obstacles.size(); ++k) {
+    const DynamicObstacle& d = options.dynamic_obstacles[k];
+    if (!std::isfinite(d.x0_m) || !std::isfinite(d.y0_m) || !std::isfinite(d.x1_m) ||
+        !std::isfinite(d.y1_m) || !(d.x0_m < d.x1_m) || !(d.y0_m < d.y1_m)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "dynamic_obstacles[%d] is [%g, %g) x [%g, %g); it must be finite with x0 < x1 and "
+          "y0 < y1",
+          k, d.x0_m, d.x1_m, d.y0_m, d.y1_m));
+    }
+    if (d.at_iteration < 0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "dynamic_obstacles[%d].at_iteration is %d; it must be >= 0", k, d.at_iteration));
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace riskplan

@@ -1,0 +1,101 @@
+// What the RRT, GENETIC and HARMONIC planners share: parameters by name,
+// budget and cancellation, the admissible altitude band of a cell, and the
+// exact report of a trajectory.
+#ifndef RISKPLAN_CORE_PLANNERS_PLANNER_SUPPORT_H_
+#define RISKPLAN_CORE_PLANNERS_PLANNER_SUPPORT_H_
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/planners/planner.h"
+#include "core/risk/risk_evaluator.h"
+#include "core/risk/risk_model.h"
+
+namespace riskplan {
+
+// The parameter values of one Plan() call: the defaults of `info`, overridden
+// by the request's. Unknown names and values that are not finite or outside
+// [min_value, max_value] are InvalidArgument errors naming the parameter.
+class PlannerParamValues {
+ public:
+  static absl::StatusOr<PlannerParamValues> Parse(std::string_view algorithm,
+                                                  const std::vector<PlannerParamInfo>& info,
+                                                  const std::map<std::string, double>& given);
+
+  // REQUIRES: `name` is one of the names of `info`.
+  double Get(std::string_view name) const;
+
+ private:
+  std::map<std::string, double, std::less<>> values_;
+};
+
+// OK when max_time_s >= 0 and finite, max_iterations >= 0 and not both are 0;
+// else InvalidArgument naming the budget.
+absl::Status CheckBudget(const PlannerBudget& budget);
+
+// The wall clock, iteration budget and cancellation of one run.
+class RunLimits {
+ public:
+  RunLimits(const PlannerBudget& budget, const CancellationToken& cancel)
+      : budget_(budget), cancel_(cancel), start_(std::chrono::steady_clock::now()) {}
+
+  double Elapsed() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  bool Cancelled() const { return cancel_.IsCancelled(); }
+  bool OutOfTime() const { return budget_.max_time_s > 0.0 && Elapsed() >= budget_.max_time_s; }
+  // True when `iterations` reached the iteration budget (never without one).
+  bool OutOfIterations(int64_t iterations) const {
+    return budget_.max_iterations > 0 && iterations >= budget_.max_iterations;
+  }
+  int64_t max_iterations() const { return budget_.max_iterations; }
+
+ private:
+  const PlannerBudget budget_;
+  const CancellationToken& cancel_;
+  const std::chrono::steady_clock::time_point start_;
+};
+
+// The admissible altitudes of cell (i, j) under spec section 6:
+// [SafeAltitude, terrain + max_agl]. False for a no-fly cell, a cell outside
+// the map, and a cell whose band is empty.
+bool CellBand(const RiskModel& model, int i, int j, double* low_m, double* high_m);
+
+// Per map cell (index j * nx + i): 1 where flight is possible. With
+// `flight_altitude_m` = 0, where the band of CellBand is not empty; otherwise
+// where that altitude lies in the band ("terrain above the flight altitude",
+// and no-fly cells, are obstacles).
+std::vector<uint8_t> FlyableCells(const RiskModel& model, double flight_altitude_m);
+
+// The exact report of waypoints joined by Dubins-airplane manoeuvres:
+// EvaluateTrajectory's risk and length through `evaluator`. nullopt when the
+// trajectory is not admissible. Fails only when the evaluator does.
+absl::StatusOr<std::optional<PlanImprovement>> EvaluateWaypoints(const RiskModel& model,
+                                                                 std::vector<Pose> waypoints,
+                                                                 RiskEvaluator* evaluator);
+
+// InvalidArgument when `pose` ("start" or "goal") lies within `clearance_m`
+// (horizontally) of one of `points`, naming the point; else OK.
+absl::Status CheckPoseClearance(const Pose& pose, const char* which,
+                                const std::vector<Point2>& points, double clearance_m);
+
+// The checks a seed planner (RRT, GENETIC, HARMONIC) makes before it plans, in
+// this order: start and goal (CheckEndpoints), the budget, the request's
+// obstacles (CheckRequestObstacles), its parameters (parsed against `info`),
+// and the clearance of start and goal from the request's obstacle points by
+// its "clearance_m" parameter. Returns the parsed parameters.
+absl::StatusOr<PlannerParamValues> PrepareSeedPlan(PlannerAlgorithm algorithm,
+                                                   const std::vector<PlannerParamInfo>& info,
+                                                   const PlanningProblem& problem,
+                                                   const PlanOptions& options);
+
+}  // namespace riskplan
+
+#endif  // RISKPLAN_CORE_PLANNERS_PLANNER_SUPPORT_H_

@@ -1,0 +1,99 @@
+// The impact table (spec section 2): for every height bin and heading bin, the
+// ballistic impact (distance, energy, angle), the exposed area, and the
+// normalised Gaussian impact kernel over map cells. These are the thesis's
+// "precomputed probability matrices".
+//
+// A table depends on the model parameters (those compared by
+// SameImpactTableParams) and on the map's cell size. It is immutable after
+// Build() and safe to share between threads.
+#ifndef RISKPLAN_CORE_RISK_IMPACT_TABLE_H_
+#define RISKPLAN_CORE_RISK_IMPACT_TABLE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/risk/ballistic.h"
+#include "core/base/model_params.h"
+#include "core/base/check.h"
+
+namespace riskplan {
+
+// Everything the risk model needs about one height bin.
+struct HeightBin {
+  double height_m = 0.0;         // h_b = b * Delta h
+  BallisticImpact fall;          // d, t_f, v_h, v_z, E, gamma at h_b
+  double sigma_along_m = 0.0;    // sigma_a
+  double sigma_across_m = 0.0;   // sigma_c
+  int half_width = 0;            // hw (kernel is (2hw+1)^2 cells)
+  double exposed_area_m2 = 0.0;  // A_exp
+};
+
+// One (height bin, heading bin) kernel. Weights are row-major with rows running
+// north: weight of offset (u, v) is weights[(v + hw) * Stride() + (u + hw)].
+// Each row is padded with zero weights to a multiple of kKernelLanes entries so
+// that the EWMM loop runs in whole vectors.
+inline constexpr int kKernelLanes = 8;
+
+struct ImpactKernel {
+  int half_width = 0;
+  // Entries per stored row: Side() rounded up to a multiple of kKernelLanes.
+  int Stride() const { return (Side() + kKernelLanes - 1) / kKernelLanes * kKernelLanes; }
+  double offset_x_m = 0.0;  // d(h_b) * cos(theta_k)
+  double offset_y_m = 0.0;  // d(h_b) * sin(theta_k)
+  const double* weights = nullptr;
+  int Side() const { return 2 * half_width + 1; }
+};
+
+class ImpactTable {
+ public:
+  // Builds the table for `params` (which must pass ValidateModelParams) and
+  // cells of side `res_m`.
+  static absl::StatusOr<std::shared_ptr<const ImpactTable>> Build(const ModelParams& params,
+                                                                  double res_m);
+
+  const ModelParams& params() const { return params_; }
+  double res_m() const { return res_m_; }
+  int height_bins() const { return static_cast<int>(bins_.size()); }
+  int heading_bins() const { return heading_bins_; }
+
+  // Spec section 3 step 2. height_bin in [1, height_bins()].
+  int HeightBinOf(double height_m) const;
+  // round(theta / (2 pi / N_theta)) mod N_theta, for any finite theta.
+  int HeadingBinOf(double theta) const;
+
+  // REQUIRES: 1 <= b <= height_bins(), 0 <= k < heading_bins().
+  const HeightBin& bin(int b) const {
+    RISKPLAN_DCHECK(b >= 1 && b <= height_bins());
+    return bins_[b - 1];
+  }
+  const ImpactKernel& kernel(int b, int k) const {
+    RISKPLAN_DCHECK(b >= 1 && b <= height_bins() && k >= 0 && k < heading_bins());
+    return kernels_[static_cast<size_t>(b - 1) * heading_bins_ + k];
+  }
+
+  size_t MemoryBytes() const;
+
+ private:
+  ImpactTable() = default;
+
+  ModelParams params_;
+  double res_m_ = 0.0;
+  int heading_bins_ = 0;
+  std::vector<HeightBin> bins_;
+  std::vector<ImpactKernel> kernels_;
+  std::vector<double> weights_;  // storage behind every kernel's weights
+};
+
+// Casualty probability of spec section 3 step 6, with the spec's limits:
+// S = 0 gives 1 when E > beta else 0; E <= beta gives 0.
+double CasualtyProbability(double energy_j, double expected_shelter, double alpha_j, double beta_j);
+
+// Exposed area of spec section 3 step 5.
+double ExposedArea(double impact_angle_rad, const ModelParams& params);
+
+}  // namespace riskplan
+
+#endif  // RISKPLAN_CORE_RISK_IMPACT_TABLE_H_

@@ -1,0 +1,266 @@
+#include "core/risk/risk_model.h"
+
+#include <cmath>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+#include <limits>
+
+#include "absl/strings/str_format.h"
+#include "core/base/check.h"
+
+namespace riskplan {
+
+std::string_view ViolationKindName(ViolationKind kind) {
+  switch (kind) {
+    case ViolationKind::kNone:
+      return "NONE";
+    case ViolationKind::kOutsideMap:
+      return "OUTSIDE_MAP";
+    case ViolationKind::kNoFlyZone:
+      return "NO_FLY_ZONE";
+    case ViolationKind::kTerrainCollision:
+      return "TERRAIN_COLLISION";
+    case ViolationKind::kBelowSafeAltitude:
+      return "BELOW_SAFE_ALTITUDE";
+    case ViolationKind::kAboveMaxAltitude:
+      return "ABOVE_MAX_ALTITUDE";
+  }
+  return "UNKNOWN";
+}
+
+absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
+    std::shared_ptr<const RiskMap> map, const ModelParams& params,
+    std::shared_ptr<const ImpactTable> table) {
+  if (map == nullptr) return absl::InvalidArgumentError("risk model: no map");
+  if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
+  if (params.max_half_width > RiskMap::kPad) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("parameter 'max_half_width' (%d) exceeds the largest supported (%d)",
+                        params.max_half_width, RiskMap::kPad));
+  }
+  if (table != nullptr &&
+      (!SameImpactTableParams(table->params(), params) || table->res_m() != map->res())) {
+    return absl::InvalidArgumentError(
+        "risk model: the impact table given was built for other parameters or cell size");
+  }
+  if (table == nullptr) {
+    absl::StatusOr<std::shared_ptr<const ImpactTable>> built =
+        ImpactTable::Build(params, map->res());
+    if (!built.ok()) return built.status();
+    table = *std::move(built);
+  }
+  auto model = std::shared_ptr<RiskModel>(new RiskModel());
+  model->map_ = std::move(map);
+  model->table_ = std::move(table);
+  model->params_ = params;
+  if (model->map_->glide_ratio() == params.glide_ratio &&
+      model->map_->glide_clearance_m() == params.glide_clearance_m) {
+    model->glide_ = &model->map_->glide_altitude();
+  } else {
+    const RiskMap& m = *model->map_;
+    model->own_glide_ = std::make_shared<const std::vector<double>>(
+        ComputeGlideAltitude(m.nx(), m.ny(), m.res(), m.layers().terrain, m.layers().nofly,
+                             m.landing_sites(), params.glide_ratio, params.glide_clearance_m));
+    model->glide_ = model->own_glide_.get();
+  }
+  return std::shared_ptr<const RiskModel>(std::move(model));
+}
+
+double RiskModel::SafeAltitude(int i, int j) const {
+  RISKPLAN_DCHECK(map_->Contains(i, j));
+  const double floor_alt = static_cast<double>(map_->terrain(i, j)) + params_.min_agl_m;
+  if (map_->landing_sites().empty()) return floor_alt;
+  return std::max(floor_alt, (*glide_)[map_->Index(i, j)]);
+}
+
+ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) const {
+  if (limit_m != nullptr) *limit_m = std::numeric_limits<double>::quiet_NaN();
+  int i = 0;
+  int j = 0;
+  if (!std::isfinite(q.z) || !map_->CellOf(q.x, q.y, &i, &j)) return ViolationKind::kOutsideMap;
+  if (map_->nofly(i, j)) return ViolationKind::kNoFlyZone;
+  const double terrain = map_->terrain(i, j);
+  if (q.z <= terrain) {
+    if (limit_m != nullptr) *limit_m = terrain;
+    return ViolationKind::kTerrainCollision;
+  }
+  const double safe = SafeAltitude(i, j);
+  if (q.z < safe) {
+    if (limit_m != nullptr) *limit_m = safe;
+    return ViolationKind::kBelowSafeAltitude;
+  }
+  const double ceiling = terrain + params_.max_agl_m;
+  if (q.z > ceiling) {
+    if (limit_m != nullptr) *limit_m = ceiling;
+    return ViolationKind::kAboveMaxAltitude;
+  }
+  return ViolationKind::kNone;
+}
+
+namespace {
+
+// The EWMM inner loops over padded layers. Each of the kKernelLanes = 8 lanes
+// accumulates every 8th column of the kernel rows in a fixed order; the lanes
+// are then added pairwise. The order of every addition is fixed by this code,
+// and the build forbids contracting a*b+c into an FMA (-ffp-contract=off), so
+// the portable loop and the AVX2 loop give the same result bit for bit.
+static_assert(kKernelLanes == 8, "the EWMM loops add eight lanes");
+
+inline double ReduceLanes(const double* a) {
+  return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
+}
+
+void EwmmRowsPortable(const double* weights, int rows, int stride, const float* rho,
+                      const float* shelter, int64_t map_stride, double* impact_factor,
+                      double* expected_shelter) {
+  double acc_rho[8] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  double acc_shelter[8] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  for (int v = 0; v < rows; ++v) {
+    const double* w = weights + static_cast<int64_t>(v) * stride;
+    const float* r = rho + v * map_stride;
+    const float* s = shelter + v * map_stride;
+    for (int u = 0; u < stride; u += 8) {
+      for (int l = 0; l < 8; ++l) {
+        acc_rho[l] += w[u + l] * static_cast<double>(r[u + l]);
+        acc_shelter[l] += w[u + l] * static_cast<double>(s[u + l]);
+      }
+    }
+  }
+  *impact_factor = ReduceLanes(acc_rho);
+  *expected_shelter = ReduceLanes(acc_shelter);
+}
+
+#if defined(__x86_64__)
+// The same arithmetic as EwmmRowsPortable: lanes 0-3 in *_lo, 4-7 in *_hi.
+__attribute__((target("avx2"))) void EwmmRowsAvx2(const double* weights, int rows, int stride,
+                                                  const float* rho, const float* shelter,
+                                                  int64_t map_stride, double* impact_factor,
+                                                  double* expected_shelter) {
+  __m256d rho_lo = _mm256_setzero_pd();
+  __m256d rho_hi = _mm256_setzero_pd();
+  __m256d sh_lo = _mm256_setzero_pd();
+  __m256d sh_hi = _mm256_setzero_pd();
+  for (int v = 0; v < rows; ++v) {
+    const double* w = weights + static_cast<int64_t>(v) * stride;
+    const float* r = rho + v * map_stride;
+    const float* s = shelter + v * map_stride;
+    for (int u = 0; u < stride; u += 8) {
+      const __m256d w_lo = _mm256_loadu_pd(w + u);
+      const __m256d w_hi = _mm256_loadu_pd(w + u + 4);
+      rho_lo = _mm256_add_pd(rho_lo, _mm256_mul_pd(w_lo, _mm256_cvtps_pd(_mm_loadu_ps(r + u))));
+      rho_hi = _mm256_add_pd(rho_hi, _mm256_mul_pd(w_hi, _mm256_cvtps_pd(_mm_loadu_ps(r + u + 4))));
+      sh_lo = _mm256_add_pd(sh_lo, _mm256_mul_pd(w_lo, _mm256_cvtps_pd(_mm_loadu_ps(s + u))));
+      sh_hi = _mm256_add_pd(sh_hi, _mm256_mul_pd(w_hi, _mm256_cvtps_pd(_mm_loadu_ps(s + u + 4))));
+    }
+  }
+  alignas(32) double lanes[8];
+  _mm256_store_pd(lanes, rho_lo);
+  _mm256_store_pd(lanes + 4, rho_hi);
+  *impact_factor = ReduceLanes(lanes);
+  _mm256_store_pd(lanes, sh_lo);
+  _mm256_store_pd(lanes + 4, sh_hi);
+  *expected_shelter = ReduceLanes(lanes);
+}
+#endif
+
+using EwmmRowsFn = void (*)(const double*, int, int, const float*, const float*, int64_t, double*,
+                            double*);
+
+EwmmRowsFn SelectEwmmRows() {
+#if defined(__x86_64__)
+  if (__builtin_cpu_supports("avx2")) return &EwmmRowsAvx2;
+#endif
+  return &EwmmRowsPortable;
+}
+
+const EwmmRowsFn kEwmmRows = SelectEwmmRows();
+
+}  // namespace
+
+void RiskModel::Ewmm(const ImpactKernel& kernel, int ci, int cj, double* impact_factor,
+                     double* expected_shelter) const {
+  const int hw = kernel.half_width;
+  const int side = kernel.Side();
+  const int stride = kernel.Stride();
+  const RiskMap& m = *map_;
+  // Rows are read `stride` cells wide (zero weights past the kernel), so the
+  // whole read must stay inside the padded layers.
+  const bool inside_padding = ci - hw >= -RiskMap::kPad && cj - hw >= -RiskMap::kPad &&
+                              ci - hw + stride <= m.nx() + RiskMap::kPad &&
+                              cj + hw < m.ny() + RiskMap::kPad;
+  if (inside_padding) {
+    const int64_t first = m.PaddedIndex(ci - hw, cj - hw);
+    kEwmmRows(kernel.weights, side, stride, m.padded_density() + first, m.padded_shelter() + first,
+              m.padded_nx(), impact_factor, expected_shelter);
+    return;
+  }
+  // Far outside the map (only with unusual parameters): read cell by cell, in
+  // the same lane order as the EWMM loops.
+  double acc_rho[kKernelLanes] = {};
+  double acc_shelter[kKernelLanes] = {};
+  for (int v = 0; v < side; ++v) {
+    for (int u = 0; u < stride; ++u) {
+      const int i = ci - hw + u;
+      const int j = cj - hw + v;
+      const double w = kernel.weights[v * stride + u];
+      const bool in = m.Contains(i, j);
+      acc_rho[u % kKernelLanes] += w * (in ? static_cast<double>(m.density(i, j)) : 0.0);
+      acc_shelter[u % kKernelLanes] += w * (in ? static_cast<double>(m.shelter(i, j)) : 10.0);
+    }
+  }
+  *impact_factor = ReduceLanes(acc_rho);
+  *expected_shelter = ReduceLanes(acc_shelter);
+}
+
+bool RiskModel::Locate(const Pose& q, KernelSite* site) const {
+  int i = 0;
+  int j = 0;
+  if (!std::isfinite(q.z) || !std::isfinite(q.theta) || !map_->CellOf(q.x, q.y, &i, &j)) {
+    return false;
+  }
+  const double h = q.z - static_cast<double>(map_->terrain(i, j));
+  if (!(h > 0.0)) return false;
+  const ImpactTable& t = *table_;
+  site->height_bin = t.HeightBinOf(h);
+  site->heading_bin = t.HeadingBinOf(q.theta);
+  const ImpactKernel& kernel = t.kernel(site->height_bin, site->heading_bin);
+  site->impact_i =
+      static_cast<int>(std::floor((q.x + kernel.offset_x_m - map_->x0()) / map_->res()));
+  site->impact_j =
+      static_cast<int>(std::floor((q.y + kernel.offset_y_m - map_->y0()) / map_->res()));
+  return true;
+}
+
+ConfigurationRisk RiskModel::FromSums(const KernelSite& site, double impact_factor,
+                                      double expected_shelter) const {
+  const HeightBin& bin = table_->bin(site.height_bin);
+  ConfigurationRisk out;
+  out.impact_factor = impact_factor;
+  out.expected_shelter = expected_shelter;
+  out.casualty_probability =
+      CasualtyProbability(bin.fall.energy_j, expected_shelter, params_.alpha_j, params_.beta_j);
+  out.exposed_area_m2 = bin.exposed_area_m2;
+  out.risk = out.exposed_area_m2 * out.casualty_probability * impact_factor;
+  out.height_bin = site.height_bin;
+  out.heading_bin = site.heading_bin;
+  out.defined = true;
+  return out;
+}
+
+ConfigurationRisk RiskModel::Evaluate(const Pose& q) const {
+  KernelSite site;
+  if (!Locate(q, &site)) return ConfigurationRisk{};
+  double impact_factor = 0.0;
+  double shelter = 0.0;
+  Ewmm(table_->kernel(site.height_bin, site.heading_bin), site.impact_i, site.impact_j,
+       &impact_factor, &shelter);
+  return FromSums(site, impact_factor, shelter);
+}
+
+size_t RiskModel::MemoryBytes() const {
+  return table_->MemoryBytes() + (own_glide_ ? own_glide_->size() * sizeof(double) : 0);
+}
+
+}  // namespace riskplan

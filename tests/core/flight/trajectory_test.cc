@@ -1,0 +1,131 @@
+#include "core/flight/trajectory.h"
+
+#include <cmath>
+
+#include "gtest/gtest.h"
+#include "tests/core/test_maps.h"
+
+namespace riskplan {
+namespace {
+
+using testing_maps::UniformMap;
+
+class TrajectoryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    map_ = UniformMap(400, 400, 5.0, 0.02f, 3.0f, 100.0f);
+    ASSERT_NE(map_, nullptr);
+    auto model = RiskModel::Create(map_, params_);
+    ASSERT_TRUE(model.ok()) << model.status();
+    model_ = *model;
+  }
+  ModelParams params_;
+  std::shared_ptr<const RiskMap> map_;
+  std::shared_ptr<const RiskModel> model_;
+};
+
+TEST_F(TrajectoryTest, StraightSegmentOnUniformMapIsConstantRateTimesLength) {
+  auto pieces = PiecesFromPolyline(std::vector<Point3>{{300, 1000, 200}, {1700, 1000, 200}});
+  ASSERT_TRUE(pieces.ok());
+  auto eval = EvaluateTrajectory(*model_, *pieces, {.keep_samples = true});
+  ASSERT_TRUE(eval.ok());
+  EXPECT_TRUE(eval->admissible);
+  EXPECT_DOUBLE_EQ(eval->length_m, 1400.0);
+  ASSERT_EQ(eval->pieces.size(), 1u);
+  EXPECT_EQ(eval->pieces[0].parts, 280);
+  ASSERT_EQ(eval->samples.size(), 280u);
+  const double m = model_->Evaluate(Pose{1000, 1000, 200, 0}).risk;
+  const double expected = params_.failure_rate_per_s * m * 1400.0 / params_.airspeed_mps;
+  EXPECT_NEAR(eval->risk, expected, 1e-12 * expected);
+  EXPECT_DOUBLE_EQ(eval->samples[0].arc_length_m, 2.5);
+  EXPECT_DOUBLE_EQ(eval->samples[0].pose.x, 302.5);
+  EXPECT_DOUBLE_EQ(eval->samples.back().arc_length_m, 1397.5);
+}
+
+TEST_F(TrajectoryTest, PartCountIsCeilOfLengthOverStep) {
+  EXPECT_EQ(PartCount(0.0, 5.0), 0);
+  EXPECT_EQ(PartCount(0.1, 5.0), 1);
+  EXPECT_EQ(PartCount(5.0, 5.0), 1);
+  EXPECT_EQ(PartCount(5.01, 5.0), 2);
+  auto pieces = PiecesFromPolyline(std::vector<Point3>{{300, 300, 200}, {312, 300, 200}});
+  ASSERT_TRUE(pieces.ok());
+  auto eval = EvaluateTrajectory(*model_, *pieces, {.keep_samples = true});
+  ASSERT_TRUE(eval.ok());
+  ASSERT_EQ(eval->samples.size(), 3u);
+  EXPECT_DOUBLE_EQ(eval->samples[0].arc_length_m, 2.0);  // ds = 4
+  EXPECT_DOUBLE_EQ(eval->samples[1].arc_length_m, 6.0);
+  EXPECT_DOUBLE_EQ(eval->samples[2].arc_length_m, 10.0);
+}
+
+TEST_F(TrajectoryTest, RiskIsTheSumOfItsPieces) {
+  const std::vector<Pose> waypoints = {
+      {300, 300, 180, 0.0}, {900, 500, 200, 1.0}, {1200, 1200, 230, 2.5}, {600, 1500, 190, 4.0}};
+  auto pieces = PiecesFromWaypoints(waypoints, params_);
+  ASSERT_TRUE(pieces.ok());
+  auto whole = EvaluateTrajectory(*model_, *pieces);
+  ASSERT_TRUE(whole.ok());
+  EXPECT_TRUE(whole->admissible) << whole->first_violation->ToString();
+  double sum = 0.0;
+  double length = 0.0;
+  for (size_t p = 0; p < pieces->size(); ++p) {
+    auto one = EvaluateTrajectory(*model_, std::span(&(*pieces)[p], 1));
+    ASSERT_TRUE(one.ok());
+    EXPECT_DOUBLE_EQ(one->risk, whole->pieces[p].risk);
+    sum += one->risk;
+    length += one->length_m;
+  }
+  EXPECT_NEAR(whole->risk, sum, 1e-15 * sum);
+  EXPECT_NEAR(whole->length_m, length, 1e-9);
+  EXPECT_GT(whole->risk, 0.0);
+}
+
+TEST_F(TrajectoryTest, FirstViolationHasKindPositionAndArcLength) {
+  // Climbs out of the band: ceiling is 100 + 150 = 250 m.
+  auto pieces = PiecesFromPolyline(
+      std::vector<Point3>{{500, 1000, 200}, {1500, 1000, 200}, {1500, 1100, 300}});
+  ASSERT_TRUE(pieces.ok());
+  auto eval = EvaluateTrajectory(*model_, *pieces);
+  ASSERT_TRUE(eval.ok());
+  EXPECT_FALSE(eval->admissible);
+  ASSERT_TRUE(eval->first_violation.has_value());
+  const Violation& v = *eval->first_violation;
+  EXPECT_EQ(v.kind, ViolationKind::kAboveMaxAltitude);
+  EXPECT_EQ(v.piece, 1);
+  EXPECT_TRUE(eval->pieces[0].admissible);
+  EXPECT_FALSE(eval->pieces[1].admissible);
+  // The second piece (length sqrt(2)*100) is cut in 29 parts; the first sample
+  // above 250 m is the first midpoint whose climb exceeds 50 m.
+  const double len = std::sqrt(2.0) * 100.0;
+  const double ds = len / 29;
+  int first = 0;
+  while (200.0 + 100.0 * (first + 0.5) * ds / len <= 250.0) ++first;
+  EXPECT_NEAR(v.arc_length_m, 1000.0 + (first + 0.5) * ds, 1e-9);
+  EXPECT_NEAR(v.pose.z, 200.0 + 100.0 * (first + 0.5) * ds / len, 1e-9);
+  EXPECT_EQ(v.limit_m, 250.0);
+  EXPECT_NE(v.ToString().find("ABOVE_MAX_ALTITUDE"), std::string::npos);
+}
+
+TEST_F(TrajectoryTest, EndpointOutsideMapIsAViolation) {
+  auto pieces = PiecesFromPolyline(std::vector<Point3>{{1000, 1000, 200}, {2000, 1000, 200}});
+  ASSERT_TRUE(pieces.ok());
+  auto eval = EvaluateTrajectory(*model_, *pieces);
+  ASSERT_TRUE(eval.ok());
+  EXPECT_FALSE(eval->admissible);
+  EXPECT_EQ(eval->first_violation->kind, ViolationKind::kOutsideMap);
+  EXPECT_NEAR(eval->first_violation->arc_length_m, 1000.0, 1e-9);  // x = 2000 is the border
+}
+
+TEST_F(TrajectoryTest, BadInputIsRefusedWithIndexAndValue) {
+  auto one = PiecesFromPolyline(std::vector<Point3>{{1, 2, 3}});
+  ASSERT_FALSE(one.ok());
+  EXPECT_NE(one.status().message().find("at least 2"), std::string::npos);
+  auto nan = PiecesFromWaypoints(std::vector<Pose>{{0, 0, 0, 0}, {1, std::nan(""), 0, 0}}, params_);
+  ASSERT_FALSE(nan.ok());
+  EXPECT_NE(nan.status().message().find("waypoints[1].y"), std::string::npos) << nan.status();
+  auto many = PiecesFromPolyline(std::vector<Point3>(11), 10);
+  ASSERT_FALSE(many.ok());
+  EXPECT_NE(many.status().message().find("at most 10"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace riskplan

@@ -1,8 +1,9 @@
 #include "accel/batch_locate.h"
-#include "core/base/check.h"
 
 #include <algorithm>
 #include <cmath>
+
+#include "core/base/check.h"
 
 #if defined(__x86_64__)
 #include <immintrin.h>

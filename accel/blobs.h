@@ -28,8 +28,8 @@
 #include "absl/synchronization/mutex.h"
 #include "accel/fixed_point.h"
 #include "accel/shim_protocol.h"
-#include "core/risk/impact_table.h"
 #include "core/map/risk_map.h"
+#include "core/risk/impact_table.h"
 
 namespace riskplan::accel {
 

@@ -29,7 +29,6 @@ ConfigurationRisk FromCached(const RiskModel& model, const KernelSite& site,
   return out;
 }
 
-
 inline void PrefetchWindow(const char* row, int64_t row_bytes, int rows, int window_bytes) {
   for (int v = 0; v < rows; ++v) {
     for (int b = 0; b < window_bytes; b += 64) __builtin_prefetch(row + b);
@@ -287,7 +286,7 @@ void CpuRiskKernel::Sums(const RiskModel& model, std::span<const LocatedSite> si
       }
       if (count == 3) count = 2;  // loops exist for 1, 2 and 4 windows
       ExactLoopFor(isa_, count, k0->Side(), shared)(group, k0->Side(), k0->Stride(), map_stride,
-                                               &impact_factor[a], &expected_shelter[a]);
+                                                    &impact_factor[a], &expected_shelter[a]);
       a += count;
     }
     return;

@@ -22,9 +22,9 @@ inline double ReduceLanes(const double* a) {
 // zero weights; adding their +0 products to a non-negative sum changes
 // nothing, so they are skipped.
 template <int kHalves, int kN, bool kShared>
-__attribute__((target("avx2"))) void EwmmAvx2(const ExactWindow* windows, int rows, int weight_stride,
-                                              int64_t map_stride, double* impact_factor,
-                                              double* expected_shelter) {
+__attribute__((target("avx2"))) void EwmmAvx2(const ExactWindow* windows, int rows,
+                                              int weight_stride, int64_t map_stride,
+                                              double* impact_factor, double* expected_shelter) {
   __m256d rho_lo[kN], rho_hi[kN], sh_lo[kN], sh_hi[kN];
   const double* w[kN];
   const float* r[kN];
@@ -128,7 +128,8 @@ __attribute__((target("avx512f"))) void EwmmAvx512(const ExactWindow* windows, i
 #pragma GCC diagnostic pop
 
 template <int kN, bool kShared, int... kHalves>
-constexpr std::array<ExactEwmmFn, sizeof...(kHalves)> Avx2Table(std::integer_sequence<int, kHalves...>) {
+constexpr std::array<ExactEwmmFn, sizeof...(kHalves)> Avx2Table(
+    std::integer_sequence<int, kHalves...>) {
   return {&EwmmAvx2<kHalves + 1, kN, kShared>...};
 }
 

@@ -24,7 +24,7 @@ struct ExactWindow {
 };
 
 using ExactEwmmFn = void (*)(const ExactWindow*, int rows, int weight_stride, int64_t map_stride,
-                        double* impact_factor, double* expected_shelter);
+                             double* impact_factor, double* expected_shelter);
 
 #if defined(__x86_64__)
 // The loop for a group of `n` (1, 2 or 4; 4 only with kAvx512) windows of

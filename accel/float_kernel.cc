@@ -1,10 +1,11 @@
 #include "accel/float_kernel.h"
-#include "core/base/check.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <utility>
+
+#include "core/base/check.h"
 
 #if defined(__x86_64__)
 #include <immintrin.h>

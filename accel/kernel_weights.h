@@ -26,8 +26,8 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 #include "accel/prepared_map.h"
-#include "core/risk/impact_table.h"
 #include "core/base/check.h"
+#include "core/risk/impact_table.h"
 
 namespace riskplan::accel {
 

@@ -1,8 +1,9 @@
 #include "accel/site_cache.h"
-#include "core/base/check.h"
 
 #include <algorithm>
 #include <bit>
+
+#include "core/base/check.h"
 
 namespace riskplan::accel {
 namespace {
@@ -50,8 +51,7 @@ SiteCache::Session SiteCache::Begin(const RiskModel& model, uint32_t variant) {
     next_tag_ = 1;
     models_.clear();
   }
-  models_.push_back(
-      ModelId{model.map_ptr(), model.table_ptr(), alpha, beta, variant, next_tag_});
+  models_.push_back(ModelId{model.map_ptr(), model.table_ptr(), alpha, beta, variant, next_tag_});
   return Session{next_tag_++, epoch_.load()};
 }
 

@@ -20,9 +20,9 @@
 #include "accel/risk_engine.h"
 #include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
+#include "core/base/random.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
-#include "core/base/random.h"
 #include "core/risk/risk_model.h"
 
 namespace riskplan {

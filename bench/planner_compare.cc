@@ -22,9 +22,9 @@
 #include "absl/flags/usage.h"
 #include "absl/strings/str_split.h"
 #include "bench/scenarios.h"
+#include "core/flight/trajectory.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
-#include "core/flight/trajectory.h"
 
 ABSL_FLAG(int, seeds, 3, "seeds per scenario");
 ABSL_FLAG(double, budget_s, 2.0, "wall-time budget per run, s");

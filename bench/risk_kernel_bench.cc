@@ -23,9 +23,7 @@ const RiskModel& Model() {
 
 // Configurations 100 m above the terrain at (x, y).
 std::vector<Pose> AlongTrajectories(size_t n) { return bench::AlongTrajectories(Model(), n); }
-std::vector<Pose> RandomConfigurations(size_t n) {
-  return bench::RandomConfigurations(Model(), n);
-}
+std::vector<Pose> RandomConfigurations(size_t n) { return bench::RandomConfigurations(Model(), n); }
 
 void Run(benchmark::State& state, const std::vector<Pose>& configs) {
   const RiskModel& model = Model();

@@ -21,14 +21,14 @@
 
 #include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
+#include "core/base/random.h"
 #include "core/map/demo_city.h"
 #include "core/planners/harmonic_potential.h"
 #include "core/planners/obstacle_points.h"
 #include "core/planners/planner.h"
 #include "core/planners/planner_support.h"
-#include "core/base/random.h"
-#include "core/risk/risk_model.h"
 #include "core/planners/two_tier_feasibility.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan {
 namespace {

@@ -3,78 +3,68 @@
 # docs/architecture.md: a file may include headers of its own part and of the
 # parts listed for it, and nothing of the parts above it. Third-party headers
 # are checked where a part must stay free of them (core: no gRPC, Protobuf,
-# GDAL, HTTP or prometheus; accel: no gRPC or Protobuf).
-# Usage: layering_test.sh SOURCE_DIR. Prints every offending line; exit 1 if any.
+# GDAL, HTTP or Prometheus; accel: no gRPC, Protobuf or Prometheus).
+# Usage: layering_test.sh SOURCE_DIR. Prints every offending include; exits 1
+# if there is one, or if it found too few includes to have checked anything.
 set -euo pipefail
 cd "$1"
 
-# part -> the project folders its files may include (besides third-party).
-declare -A allowed=(
-  [core/base]="core/base"
-  [core/map]="core/base core/map"
-  [core/risk]="core/base core/map core/risk"
-  [core/flight]="core/base core/map core/risk core/flight"
-  [core/planners]="core/base core/map core/risk core/flight core/planners"
-  [core/tools]="core/base core/map core/risk core/flight core/planners core/tools"
-  [accel]="core accel"
-  [server]="core accel server riskplan"
-  [client]="client riskplan"
-)
-# Project include roots: an include starting with one of these is ours.
-project_roots="core accel server client riskplan tests bench"
-# Third-party prefixes a part must not include.
-declare -A forbidden=(
-  [core]="grpc grpcpp google/protobuf riskplan/ gdal ogr cpl_ proj httplib prometheus"
-  [accel]="grpc grpcpp google/protobuf riskplan/ prometheus"
-)
+# Every #include line of the checked folders, as FILE<TAB>HEADER.
+includes=$(find core accel server client -name '*.h' -o -name '*.cc' | sort |
+  xargs grep -HE '^#include [<"]' |
+  sed -E 's/^([^:]+):#include [<"]([^>"]+)[>"].*/\1\t\2/')
 
-failures=0
-checked=0
-for part in "${!allowed[@]}"; do
-  [ -d "$part" ] || { echo "layering: folder $part is missing"; failures=$((failures + 1)); continue; }
-  while IFS= read -r file; do
-    # accel's part covers its sub-folders; core's parts are disjoint.
-    while IFS= read -r line; do
-      inc=${line#*\"}
-      inc=${inc%%\"*}
-      checked=$((checked + 1))
-      root=${inc%%/*}
-      case " $project_roots " in *" $root "*) ;; *) continue ;; esac
-      ok=0
-      for a in ${allowed[$part]}; do
-        if [[ "$inc" == "$a/"* ]]; then ok=1; break; fi
-      done
-      if [ $ok -eq 0 ]; then
-        echo "layering: $file includes \"$inc\", outside what $part may use (${allowed[$part]})"
-        failures=$((failures + 1))
-      fi
-    done < <(grep -E '^#include "' "$file" || true)
-  done < <(find "$part" -name '*.h' -o -name '*.cc' | sort)
-done
-
-for top in "${!forbidden[@]}"; do
-  while IFS= read -r file; do
-    while IFS= read -r line; do
-      inc=$(echo "$line" | sed -E 's/^#include [<"]([^>"]+)[>"].*/\1/')
-      for f in ${forbidden[$top]}; do
-        if [[ "$inc" == "$f"* ]]; then
-          echo "layering: $file includes <$inc>: $top must not depend on $f"
-          failures=$((failures + 1))
-        fi
-      done
-    done < <(grep -E '^#include [<"]' "$file" || true)
-  done < <(find "$top" -name '*.h' -o -name '*.cc' | sort)
-done
-
-# Every core source file belongs to one of the parts above.
-while IFS= read -r file; do
-  echo "layering: $file is not in a core part (base, map, risk, flight, planners, tools)"
-  failures=$((failures + 1))
-done < <(find core -maxdepth 1 -name '*.h' -o -maxdepth 1 -name '*.cc')
-
-if [ "$checked" -lt 100 ]; then
-  echo "layering: only $checked includes found; is $1 the source tree?"
+# Every core source file belongs to one of its parts.
+stray=$(find core -maxdepth 1 -name '*.h' -o -maxdepth 1 -name '*.cc')
+if [ -n "$stray" ]; then
+  echo "layering: not in a core part (base, map, risk, flight, planners, tools): $stray"
   exit 1
 fi
-echo "layering: $checked includes checked, $failures outside the table"
-[ "$failures" -eq 0 ]
+
+echo "$includes" | awk -F'\t' '
+BEGIN {
+  # part -> the project folders its files may include.
+  allowed["core/base"] = "core/base"
+  allowed["core/map"] = "core/base core/map"
+  allowed["core/risk"] = "core/base core/map core/risk"
+  allowed["core/flight"] = "core/base core/map core/risk core/flight"
+  allowed["core/planners"] = "core/base core/map core/risk core/flight core/planners"
+  allowed["core/tools"] = "core"
+  allowed["accel"] = "core accel"
+  allowed["server"] = "core accel server riskplan"
+  allowed["client"] = "client riskplan"
+  # An include whose first folder is one of these is the project'"'"'s own.
+  split("core accel server client riskplan tests bench", roots, " ")
+  for (r in roots) own[roots[r]] = 1
+  # Third-party prefixes a top-level part must not include.
+  forbidden["core"] = "grpc grpcpp google/protobuf gdal ogr cpl_ proj httplib prometheus"
+  forbidden["accel"] = "grpc grpcpp google/protobuf prometheus"
+  failures = 0; checked = 0
+}
+{
+  file = $1; inc = $2; checked++
+  n = split(file, parts, "/")
+  part = parts[1]
+  if (part == "core") {
+    if (n < 3) { print "layering: " file " is not in a core part (base, map, risk, flight, planners, tools)"; failures++; next }
+    part = "core/" parts[2]
+    if (!(part in allowed)) { print "layering: " file " is in " part ", which the table does not list"; failures++; next }
+  }
+  split(inc, ip, "/")
+  if (ip[1] in own && index(inc, "/") > 0) {
+    ok = 0
+    m = split(allowed[part], list, " ")
+    for (k = 1; k <= m; k++) if (index(inc, list[k] "/") == 1) ok = 1
+    if (!ok) { print "layering: " file " includes \"" inc "\", outside what " part " may use (" allowed[part] ")"; failures++ }
+  }
+  top = parts[1]
+  if (top in forbidden) {
+    m = split(forbidden[top], bad, " ")
+    for (k = 1; k <= m; k++) if (index(inc, bad[k]) == 1) { print "layering: " file " includes <" inc ">: " top " must not depend on " bad[k]; failures++; break }
+  }
+}
+END {
+  if (checked < 100) { print "layering: only " checked " includes found; is this the source tree?"; exit 1 }
+  print "layering: " checked " includes checked, " failures " outside the table"
+  exit failures > 0
+}'

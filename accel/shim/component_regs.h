@@ -49,7 +49,7 @@ inline constexpr uint32_t kErrorNone = 0;
 inline constexpr uint32_t kErrorBadLane =
     1;  // a lane's window leaves the cut, its slot or side is out of range, a lane in
         // LANE_MASK does not exist, or the cut is wider or taller than 65535 cells
-inline constexpr uint32_t kErrorStream = 2;  // STREAM written with no job taking cells
+inline constexpr uint32_t kErrorStream = 2;      // STREAM written with no job taking cells
 inline constexpr uint32_t kErrorWeightBusy = 3;  // WDATA_HI written while a job runs
 
 // Per-lane registers: base kLaneBase + l * kLaneStride.

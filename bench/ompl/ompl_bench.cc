@@ -34,9 +34,9 @@
 #include "bench/ompl/run_record.h"
 #include "bench/ompl/self_check.h"
 #include "bench/scenarios.h"
+#include "core/flight/trajectory.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
-#include "core/flight/trajectory.h"
 #include "ompl/util/Console.h"
 
 // Ten of the 24 scenarios: seven across the dense centre (both 5 km ones

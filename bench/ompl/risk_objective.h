@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/risk/risk_model.h"
 #include "core/flight/trajectory.h"
+#include "core/risk/risk_model.h"
 #include "ompl/base/MotionValidator.h"
 #include "ompl/base/OptimizationObjective.h"
 #include "ompl/base/SpaceInformation.h"

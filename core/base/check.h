@@ -27,9 +27,9 @@ namespace riskplan::internal {
 
 #if !defined(NDEBUG) || defined(RISKPLAN_DCHECK_ALWAYS_ON)
 #define RISKPLAN_DCHECK_IS_ON 1
-#define RISKPLAN_DCHECK(condition)                                                  \
-  (static_cast<bool>(condition)                                                     \
-       ? static_cast<void>(0)                                                       \
+#define RISKPLAN_DCHECK(condition) \
+  (static_cast<bool>(condition)    \
+       ? static_cast<void>(0)      \
        : ::riskplan::internal::DcheckFailed(#condition, __FILE__, __LINE__))
 #else
 #define RISKPLAN_DCHECK_IS_ON 0

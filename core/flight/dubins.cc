@@ -6,8 +6,8 @@
 #include <limits>
 #include <string_view>
 
-#include "core/base/geometry.h"
 #include "core/base/check.h"
+#include "core/base/geometry.h"
 
 namespace riskplan {
 namespace {

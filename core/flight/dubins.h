@@ -33,9 +33,7 @@ struct DubinsPath2D {
   DubinsWord word = DubinsWord::kLSL;
   std::array<double, 3> segment_length_m = {0.0, 0.0, 0.0};
 
-  double Length() const {
-    return segment_length_m[0] + segment_length_m[1] + segment_length_m[2];
-  }
+  double Length() const { return segment_length_m[0] + segment_length_m[1] + segment_length_m[2]; }
   // Pose (z = 0) after horizontal arc length s in [0, Length()] (clamped).
   Pose PoseAt(double s) const;
 };
@@ -43,8 +41,8 @@ struct DubinsPath2D {
 // Shortest planar Dubins path from (x0, y0, th0) to (x1, y1, th1) with turning
 // radius `radius` > 0. Among words of equal length (within 1e-9 m) the first in
 // the order of DubinsWord wins, so results are deterministic.
-DubinsPath2D ShortestDubinsPath(double x0, double y0, double th0, double x1, double y1,
-                                double th1, double radius);
+DubinsPath2D ShortestDubinsPath(double x0, double y0, double th0, double x1, double y1, double th1,
+                                double radius);
 
 // Length of a specific word, or +infinity when the word does not exist for
 // these poses. `segments`, when given, receives the three lengths in metres

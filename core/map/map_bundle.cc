@@ -502,7 +502,8 @@ absl::Status WriteMapBundle(const RiskMap& map, const std::string& dir) {
   }
   manifest["layers"] = std::move(layer_entries);
   // Invalid UTF-8 in a name or provenance is replaced rather than thrown on.
-  const std::string text = manifest.dump(2, ' ', false, OrderedJson::error_handler_t::replace) + "\n";
+  const std::string text =
+      manifest.dump(2, ' ', false, OrderedJson::error_handler_t::replace) + "\n";
   return WriteFileAtomically(dir, kManifestName, text.data(), text.size());
 }
 

@@ -6,10 +6,10 @@
 #include <cstring>
 #include <unordered_map>
 
+#include "core/base/random.h"
 #include "core/planners/obstacle_points.h"
 #include "core/planners/path_realizer.h"
 #include "core/planners/planner_support.h"
-#include "core/base/random.h"
 #include "core/planners/two_tier_feasibility.h"
 
 namespace riskplan {

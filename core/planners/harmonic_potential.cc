@@ -1,9 +1,10 @@
 #include "core/planners/harmonic_potential.h"
-#include "core/base/check.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+
+#include "core/base/check.h"
 
 namespace riskplan {
 

@@ -14,8 +14,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/planners/planner.h"
 #include "core/map/risk_map.h"
+#include "core/planners/planner.h"
 
 namespace riskplan {
 

@@ -5,8 +5,8 @@
 #include <map>
 #include <tuple>
 
-#include "core/planners/planner_support.h"
 #include "core/base/check.h"
+#include "core/planners/planner_support.h"
 
 namespace riskplan {
 

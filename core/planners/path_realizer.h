@@ -15,10 +15,10 @@
 #include <vector>
 
 #include "core/base/geometry.h"
+#include "core/flight/trajectory.h"
 #include "core/planners/obstacle_points.h"
 #include "core/planners/planner.h"
 #include "core/risk/risk_model.h"
-#include "core/flight/trajectory.h"
 
 namespace riskplan {
 

@@ -32,9 +32,9 @@
 #include "absl/status/statusor.h"
 #include "core/base/geometry.h"
 #include "core/base/random.h"
+#include "core/flight/trajectory.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
-#include "core/flight/trajectory.h"
 
 namespace riskplan {
 

@@ -3,11 +3,11 @@
 #include <cmath>
 
 #include "absl/strings/str_format.h"
+#include "core/flight/trajectory.h"
 #include "core/planners/genetic_planner.h"
 #include "core/planners/harmonic_planner.h"
 #include "core/planners/risk_rrt_star.h"
 #include "core/planners/rrt_planner.h"
-#include "core/flight/trajectory.h"
 
 namespace riskplan {
 

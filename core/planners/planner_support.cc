@@ -5,8 +5,8 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "core/flight/trajectory.h"
 #include "core/base/check.h"
+#include "core/flight/trajectory.h"
 
 namespace riskplan {
 

@@ -15,7 +15,9 @@ absl::StatusOr<Params> Params::Parse(const std::map<std::string, double>& given)
       PlannerParamValues::Parse("RISK_RRT_STAR", RiskRrtStar::ParamInfo(), given);
   if (!values.ok()) return values.status();
   // Integer parameters: the table's bounds keep them well inside int.
-  auto integer = [&](const char* name) { return static_cast<int64_t>(std::floor(values->Get(name))); };
+  auto integer = [&](const char* name) {
+    return static_cast<int64_t>(std::floor(values->Get(name)));
+  };
   Params p;
   p.step_m = values->Get("step_m");
   p.goal_bias = values->Get("goal_bias");
@@ -100,6 +102,5 @@ absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
   rrt_star::Run run(problem, options, *params, evaluator, cancel, on_improvement);
   return run.Execute();
 }
-
 
 }  // namespace riskplan

@@ -51,8 +51,8 @@ void Run::AddCandidate(const Pose& from, const Pose& to, int32_t node, double ba
 
 absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
                                      int32_t* winner) {
-  const int64_t chunk = params_.batch_chunk > 0 ? params_.batch_chunk
-                                                : std::numeric_limits<int64_t>::max();
+  const int64_t chunk =
+      params_.batch_chunk > 0 ? params_.batch_chunk : std::numeric_limits<int64_t>::max();
   double best = kInf;
   for (const CandidateEdge& e : *edges) best = std::min(best, e.limit);
   if (winner != nullptr) *winner = -1;

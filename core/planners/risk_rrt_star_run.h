@@ -68,10 +68,10 @@ struct CandidateEdge {
   CandidateEdge(int32_t node, PieceRisk rule, double base, double limit)
       : node(node), rule(std::move(rule)), base(base), limit(limit) {}
 
-  int32_t node = -1;  // the tree node at the other end
-  PieceRisk rule;     // the edge's piece, its midpoints and their sum so far
-  double base = 0.0;    // risk added to the edge's own: R of its far end
-  double limit = kInf;  // drop when base + partial risk >= limit
+  int32_t node = -1;     // the tree node at the other end
+  PieceRisk rule;        // the edge's piece, its midpoints and their sum so far
+  double base = 0.0;     // risk added to the edge's own: R of its far end
+  double limit = kInf;   // drop when base + partial risk >= limit
   int64_t in_batch = 0;  // midpoints of this edge in the current batch
   bool alive = true;
   bool admissible = true;  // false once an inadmissible midpoint was found
@@ -177,7 +177,6 @@ class Run {
   std::vector<Pose> batch_poses_;
   std::vector<ConfigurationRisk> batch_risks_;
 };
-
 
 }  // namespace riskplan::rrt_star
 

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#include "core/base/random.h"
 #include "core/planners/obstacle_points.h"
 #include "core/planners/path_realizer.h"
 #include "core/planners/planner_support.h"
-#include "core/base/random.h"
 #include "core/planners/spatial_grid.h"
 
 namespace riskplan {

@@ -29,8 +29,8 @@
 
 #include "absl/status/status.h"
 #include "core/base/geometry.h"
-#include "core/risk/risk_model.h"
 #include "core/flight/trajectory.h"
+#include "core/risk/risk_model.h"
 
 namespace riskplan {
 

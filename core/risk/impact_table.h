@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "core/risk/ballistic.h"
-#include "core/base/model_params.h"
 #include "core/base/check.h"
+#include "core/base/model_params.h"
+#include "core/risk/ballistic.h"
 
 namespace riskplan {
 

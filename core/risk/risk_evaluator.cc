@@ -1,4 +1,5 @@
 #include "core/risk/risk_evaluator.h"
+
 #include "core/base/check.h"
 
 namespace riskplan {

@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "core/base/check.h"
 #include "core/base/geometry.h"
 #include "core/risk/risk_model.h"
-#include "core/base/check.h"
 
 namespace riskplan {
 

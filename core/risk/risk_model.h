@@ -14,9 +14,9 @@
 
 #include "absl/status/statusor.h"
 #include "core/base/geometry.h"
-#include "core/risk/impact_table.h"
 #include "core/base/model_params.h"
 #include "core/map/risk_map.h"
+#include "core/risk/impact_table.h"
 
 namespace riskplan {
 

@@ -6,8 +6,8 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "core/risk/risk_layer.h"
 #include "core/map/risk_map.h"
+#include "core/risk/risk_layer.h"
 
 namespace riskplan {
 

@@ -21,13 +21,13 @@
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
+#include "core/flight/trajectory.h"
+#include "core/flight/trajectory_io.h"
 #include "core/map/demo_city.h"
 #include "core/map/map_bundle.h"
 #include "core/risk/risk_layer.h"
 #include "core/risk/risk_model.h"
 #include "core/tools/layer_writers.h"
-#include "core/flight/trajectory.h"
-#include "core/flight/trajectory_io.h"
 #include "nlohmann/json.hpp"
 
 ABSL_FLAG(std::string, map, "",

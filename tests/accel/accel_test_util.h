@@ -33,8 +33,8 @@
 #include "accel/risk_engine.h"
 #include "accel/shim/device.h"
 #include "accel/shim/shim_session.h"
-#include "core/map/demo_city.h"
 #include "core/base/random.h"
+#include "core/map/demo_city.h"
 #include "core/risk/risk_model.h"
 #include "gtest/gtest.h"
 

@@ -29,9 +29,9 @@
 
 #include "accel/risk_engine.h"
 #include "accel_test_util.h"
-#include "core/planners/planner.h"
 #include "core/base/random.h"
 #include "core/flight/trajectory.h"
+#include "core/planners/planner.h"
 #include "gtest/gtest.h"
 #include "plan_test_util.h"
 

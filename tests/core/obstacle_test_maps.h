@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "core/planners/planner.h"
-#include "core/map/risk_map.h"
-#include "core/risk/risk_model.h"
 #include "core/flight/trajectory.h"
+#include "core/map/risk_map.h"
+#include "core/planners/planner.h"
+#include "core/risk/risk_model.h"
 #include "gtest/gtest.h"
 
 namespace riskplan::testing_maps {

@@ -5,7 +5,6 @@
 #endif
 #undef RISKPLAN_DCHECK_ALWAYS_ON
 #include "core/base/check.h"
-
 #include "gtest/gtest.h"
 
 namespace riskplan {

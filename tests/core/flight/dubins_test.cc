@@ -394,7 +394,7 @@ TEST(DubinsAirplanePathTest, SpiralDecisionAtJustUnderAndJustOverTheTolerance) {
   const Pose a{1000, 1000, 0.0, 0.0};
   const double limit = 300.0 * std::tan(kGamma);
   const double at = LargestClimbWithoutSpiral(300.0, kGamma);
-  ASSERT_GT(at, limit);                  // the tolerance is above the limit ...
+  ASSERT_GT(at, limit);                      // the tolerance is above the limit ...
   EXPECT_LT(at - limit, 1e-9 * at * 1.001);  // ... by 1e-9 of the climb
   EXPECT_GT(at - limit, 1e-9 * at * 0.999);
   const double over = std::nextafter(at, kInfinity);
@@ -408,14 +408,13 @@ TEST(DubinsAirplanePathTest, SpiralDecisionAtJustUnderAndJustOverTheTolerance) {
   EXPECT_EQ(spiral.spiral_turns(), 1);
   EXPECT_NEAR(spiral.HorizontalLength(), 300.0 + kTwoPi * 50.0, 1e-9);
   // Descending mirrors climbing.
-  EXPECT_EQ(DubinsAirplanePath(Pose{1000, 1000, at, 0.0}, Pose{1300, 1000, 0.0, 0.0}, 50.0,
-                               kGamma)
+  EXPECT_EQ(DubinsAirplanePath(Pose{1000, 1000, at, 0.0}, Pose{1300, 1000, 0.0, 0.0}, 50.0, kGamma)
                 .spiral_turns(),
             0);
-  EXPECT_EQ(DubinsAirplanePath(Pose{1000, 1000, over, 0.0}, Pose{1300, 1000, 0.0, 0.0}, 50.0,
-                               kGamma)
-                .spiral_turns(),
-            1);
+  EXPECT_EQ(
+      DubinsAirplanePath(Pose{1000, 1000, over, 0.0}, Pose{1300, 1000, 0.0, 0.0}, 50.0, kGamma)
+          .spiral_turns(),
+      1);
 }
 
 TEST(DubinsAirplanePathTest, DocumentedExampleClimbsWithinTheToleranceWithoutSpiral) {

@@ -2,8 +2,8 @@
 
 #include <vector>
 
-#include "core/planners/risk_guide.h"
 #include "core/flight/trajectory.h"
+#include "core/planners/risk_guide.h"
 #include "gtest/gtest.h"
 #include "tests/core/planner_test_util.h"
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <thread>
 
-#include "core/planners/obstacle_points.h"
 #include "core/base/random.h"
+#include "core/planners/obstacle_points.h"
 #include "gtest/gtest.h"
 #include "tests/core/obstacle_test_maps.h"
 #include "tests/core/planner_test_util.h"

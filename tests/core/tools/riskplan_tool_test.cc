@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "core/base/geometry.h"
+#include "core/flight/trajectory.h"
 #include "core/map/map_bundle.h"
 #include "core/risk/risk_model.h"
-#include "core/flight/trajectory.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"

@@ -25,7 +25,11 @@
 namespace riskplan::client {
 namespace {
 
-// Splits "a,b,c" into exactly `count` finite numbers.
+// Splits "a,b,c" into exactly `count` finite numbers. SimpleAtod accepts
+// "nan" and "inf", which the server would refuse only after a round trip and
+// without naming the flag, hence the finiteness check here. (Debian's abseil
+// has its own absl::string_view, not an alias of std::string_view, so text
+// crosses into abseil as absl::string_view.)
 absl::StatusOr<std::vector<double>> ParseNumbers(std::string_view text, size_t count,
                                                  std::string_view what) {
   std::vector<double> out;
@@ -46,6 +50,8 @@ absl::StatusOr<std::vector<double>> ParseNumbers(std::string_view text, size_t c
   return out;
 }
 
+// The ';'-separated points, blank ones skipped, so that a trailing ';' (easy
+// to leave when pasting a list) is not an empty point.
 std::vector<std::string> Points(std::string_view text) {
   std::vector<std::string> points;
   for (absl::string_view part :
@@ -81,6 +87,8 @@ absl::StatusOr<v1::Waypoints> ParseWaypoints(std::string_view text) {
     pose->set_z((*v)[2]);
     pose->set_theta((*v)[3]);
   }
+  // A trajectory needs two points; the server checks it too, but here the
+  // message can name the flag.
   if (out.poses_size() < 2) {
     return absl::InvalidArgumentError(
         absl::StrFormat("waypoints: %d given; at least 2 are needed", out.poses_size()));
@@ -107,6 +115,7 @@ absl::StatusOr<v1::Polyline> ParsePolyline(std::string_view text) {
   return out;
 }
 
+// Unlike a trajectory, an obstacle list may be empty: --obstacles is optional.
 absl::StatusOr<std::vector<v1::Point2>> ParsePoints2(std::string_view text) {
   std::vector<v1::Point2> out;
   const std::vector<std::string> points = Points(text);
@@ -323,6 +332,9 @@ absl::Status ReadTrajectoryFile(const std::string& path, v1::EvaluateRiskRequest
   return ParseJson(*text, absl::StrFormat("trajectory file '%s'", path), request);
 }
 
+// nlohmann writes each double with the fewest digits that read back as the
+// same double, so a saved plan's waypoints are read back as the very values
+// the server sent, and evaluate to the risk the plan reported.
 std::string WaypointsToJson(const google::protobuf::RepeatedPtrField<v1::Pose>& poses) {
   nlohmann::json points = nlohmann::json::array();
   for (const v1::Pose& p : poses) points.push_back({p.x(), p.y(), p.z(), p.theta()});
@@ -346,7 +358,11 @@ absl::StatusOr<std::map<std::string, double>> ParseNameValues(std::string_view t
   return out;
 }
 
+// By reflection rather than by a table of names, so that a parameter added
+// to ModelParameters works here without a change; the server checks the
+// ranges (docs/risk-model.md).
 absl::Status ParseModelParameters(std::string_view text, v1::ModelParameters* params) {
+  assert(params != nullptr);
   absl::StatusOr<std::map<std::string, double>> values = ParseNameValues(text);
   if (!values.ok()) return values.status();
   const google::protobuf::Descriptor* descriptor = params->GetDescriptor();
@@ -360,6 +376,8 @@ absl::Status ParseModelParameters(std::string_view text, v1::ModelParameters* pa
       return absl::InvalidArgumentError(absl::StrFormat("unknown model parameter '%s'; known: %s",
                                                         name, absl::StrJoin(known, ", ")));
     }
+    // Integer fields (heading_bins) must get a whole number; the bound keeps
+    // the cast within int32 (the server checks the real range).
     if (field->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_INT32) {
       if (value != std::floor(value) || std::fabs(value) > 2e9) {
         return absl::InvalidArgumentError(absl::StrFormat(

@@ -1,5 +1,7 @@
 #include "client/client.h"
 
+#include <cassert>
+#include <iterator>
 #include <utility>
 
 namespace riskplan::client {
@@ -7,14 +9,21 @@ namespace riskplan::client {
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
                                            const grpc::ChannelArguments& extra) {
   grpc::ChannelArguments args = extra;
+  // gRPC's default limit is 4 MiB, which a final PlanUpdate with its tree or
+  // an EvaluateRisk response with every sample can exceed; the server sends
+  // up to 64 MiB (docs/api.md, "Limits").
   args.SetMaxReceiveMessageSize(kMaxReceiveBytes);
   // Spreads calls over every address a name resolves to (e.g. the pods of a
   // headless Kubernetes Service); the same as pick_first for one address.
   args.SetLoadBalancingPolicyName("round_robin");
+  // Plaintext, as the server listens: it has no TLS of its own.
   return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
 }
 
 void SetTimeout(grpc::ClientContext* context, absl::Duration timeout) {
+  assert(context != nullptr);
+  // No deadline is gRPC's default; an infinite one is left unset rather than
+  // converted, since absl::InfiniteFuture() has no chrono time_point.
   if (timeout == absl::InfiniteDuration()) return;
   context->set_deadline(absl::ToChronoTime(absl::Now() + timeout));
 }
@@ -63,6 +72,9 @@ grpc::Status RiskplanClient::Plan(const v1::PlanRequest& request,
       stub_->PlanTrajectory(&context, request);
   v1::PlanUpdate update;
   bool cancelled = false;
+  // After a cancel the stream is still read to its end, because Finish may
+  // only be called once every message has been read; the updates already on
+  // their way are dropped, so the callback hears nothing after it said stop.
   while (reader->Read(&update)) {
     if (!cancelled && !on_update(update)) {
       context.TryCancel();
@@ -75,6 +87,7 @@ grpc::Status RiskplanClient::Plan(const v1::PlanRequest& request,
 grpc::Status RiskplanClient::CheckHealth(
     const std::string& service, grpc::health::v1::HealthCheckResponse::ServingStatus* status,
     absl::Duration timeout) {
+  assert(status != nullptr);
   grpc::ClientContext context;
   SetTimeout(&context, timeout);
   grpc::health::v1::HealthCheckRequest request;
@@ -86,6 +99,8 @@ grpc::Status RiskplanClient::CheckHealth(
 }
 
 std::string StatusCodeName(grpc::StatusCode code) {
+  // Indexed by the code's value: gRPC fixes the canonical codes as 0 to 16,
+  // and the names are those of docs/api.md and of the load reports.
   static const char* const kNames[] = {"OK",
                                        "CANCELLED",
                                        "UNKNOWN",
@@ -103,8 +118,10 @@ std::string StatusCodeName(grpc::StatusCode code) {
                                        "UNAVAILABLE",
                                        "DATA_LOSS",
                                        "UNAUTHENTICATED"};
+  static_assert(std::size(kNames) == grpc::StatusCode::UNAUTHENTICATED + 1);
+  // A server or a proxy may send any integer as a code.
   const int i = static_cast<int>(code);
-  return i >= 0 && i <= 16 ? kNames[i] : "UNKNOWN";
+  return i >= 0 && i < static_cast<int>(std::size(kNames)) ? kNames[i] : "UNKNOWN";
 }
 
 }  // namespace riskplan::client

@@ -49,7 +49,8 @@ class RiskplanClient {
   grpc::Status Plan(const v1::PlanRequest& request, const PlanUpdateCallback& on_update,
                     absl::Duration timeout = absl::InfiniteDuration());
 
-  // grpc.health.v1.Health/Check of `service` ("" for the whole server).
+  // grpc.health.v1.Health/Check of `service` ("" for the whole server);
+  // `*status` is set when the call succeeds. REQUIRES: status != nullptr.
   grpc::Status CheckHealth(const std::string& service,
                            grpc::health::v1::HealthCheckResponse::ServingStatus* status,
                            absl::Duration timeout = absl::Seconds(5));
@@ -64,6 +65,7 @@ class RiskplanClient {
 };
 
 // Sets `context`'s deadline to now + `timeout` (nothing for an infinite one).
+// REQUIRES: context != nullptr.
 void SetTimeout(grpc::ClientContext* context, absl::Duration timeout);
 
 // The channel the CLI and the load generator use: plaintext, large messages,

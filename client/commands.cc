@@ -14,6 +14,13 @@
 #include "client/trajectory_text.h"
 #include "google/protobuf/util/json_util.h"
 
+// The commands behind `riskplan`. Each builds its request from CliOptions
+// and checks the options before the first call, so a mistyped flag costs no
+// server time and exits 2, while a failed call exits 1 (the codes of
+// commands.h): a script can tell its own mistakes from the server's.
+// Validation is left to the server wherever it knows more (ranges, planner
+// parameter names, admissibility), so a newer server needs no newer client.
+
 namespace riskplan::client {
 namespace {
 
@@ -22,12 +29,19 @@ int Usage(const std::string& message) {
   return 2;
 }
 
+// The code by name, as docs/api.md lists the codes with their meaning and
+// whether a retry can help.
 int RpcError(const char* method, const grpc::Status& status) {
   std::fprintf(stderr, "riskplan: %s failed: %s: %s\n", method,
                StatusCodeName(status.error_code()).c_str(), status.error_message().c_str());
   return 1;
 }
 
+// The proto3 JSON mapping, with the proto's own field names (sample_count,
+// not sampleCount) so that --json output matches the proto and the docs.
+// 64-bit integers come out as strings, as the mapping requires (a double
+// cannot hold them all). Printing fails only for an Any of an unknown type,
+// and the API has no Any field, so the status is ignored.
 std::string ToJson(const google::protobuf::Message& message) {
   std::string out;
   google::protobuf::util::JsonPrintOptions options;
@@ -37,6 +51,8 @@ std::string ToJson(const google::protobuf::Message& message) {
   return out;
 }
 
+// --timeout_ms=0 (the default) means "the command's own deadline", which
+// differs by command (riskplan_main.cc's help lists them).
 absl::Duration TimeoutOr(const CliOptions& o, absl::Duration fallback) {
   return o.timeout > absl::ZeroDuration() ? o.timeout : fallback;
 }
@@ -45,6 +61,8 @@ absl::StatusOr<v1::EvaluateRiskRequest> EvalRequest(const CliOptions& o) {
   v1::EvaluateRiskRequest request;
   request.set_map(o.map);
   request.set_include_samples(o.samples);
+  // Two trajectories given is an error rather than one winning, so that a
+  // flag left over in a script cannot silently choose what is evaluated.
   const int given = !o.waypoints.empty() + !o.polyline.empty() + !o.trajectory_file.empty();
   if (given != 1) {
     return absl::InvalidArgumentError(
@@ -67,6 +85,8 @@ absl::StatusOr<v1::EvaluateRiskRequest> EvalRequest(const CliOptions& o) {
   if (o.two_tier) {
     v1::TwoTierOptions* two_tier = request.mutable_two_tier();
     two_tier->set_enabled(true);
+    // Names as in the proto, in any case. UNSPECIFIED parses but is not a
+    // rule one can ask for by name (the server reads it as FLIGHT_BAND).
     v1::CollisionRule rule = v1::COLLISION_RULE_UNSPECIFIED;
     if (!v1::CollisionRule_Parse(absl::AsciiStrToUpper(o.two_tier_rule), &rule) ||
         rule == v1::COLLISION_RULE_UNSPECIFIED) {
@@ -74,6 +94,9 @@ absl::StatusOr<v1::EvaluateRiskRequest> EvalRequest(const CliOptions& o) {
           "--two_tier_rule=%s: unknown; known: FLIGHT_BAND, TERRAIN_ONLY", o.two_tier_rule));
     }
     two_tier->set_rule(rule);
+    // -1 leaves a field unset, so that the server applies its default: for
+    // these optional fields an explicit 0 means something else (no detailed
+    // pieces; an invalid block size), and the defaults live in one place.
     if (o.two_tier_detailed_segments != -1) {
       two_tier->set_detailed_segments(o.two_tier_detailed_segments);
     }
@@ -83,6 +106,8 @@ absl::StatusOr<v1::EvaluateRiskRequest> EvalRequest(const CliOptions& o) {
   return request;
 }
 
+// One line for the two-tier result. A coarse-tier hit names a block of the
+// coarse grid, not a map cell, so the word says which grid the indices are on.
 std::string TwoTierText(const v1::TwoTierResult& t) {
   if (t.feasible()) {
     return absl::StrFormat("two-tier check: feasible (%d cells checked)",
@@ -100,6 +125,8 @@ std::string TwoTierText(const v1::TwoTierResult& t) {
 absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
   v1::PlanRequest request;
   request.set_map(o.map);
+  // Checked here so that the message names the flags (the server could only
+  // say that the request has no start).
   if (o.start.empty() || o.goal.empty()) {
     return absl::InvalidArgumentError("--start and --goal are required ('x,y,z,theta')");
   }
@@ -109,6 +136,8 @@ absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
   if (!goal.ok()) return goal.status();
   *request.mutable_start() = *start;
   *request.mutable_goal() = *goal;
+  // Enum names in any case (--algorithm=rrt), parsed by the proto so that a
+  // new algorithm needs no change here.
   v1::Algorithm algorithm = v1::ALGORITHM_UNSPECIFIED;
   if (!v1::Algorithm_Parse(absl::AsciiStrToUpper(o.algorithm), &algorithm)) {
     return absl::InvalidArgumentError(absl::StrFormat(
@@ -121,6 +150,8 @@ absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
   request.set_min_update_interval_ms(o.min_update_interval_ms);
   request.set_display_step_m(o.display_step_m);
   request.set_include_tree(o.tree);
+  // Planner parameters are passed by name and checked by the server, which
+  // knows each planner's parameters and ranges (`riskplan-server --help`).
   absl::StatusOr<std::map<std::string, double>> planner_params = ParseNameValues(o.planner_params);
   if (!planner_params.ok()) return planner_params.status();
   request.mutable_planner_params()->insert(planner_params->begin(), planner_params->end());
@@ -169,6 +200,9 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
     std::printf("%s\n", ToJson(r).c_str());
     return 0;
   }
+  // Risks with 9 significant digits: enough to tell apart the trajectories a
+  // planner compares, and to check a plan's reported risk against an
+  // evaluation of its waypoints; --json gives every digit.
   std::printf("risk %.9g expected casualties per flight, length %.1f m, %d samples, %s\n", r.risk(),
               r.length_m(), static_cast<int>(r.sample_count()),
               r.admissible() ? "admissible" : "NOT admissible");
@@ -196,6 +230,8 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
 int RunPlan(const CliOptions& o, RiskplanClient& client) {
   absl::StatusOr<v1::PlanRequest> request = PlanRequest(o);
   if (!request.ok()) return Usage(std::string(request.status().message()));
+  // The picture's name is checked before planning, not after a plan of many
+  // seconds that would then be lost.
   if (!o.picture.empty() && !o.picture.ends_with(".svg") && !o.picture.ends_with(".png")) {
     return Usage("--picture must name a .svg or .png file");
   }
@@ -206,15 +242,23 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
               static_cast<int>(o.seed));
   std::printf("%5s %9s %11s %10s %14s %10s\n", "seq", "elapsed_s", "iterations", "tree_size",
               "best_risk", "length_m");
+  // Flushed after every line: stdout is fully buffered when piped, and the
+  // point of streaming is to see each improvement as it arrives.
   std::fflush(stdout);
 
   std::vector<v1::Trajectory> improvements;
   v1::PlanUpdate final_update;
+  // No deadline by default: the plan's budget already bounds it on the server
+  // (and --max_plan_time_ms caps every plan), so a client deadline could only
+  // cut a plan short and lose its final message.
   const absl::Duration timeout =
       o.timeout > absl::ZeroDuration() ? o.timeout : absl::InfiniteDuration();
   grpc::Status status = client.Plan(
       *request,
       [&](const v1::PlanUpdate& u) {
+        // Every message repeats the best trajectory so far (the final one
+        // too), so a trajectory counts as an improvement only when it
+        // differs from the last one kept; the picture draws each once.
         if (u.has_trajectory() &&
             (improvements.empty() ||
              u.trajectory().found_at_iteration() != improvements.back().found_at_iteration() ||
@@ -233,6 +277,9 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
       timeout);
   if (!status.ok()) return RpcError("PlanTrajectory", status);
 
+  // "found" counts every improvement of the planner, also those the server
+  // never sent because a newer one replaced them (docs/api.md, "The
+  // stream"); "sent" counts the distinct ones received.
   std::printf(
       "ended: %s after %.2f s, %d iterations, tree of %d nodes, %d improvements found "
       "(%d sent)\n",
@@ -254,6 +301,11 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
   }
 
   if (!o.picture.empty()) {
+    // The landing sites come from ListMaps, the layers from GetMapLayer,
+    // downsampled by the server to the picture's size: a full layer is 4
+    // bytes a map cell, far more than a picture of a few hundred pixels
+    // needs. Both layers are asked for at the same size, so they come on the
+    // same grid.
     PictureInput picture;
     v1::ListMapsResponse maps;
     if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError("ListMaps", s);
@@ -286,6 +338,8 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
     }
     std::printf("picture: %s\n", o.picture.c_str());
   }
+  // 3 tells a script that the plan ran but found nothing (NO_SOLUTION, or a
+  // SHUTDOWN before the first solution), which is not an RPC failure.
   return final_update.has_trajectory() ? 0 : 3;
 }
 
@@ -310,6 +364,7 @@ int RunLoad(const CliOptions& o, RiskplanClient& client) {
     return Usage(absl::StrFormat("--mode=%s: must be closed or open", o.mode));
   }
   load.mode = o.mode == "closed" ? LoadMode::kClosed : LoadMode::kOpen;
+  // Written as !(x > 0) so that NaN is refused too.
   if (o.concurrency < 1 || !(o.rate > 0) || !(o.duration_s > 0) || o.max_outstanding < 1) {
     return Usage("--concurrency, --rate, --duration_s and --max_outstanding must be > 0");
   }
@@ -328,6 +383,9 @@ int RunLoad(const CliOptions& o, RiskplanClient& client) {
         p.interval_p50_s * 1e3, p.interval_p99_s * 1e3);
     std::fflush(stdout);
   };
+  // The ceiling is Ping, a call that does nothing, under the same load: what
+  // the transport, gRPC and the server's threads cost alone. The ratios
+  // against it show how much the RPC's own work costs beyond that.
   std::optional<LoadReport> ceiling;
   if (o.ceiling && load.rpc != LoadRpc::kPing) {
     LoadOptions ping = load;

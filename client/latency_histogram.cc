@@ -1,11 +1,15 @@
 #include "client/latency_histogram.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 namespace riskplan::client {
 namespace {
 
+// Log-spaced buckets keep the relative error the same at every latency: a
+// 1% bucket is 10 ns wide at 1 us and 10 ms at 1 s, so microsecond Pings and
+// multi-second plans share one histogram without losing either.
 constexpr double kLowest = 1e-6;  // s; everything below is in bucket 0
 constexpr double kGrowth = 1.01;  // bucket width ratio
 const double kLogGrowth = std::log(kGrowth);
@@ -17,6 +21,7 @@ const int kBuckets = static_cast<int>(std::ceil(std::log(1000.0 / kLowest) / kLo
 LatencyHistogram::LatencyHistogram() : buckets_(kBuckets, 0) {}
 
 int LatencyHistogram::BucketOf(double seconds) {
+  // Written so that NaN lands in bucket 0 too, never at a wild index.
   if (!(seconds > kLowest)) return 0;
   const int b = static_cast<int>(std::log(seconds / kLowest) / kLogGrowth) + 1;
   return std::min(b, kBuckets - 1);
@@ -27,6 +32,8 @@ double LatencyHistogram::BucketLow(int bucket) {
 }
 
 void LatencyHistogram::Add(double seconds) {
+  // A latency can come out negative when the clock steps back between send
+  // and completion; it is counted (the call did complete) as 0.
   if (!(seconds >= 0.0)) seconds = 0.0;
   ++buckets_[BucketOf(seconds)];
   min_ = count_ == 0 ? seconds : std::min(min_, seconds);
@@ -37,6 +44,8 @@ void LatencyHistogram::Add(double seconds) {
 
 void LatencyHistogram::Merge(const LatencyHistogram& other) {
   if (other.count_ == 0) return;
+  // Every histogram has kBuckets buckets, so they add bucket by bucket.
+  assert(other.buckets_.size() == buckets_.size());
   for (size_t i = 0; i < buckets_.size(); ++i) buckets_[i] += other.buckets_[i];
   min_ = count_ == 0 ? other.min_ : std::min(min_, other.min_);
   max_ = count_ == 0 ? other.max_ : std::max(max_, other.max_);
@@ -65,7 +74,7 @@ double LatencyHistogram::Percentile(double p) const {
       return std::clamp(low + (high - low) * inside, min_, max_);
     }
   }
-  return max_;
+  return max_;  // not reached: rank <= count_, the sum of the buckets
 }
 
 }  // namespace riskplan::client

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cassert>
+#include <cmath>
 #include <thread>
 #include <utility>
 
@@ -15,7 +17,9 @@
 namespace riskplan::client {
 namespace {
 
-// The shared state of one load phase.
+// The shared state of one load phase. Every call goes through one channel
+// and one stub (both thread-safe), as a real client process would: the run
+// measures the server, not the cost of opening connections.
 class LoadRun {
  public:
   LoadRun(std::shared_ptr<grpc::Channel> channel, const LoadOptions& options)
@@ -41,6 +45,8 @@ class LoadRun {
 
   const std::shared_ptr<grpc::Channel> channel_;
   const std::unique_ptr<v1::Planner::Stub> stub_;
+  // A copy held for the whole run: the asynchronous calls read their request
+  // through a pointer into it until they complete.
   const LoadOptions options_;
   absl::Time start_;
   absl::Time stop_;  // no call is sent from then on
@@ -53,16 +59,21 @@ class LoadRun {
   absl::Time last_done_ ABSL_GUARDED_BY(mu_);
 };
 
-// One streaming plan call, callback API; deletes itself when done.
+// One streaming plan call, callback API. It owns itself: gRPC calls OnDone
+// last, after every other reaction, so that is where it is deleted. The run
+// outlives it, since Run waits until no call is outstanding.
 class LoadRun::PlanReactor final : public grpc::ClientReadReactor<v1::PlanUpdate> {
  public:
   PlanReactor(LoadRun* run, absl::Time intended) : run_(run), intended_(intended) {
     SetTimeout(&context_, run->options_.timeout);
     run->stub_->async()->PlanTrajectory(&context_, &run->options_.plan_request, this);
+    // The first read is queued before the call starts, so no message can
+    // arrive without a read waiting for it.
     StartRead(&update_);
     StartCall();
   }
   void OnReadDone(bool ok) override {
+    // !ok: the stream has ended; OnDone follows with the status.
     if (!ok) return;
     if (updates_++ == 0) run_->RecordFirstUpdate(intended_, absl::Now());
     StartRead(&update_);
@@ -95,6 +106,9 @@ void LoadRun::IssueAsync(absl::Time intended) {
       new PlanReactor(this, intended);
       return;
     case LoadRpc::kEvaluateRisk: {
+      // The callback API needs the context and the response to live until
+      // the callback runs, which is after this function returns: they are
+      // allocated here and freed by the callback, their last user.
       auto* context = new grpc::ClientContext;
       auto* response = new v1::EvaluateRiskResponse;
       SetTimeout(context, options_.timeout);
@@ -110,7 +124,7 @@ void LoadRun::IssueAsync(absl::Time intended) {
       auto* context = new grpc::ClientContext;
       auto* response = new v1::PingResponse;
       SetTimeout(context, options_.timeout);
-      static const v1::PingRequest kPing;
+      static const v1::PingRequest kPing;  // outlives every call
       stub_->async()->Ping(context, &kPing, response,
                            [this, context, response, intended](grpc::Status status) {
                              Record(intended, status, absl::Now());
@@ -159,6 +173,11 @@ void LoadRun::CallSync(absl::Time intended) {
   Record(intended, status, absl::Now());
 }
 
+// Latency counts from `intended`, not from the actual send, so the time a
+// call waited to be sent counts too: a stall shows up in the latency instead
+// of quietly lowering the offered load (no coordinated omission). Every
+// completed call is counted, whatever its code: a fast error is a result
+// too, and the codes tell them apart.
 void LoadRun::Record(absl::Time intended, const grpc::Status& status, absl::Time done) {
   const double latency_s = absl::ToDoubleSeconds(done - intended);
   absl::MutexLock lock(&mu_);
@@ -182,11 +201,17 @@ void LoadRun::RecordOverloaded() {
 
 void LoadRun::SendOpenLoop() {
   const absl::Duration interval = absl::Seconds(1.0 / options_.rate_per_s);
+  // Send times are start + i * interval, not "interval after the last send":
+  // sleeping that way would add each send's own delay to the next, and a
+  // sender that fell behind would lower the rate instead of catching up.
   for (int64_t i = 0;; ++i) {
     const absl::Time intended = start_ + i * interval;
     if (intended >= stop_) return;
     const absl::Time now = absl::Now();
     if (intended > now) absl::SleepFor(intended - now);
+    // A server that stops answering would otherwise make calls pile up in
+    // the client without bound; past max_outstanding a due call is counted
+    // as CLIENT_OVERLOADED instead of being sent.
     bool overloaded = false;
     {
       absl::MutexLock lock(&mu_);
@@ -202,6 +227,8 @@ void LoadRun::SendOpenLoop() {
 
 void LoadRun::ReportProgress(const LoadProgressCallback& progress) {
   absl::Time last = start_;
+  // Short naps rather than one-second sleeps, so that the end of the run is
+  // noticed within 100 ms; a last, partial interval is then reported too.
   while (!finished_.load()) {
     absl::SleepFor(absl::Milliseconds(100));
     const absl::Time now = absl::Now();
@@ -233,6 +260,8 @@ LoadReport LoadRun::Run(const LoadProgressCallback& progress) {
   }
   std::thread reporter([this, &progress] { ReportProgress(progress); });
   if (options_.mode == LoadMode::kClosed) {
+    // One thread per caller on the blocking stub: a closed loop is as many
+    // clients each waiting for its answer, which is what threads model.
     std::vector<std::thread> callers;
     for (int i = 0; i < std::max(1, options_.concurrency); ++i) {
       callers.emplace_back([this] {
@@ -250,6 +279,8 @@ LoadReport LoadRun::Run(const LoadProgressCallback& progress) {
   finished_.store(true);
   reporter.join();
   absl::MutexLock lock(&mu_);
+  // Until the last completion, not until stop_: calls sent before the stop
+  // are waited for, and their time belongs to the throughput they add.
   report_.elapsed_s = absl::ToDoubleSeconds(last_done_ - start_);
   return report_;
 }
@@ -316,6 +347,8 @@ std::string PhaseText(const LoadReport& r) {
   return out;
 }
 
+// 0 rather than inf or NaN when the ceiling measured nothing: JSON has no
+// infinity, and nlohmann would write null.
 double Ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
 }  // namespace
@@ -346,6 +379,8 @@ int64_t LoadReport::Overloaded() const {
 
 LoadReport RunLoad(const std::shared_ptr<grpc::Channel>& channel, const LoadOptions& options,
                    const LoadProgressCallback& progress) {
+  assert(options.mode != LoadMode::kOpen ||
+         (options.rate_per_s > 0 && std::isfinite(options.rate_per_s)));
   LoadRun run(channel, options);
   return run.Run(progress);
 }

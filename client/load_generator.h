@@ -82,6 +82,7 @@ using LoadProgressCallback = std::function<void(const LoadProgress&)>;
 
 // Runs one load phase against `channel`. Blocks for about options.duration,
 // plus the time the last calls take to end.
+// REQUIRES: options.rate_per_s > 0 and finite when options.mode is kOpen.
 LoadReport RunLoad(const std::shared_ptr<grpc::Channel>& channel, const LoadOptions& options,
                    const LoadProgressCallback& progress);
 

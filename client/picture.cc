@@ -3,6 +3,7 @@
 #include <png.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <fstream>
 
@@ -17,7 +18,11 @@ struct Rgb {
 };
 
 // Density colour: pale for empty land, then yellow, orange and dark red on a
-// log scale from 1e-5 to the map's densest block.
+// log scale from 1e-5 to the map's densest block. Logarithmic because
+// densities span orders of magnitude (a park, a suburb, a centre): on a
+// linear scale only the densest blocks would show. The top is at least 1e-4
+// so that the scale spans a decade even on an empty map (no division by
+// log 1 = 0).
 Rgb DensityColour(float density, float max_density) {
   if (!(density > 1e-5f)) return {236, 240, 230};
   const double top = std::max(1e-4, static_cast<double>(max_density));
@@ -31,7 +36,9 @@ Rgb DensityColour(float density, float max_density) {
           kStops[i].b + (kStops[i + 1].b - kStops[i].b) * f};
 }
 
-// Maps world metres onto the picture's pixels (north up).
+// Maps world metres onto the picture's pixels, one pixel per layer cell.
+// Map rows count from the south and image rows from the top, hence the flip
+// in Y.
 struct Projection {
   double x0, y0, cell_m;
   int height;
@@ -39,11 +46,15 @@ struct Projection {
   double Y(double y) const { return height - (y - y0) / cell_m; }
 };
 
+// A zero cell size (a malformed response) is taken as 1 m, to draw
+// something wrong rather than divide by zero.
 Projection ProjectionOf(const PictureInput& in) {
   return {in.density.x0_m(), in.density.y0_m(), in.density.cell_m() > 0 ? in.density.cell_m() : 1,
           in.density.ny()};
 }
 
+// For the data: URI that embeds the raster in the SVG, so that the picture
+// is one self-contained file.
 std::string Base64(const std::string& data) {
   static const char kChars[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
@@ -74,8 +85,11 @@ Rgb ImprovementColour(size_t k, size_t n) {
   return {150 - 150 * t, 190 - 150 * t, 255 - 55 * t};
 }
 
-// Blends a square brush of side `width` px centred on (x, y).
+// Blends a square brush of side `width` px centred on (x, y). Pixels off the
+// image are skipped, so a trajectory may leave the map. Alpha stays 255: the
+// raster under the drawing is opaque.
 void Stamp(RgbaImage* img, double x, double y, double width, Rgb c, double alpha) {
+  assert(img->pixels.size() == static_cast<size_t>(img->width) * img->height * 4);
   const int half = std::max(0, static_cast<int>(width / 2));
   const int cx = static_cast<int>(std::lround(x)), cy = static_cast<int>(std::lround(y));
   for (int py = cy - half; py <= cy + half; ++py) {
@@ -89,10 +103,14 @@ void Stamp(RgbaImage* img, double x, double y, double width, Rgb c, double alpha
   }
 }
 
+// Stamps one brush per pixel along the longer axis: dense enough for a
+// gap-free line, and simple, since the picture needs no anti-aliasing.
 void DrawLine(RgbaImage* img, double x0, double y0, double x1, double y1, double width, Rgb c,
               double alpha) {
   const double steps = std::max({std::fabs(x1 - x0), std::fabs(y1 - y0), 1.0});
-  if (steps > 1e5) return;  // far off the picture
+  // A line this long reaches far off the picture (a pose in another frame,
+  // say); drawing it would take a stamp per pixel of its length.
+  if (steps > 1e5) return;
   for (int s = 0; s <= static_cast<int>(steps); ++s) {
     const double t = s / steps;
     Stamp(img, x0 + (x1 - x0) * t, y0 + (y1 - y0) * t, width, c, alpha);
@@ -127,6 +145,9 @@ std::string SvgColour(Rgb c) {
                          static_cast<int>(c.b));
 }
 
+// The caption holds names from the server (the map's); escaped so that a
+// name with '<' or '&' cannot break the document. Quotes need no escape in
+// element text.
 std::string XmlEscape(const std::string& text) {
   std::string out;
   for (char ch : text) {
@@ -150,14 +171,20 @@ std::string XmlEscape(const std::string& text) {
 }  // namespace
 
 absl::StatusOr<std::string> EncodePng(const RgbaImage& image) {
+  assert(image.pixels.size() == static_cast<size_t>(image.width) * image.height * 4);
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   if (png == nullptr) return absl::InternalError("png_create_write_struct failed");
   png_infop info = png_create_info_struct(png);
+  // libpng reports an error by longjmp back to this setjmp. `out` is
+  // declared before it, because a longjmp must not skip the destructor of an
+  // object created after the setjmp; nothing after it owns memory.
   std::string out;
   if (info == nullptr || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     return absl::InternalError("PNG encoding failed");
   }
+  // Into memory, not a FILE*: the SVG embeds the bytes, and WritePicture
+  // writes them with the same error check as the SVG's.
   png_set_write_fn(
       png, &out,
       [](png_structp p, png_bytep data, png_size_t size) {
@@ -177,12 +204,16 @@ absl::StatusOr<std::string> EncodePng(const RgbaImage& image) {
 }
 
 RgbaImage RenderMapRaster(const PictureInput& in) {
+  assert(in.density.nx() >= 0 && in.density.ny() >= 0 &&
+         in.density.values_size() == static_cast<int64_t>(in.density.nx()) * in.density.ny());
   RgbaImage img;
   img.width = in.density.nx();
   img.height = in.density.ny();
   img.pixels.assign(static_cast<size_t>(img.width) * img.height * 4, 255);
   float max_density = 0.0f;
   for (float d : in.density.values()) max_density = std::max(max_density, d);
+  // No-fly zones are drawn only when their layer came on the density's grid;
+  // otherwise (absent, or a mismatched response) the map is drawn without.
   const bool has_nofly = in.nofly.nx() == img.width && in.nofly.ny() == img.height &&
                          in.nofly.values_size() == in.density.values_size();
   for (int j = 0; j < img.height; ++j) {
@@ -203,7 +234,13 @@ RgbaImage RenderMapRaster(const PictureInput& in) {
   return img;
 }
 
+// The raster (density and no-fly) is embedded as a PNG and everything drawn
+// on it is vector, so lines stay sharp when zoomed and each improvement can
+// carry a tooltip with its risk. Drawn bottom to top: raster, landing sites,
+// tree, improvements from the first to the best, start and goal.
 std::string RenderSvg(const PictureInput& in) {
+  assert(in.density.nx() >= 0 && in.density.ny() >= 0 &&
+         in.density.values_size() == static_cast<int64_t>(in.density.nx()) * in.density.ny());
   const Projection pr = ProjectionOf(in);
   const int w = in.density.nx(), h = in.density.ny();
   const int caption_h = 28;
@@ -216,6 +253,9 @@ std::string RenderSvg(const PictureInput& in) {
                         "<text x=\"6\" y=\"-9\" font-family=\"sans-serif\" font-size=\"14\">%s"
                         "</text>\n",
                         -caption_h, w, caption_h, XmlEscape(in.caption));
+  // "pixelated" keeps map cells square when a viewer scales the image up; a
+  // raster that failed to encode leaves the picture without a background
+  // rather than without the trajectories.
   absl::StatusOr<std::string> png = EncodePng(RenderMapRaster(in));
   if (png.ok()) {
     absl::StrAppendFormat(&svg,
@@ -263,8 +303,15 @@ std::string RenderSvg(const PictureInput& in) {
 }
 
 absl::Status WritePicture(const std::string& path, const PictureInput& in) {
+  // The layers come from the server: a response that does not hold nx * ny
+  // values is refused here, before the renderers index it.
   if (in.density.nx() <= 0 || in.density.ny() <= 0) {
     return absl::InvalidArgumentError("picture: the density layer is empty");
+  }
+  if (in.density.values_size() != static_cast<int64_t>(in.density.nx()) * in.density.ny()) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("picture: the density layer has %d values for %d x %d cells",
+                        in.density.values_size(), in.density.nx(), in.density.ny()));
   }
   std::string bytes;
   if (absl::EndsWith(path, ".svg")) {
@@ -295,6 +342,8 @@ absl::Status WritePicture(const std::string& path, const PictureInput& in) {
   }
   std::ofstream out(path, std::ios::binary);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  // Closed before the check, so that a failure to flush (a full disk) is
+  // reported too.
   out.close();
   if (!out) return absl::UnavailableError(absl::StrFormat("cannot write picture '%s'", path));
   return absl::OkStatus();

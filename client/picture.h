@@ -36,16 +36,20 @@ struct RgbaImage {
 };
 
 // Encodes `image` as PNG.
+// REQUIRES: image.pixels.size() == image.width * image.height * 4.
 absl::StatusOr<std::string> EncodePng(const RgbaImage& image);
 
 // The map layers alone: density colours with the no-fly zones tinted violet.
+// REQUIRES: input.density holds nx * ny values (WritePicture checks it).
 RgbaImage RenderMapRaster(const PictureInput& input);
 
 // The SVG document.
+// REQUIRES: input.density holds nx * ny values (WritePicture checks it).
 std::string RenderSvg(const PictureInput& input);
 
 // Writes `input` to `path`: SVG when it ends in ".svg", PNG when it ends in
-// ".png"; InvalidArgument otherwise.
+// ".png"; InvalidArgument otherwise, and for a density layer that is empty or
+// does not hold nx * ny values.
 absl::Status WritePicture(const std::string& path, const PictureInput& input);
 
 }  // namespace riskplan::client

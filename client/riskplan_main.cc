@@ -1,4 +1,8 @@
 // riskplan: the command-line client of riskplan-server.
+//
+// Only flag parsing lives here. The commands (commands.h) take their options
+// as a plain CliOptions struct, never reading flags themselves, so that they
+// carry no global state and could be driven from other code as well.
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -20,7 +24,7 @@ ABSL_FLAG(std::string, waypoints, "",
 ABSL_FLAG(std::string, polyline, "", "eval, load: polyline 'x,y,z;...' of straight segments");
 ABSL_FLAG(std::string, trajectory_file, "",
           "eval, load: JSON file {\"waypoints\": [[x,y,z,theta],...]} or {\"polyline\": "
-          "[[x,y,z],...]}");
+          "[[x,y,z],...]} (docs/api.md, \"Trajectory files\")");
 ABSL_FLAG(bool, samples, false, "eval: also print every sample's configuration risk");
 ABSL_FLAG(bool, two_tier, false,
           "eval: also run the two-tier feasibility check and print which tier found the "
@@ -98,6 +102,9 @@ constexpr char kUsage[] =
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
   std::vector<char*> positional = absl::ParseCommandLine(argc, argv);
+  // positional[0] is the program; exactly one command follows. Anything more
+  // is refused rather than ignored, as it is most likely a flag whose "--"
+  // or "=" went missing.
   if (positional.size() != 2) {
     std::fprintf(stderr, "riskplan: give one command (maps, eval, plan, load); see --help\n");
     return 2;
@@ -142,6 +149,9 @@ int main(int argc, char** argv) {
   o.ceiling = absl::GetFlag(FLAGS_ceiling);
   o.report_json = absl::GetFlag(FLAGS_report_json);
 
+  // Creating the client does not connect (gRPC connects on the first call),
+  // so it costs nothing before the command is known to be valid; a bad
+  // --server shows up as UNAVAILABLE from the first call.
   riskplan::client::RiskplanClient client(o.server);
   if (command == "maps") return riskplan::client::RunMaps(o, client);
   if (command == "eval") return riskplan::client::RunEval(o, client);

@@ -6,12 +6,13 @@
 //   polyline:  "x,y,z; x,y,z; ..."
 //   JSON file: {"waypoints": [[x, y, z, theta], ...]} or
 //              {"polyline": [[x, y, z], ...]}
-// Parsers check the syntax and that every number is finite; ranges and
-// admissibility are the server's business. Errors (InvalidArgument) name the
-// point index and the text at fault.
+// The text forms' parsers check the syntax and that every number is finite;
+// ranges and admissibility are the server's business. Errors
+// (InvalidArgument) name the point index and the text at fault.
 #ifndef RISKPLAN_CLIENT_TRAJECTORY_TEXT_H_
 #define RISKPLAN_CLIENT_TRAJECTORY_TEXT_H_
 
+#include <cstddef>
 #include <map>
 #include <string>
 #include <string_view>
@@ -28,8 +29,25 @@ absl::StatusOr<v1::Polyline> ParsePolyline(std::string_view text);
 // "x,y; x,y; ..." (any number of points, none for empty text).
 absl::StatusOr<std::vector<v1::Point2>> ParsePoints2(std::string_view text);
 
-// Sets the trajectory of `request` (waypoints or polyline) from JSON text.
+// Trajectory JSON, by the rule of docs/api.md ("Trajectory files"), which
+// riskplan-tool's reader (core/flight/trajectory_io.h) follows too; the
+// client may not use core's, so the rule is written twice, and
+// tests/data/trajectory_json_cases.json is the one table of cases both are
+// tested against. The limits are riskplan-tool's, so that a file one tool
+// reads the other reads too.
+inline constexpr size_t kMaxTrajectoryJsonPoints = 100000;
+inline constexpr size_t kMaxTrajectoryFileBytes = size_t{64} << 20;
+
+// Sets the trajectory of `request` (waypoints or polyline) from JSON text;
+// on error `request` is left unchanged. Errors are InvalidArgument: the
+// prefix "trajectory JSON: ", then the JSON path at fault and what is wrong,
+// e.g. `waypoints[3].theta must be a number, got string "1.57"`.
+// REQUIRES: request != nullptr.
 absl::Status ParseTrajectoryJson(std::string_view json, v1::EvaluateRiskRequest* request);
+// The same from a file of at most kMaxTrajectoryFileBytes; errors in its
+// content start with "trajectory file 'PATH': " instead. A file that cannot
+// be opened or read is NotFound ("cannot open trajectory file 'PATH': ...").
+// REQUIRES: request != nullptr.
 absl::Status ReadTrajectoryFile(const std::string& path, v1::EvaluateRiskRequest* request);
 
 // JSON text {"waypoints": [[x, y, z, theta], ...]} of a trajectory, which
@@ -41,6 +59,7 @@ absl::StatusOr<std::map<std::string, double>> ParseNameValues(std::string_view t
 
 // Applies "name=value,..." to ModelParameters by field name (proto
 // reflection); errors name the unknown field and list the known ones.
+// REQUIRES: params != nullptr.
 absl::Status ParseModelParameters(std::string_view text, v1::ModelParameters* params);
 
 }  // namespace riskplan::client

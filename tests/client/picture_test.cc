@@ -67,5 +67,15 @@ TEST(PictureTest, PngSignatureAndBadExtension) {
   EXPECT_EQ(WritePicture("/tmp/x.gif", TwoByTwo()).code(), absl::StatusCode::kInvalidArgument);
 }
 
+TEST(PictureTest, DensityLayerWithoutNxTimesNyValuesIsRefused) {
+  PictureInput in = TwoByTwo();
+  in.density.add_values(0.5f);  // 5 values for 2 x 2 cells
+  const std::string path = ::testing::TempDir() + "picture_test_bad_layer.png";
+  const absl::Status status = WritePicture(path, in);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(status.message()),
+              HasSubstr("the density layer has 5 values for 2 x 2 cells"));
+}
+
 }  // namespace
 }  // namespace riskplan::client

@@ -1,12 +1,25 @@
 #include "client/trajectory_text.h"
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_replace.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "nlohmann/json.hpp"
 
 namespace riskplan::client {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::StartsWith;
+using Json = nlohmann::json;
+using Points = std::vector<std::vector<double>>;
 
 TEST(TrajectoryTextTest, Pose) {
   absl::StatusOr<v1::Pose> pose = ParsePose(" 1200, 1500 ,250,0.785");
@@ -67,6 +80,173 @@ TEST(TrajectoryTextTest, ModelParametersByName) {
   EXPECT_THAT(std::string(ParseModelParameters("heading_bins=3.5", &params).message()),
               HasSubstr("whole number"));
   EXPECT_TRUE(ParseModelParameters("", &params).ok());
+}
+
+// The trajectory JSON rule against the shared table of cases,
+// tests/data/trajectory_json_cases.json, which riskplan-tool's reader
+// (tests/core/flight/trajectory_io_test.cc) is tested against too. The table
+// is read here with the same few lines as there: the client may not share
+// code with core, not even in tests.
+
+// One entry of the table, as the table's "about" describes it.
+struct Case {
+  std::string name;
+  std::string text;  // the JSON text, or the file's content
+  // File cases: how the file is made when it is not `text`.
+  bool missing = false;
+  bool directory = false;
+  int64_t size = -1;  // a file of this many zero bytes
+  // The outcome: an error, or the kind and the points read.
+  std::string error;
+  std::string code;
+  std::string kind;  // "waypoints" or "polyline"
+  Points points;
+};
+
+Json LoadTable() {
+  const std::string path =
+      std::string(RISKPLAN_SOURCE_DIR) + "/tests/data/trajectory_json_cases.json";
+  std::ifstream in(path);
+  EXPECT_TRUE(in) << "cannot open " << path;
+  return Json::parse(in);  // a broken table throws, and the test fails
+}
+
+Case ReadCase(const Json& entry) {
+  Case c;
+  c.name = entry.at("name").get<std::string>();
+  int inputs = 0;
+  if (entry.contains("text")) {
+    c.text = entry["text"].get<std::string>();
+    ++inputs;
+  }
+  if (entry.contains("json")) {
+    c.text = entry["json"].dump();
+    ++inputs;
+  }
+  Points repeated;
+  if (entry.contains("repeat")) {
+    const Json& r = entry["repeat"];
+    const int64_t count = r.at("count").get<int64_t>();
+    Json doc = {{r.at("key").get<std::string>(), Json::array()}};
+    Json& list = doc[r["key"].get<std::string>()];
+    for (int64_t i = 0; i < count; ++i) list.push_back(r.at("point"));
+    repeated.assign(count, r["point"].get<std::vector<double>>());
+    c.text = doc.dump();
+    ++inputs;
+  }
+  if (entry.contains("size")) {
+    c.size = entry["size"].get<int64_t>();
+    ++inputs;
+  }
+  c.missing = entry.value("missing", false);
+  c.directory = entry.value("directory", false);
+  inputs += c.missing + c.directory;
+  EXPECT_EQ(inputs, 1) << c.name << ": give exactly one input";
+
+  int outcomes = 0;
+  if (entry.contains("error")) {
+    c.error = entry["error"].get<std::string>();
+    c.code = entry.value("code", "INVALID_ARGUMENT");
+    ++outcomes;
+  }
+  for (const char* kind : {"waypoints", "polyline"}) {
+    if (!entry.contains(kind)) continue;
+    c.kind = kind;
+    c.points = entry[kind] == "repeated" ? repeated : entry[kind].get<Points>();
+    ++outcomes;
+  }
+  EXPECT_EQ(outcomes, 1) << c.name << ": give exactly one outcome";
+  return c;
+}
+
+// The request's trajectory as the table writes it.
+void Flatten(const v1::EvaluateRiskRequest& request, std::string* kind, Points* points) {
+  points->clear();
+  kind->clear();
+  if (request.has_waypoints()) {
+    *kind = "waypoints";
+    for (const v1::Pose& p : request.waypoints().poses()) {
+      points->push_back({p.x(), p.y(), p.z(), p.theta()});
+    }
+  } else if (request.has_polyline()) {
+    *kind = "polyline";
+    for (const v1::Point3& p : request.polyline().points())
+      points->push_back({p.x(), p.y(), p.z()});
+  }
+}
+
+// A request that already holds a trajectory (and a map), to see that a
+// refused text leaves it alone and an accepted one replaces the trajectory.
+v1::EvaluateRiskRequest Prefilled() {
+  v1::EvaluateRiskRequest request;
+  request.set_map("demo-city");
+  v1::Point3* p = request.mutable_polyline()->add_points();
+  p->set_x(-7);
+  p->set_y(-8);
+  p->set_z(-9);
+  return request;
+}
+
+void ExpectOutcome(const Case& c, const absl::Status& status,
+                   const v1::EvaluateRiskRequest& request, const std::string& path) {
+  if (!c.error.empty()) {
+    ASSERT_FALSE(status.ok()) << "accepted; expected: " << c.error;
+    EXPECT_EQ(absl::StatusCodeToString(status.code()), c.code) << status;
+    EXPECT_THAT(std::string(status.message()),
+                HasSubstr(absl::StrReplaceAll(c.error, {{"{path}", path}})));
+    EXPECT_EQ(request.SerializeAsString(), Prefilled().SerializeAsString())
+        << "a refused trajectory changed the request";
+    return;
+  }
+  ASSERT_TRUE(status.ok()) << status;
+  std::string kind;
+  Points points;
+  Flatten(request, &kind, &points);
+  EXPECT_EQ(kind, c.kind);
+  EXPECT_EQ(points.size(), c.points.size());
+  EXPECT_TRUE(points == c.points) << "the points read differ from the table's";
+  EXPECT_EQ(request.map(), "demo-city");
+}
+
+TEST(TrajectoryTextTest, JsonTextFollowsTheSharedTable) {
+  const Json table = LoadTable();
+  ASSERT_GE(table.at("cases").size(), 40u);
+  for (const Json& entry : table["cases"]) {
+    const Case c = ReadCase(entry);
+    SCOPED_TRACE(c.name);
+    v1::EvaluateRiskRequest request = Prefilled();
+    const absl::Status status = ParseTrajectoryJson(c.text, &request);
+    ExpectOutcome(c, status, request, "");
+    if (!status.ok()) {
+      EXPECT_THAT(std::string(status.message()), StartsWith("trajectory JSON: "));
+    }
+  }
+}
+
+TEST(TrajectoryTextTest, JsonFilesFollowTheSharedTable) {
+  const Json table = LoadTable();
+  ASSERT_GE(table.at("file_cases").size(), 7u);
+  const std::filesystem::path dir =
+      ::testing::TempDir() + "trajectory_text_test." + std::to_string(getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  int n = 0;
+  for (const Json& entry : table["file_cases"]) {
+    const Case c = ReadCase(entry);
+    SCOPED_TRACE(c.name);
+    const std::string path = (dir / ("case" + std::to_string(n++) + ".json")).string();
+    if (c.directory) {
+      std::filesystem::create_directory(path);
+    } else if (c.size >= 0) {
+      std::ofstream(path).close();
+      std::filesystem::resize_file(path, c.size);  // sparse: costs no disk
+    } else if (!c.missing) {
+      std::ofstream(path, std::ios::binary) << c.text;
+    }
+    v1::EvaluateRiskRequest request = Prefilled();
+    ExpectOutcome(c, ReadTrajectoryFile(path, &request), request, path);
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -11,15 +11,19 @@
 #include "absl/strings/str_replace.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "nlohmann/json.hpp"
+#include "tests/trajectory_json_cases.h"
 
 namespace riskplan::client {
 namespace {
 
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
-using Json = nlohmann::json;
-using Points = std::vector<std::vector<double>>;
+using trajectory_json_cases::Case;
+using trajectory_json_cases::Json;
+using trajectory_json_cases::LoadTable;
+using trajectory_json_cases::MakeCaseFile;
+using trajectory_json_cases::Points;
+using trajectory_json_cases::ReadCase;
 
 TEST(TrajectoryTextTest, Pose) {
   absl::StatusOr<v1::Pose> pose = ParsePose(" 1200, 1500 ,250,0.785");
@@ -87,77 +91,6 @@ TEST(TrajectoryTextTest, ModelParametersByName) {
 // (tests/core/flight/trajectory_io_test.cc) is tested against too. The table
 // is read here with the same few lines as there: the client may not share
 // code with core, not even in tests.
-
-// One entry of the table, as the table's "about" describes it.
-struct Case {
-  std::string name;
-  std::string text;  // the JSON text, or the file's content
-  // File cases: how the file is made when it is not `text`.
-  bool missing = false;
-  bool directory = false;
-  int64_t size = -1;  // a file of this many zero bytes
-  // The outcome: an error, or the kind and the points read.
-  std::string error;
-  std::string code;
-  std::string kind;  // "waypoints" or "polyline"
-  Points points;
-};
-
-Json LoadTable() {
-  const std::string path =
-      std::string(RISKPLAN_SOURCE_DIR) + "/tests/data/trajectory_json_cases.json";
-  std::ifstream in(path);
-  EXPECT_TRUE(in) << "cannot open " << path;
-  return Json::parse(in);  // a broken table throws, and the test fails
-}
-
-Case ReadCase(const Json& entry) {
-  Case c;
-  c.name = entry.at("name").get<std::string>();
-  int inputs = 0;
-  if (entry.contains("text")) {
-    c.text = entry["text"].get<std::string>();
-    ++inputs;
-  }
-  if (entry.contains("json")) {
-    c.text = entry["json"].dump();
-    ++inputs;
-  }
-  Points repeated;
-  if (entry.contains("repeat")) {
-    const Json& r = entry["repeat"];
-    const int64_t count = r.at("count").get<int64_t>();
-    Json doc = {{r.at("key").get<std::string>(), Json::array()}};
-    Json& list = doc[r["key"].get<std::string>()];
-    for (int64_t i = 0; i < count; ++i) list.push_back(r.at("point"));
-    repeated.assign(count, r["point"].get<std::vector<double>>());
-    c.text = doc.dump();
-    ++inputs;
-  }
-  if (entry.contains("size")) {
-    c.size = entry["size"].get<int64_t>();
-    ++inputs;
-  }
-  c.missing = entry.value("missing", false);
-  c.directory = entry.value("directory", false);
-  inputs += c.missing + c.directory;
-  EXPECT_EQ(inputs, 1) << c.name << ": give exactly one input";
-
-  int outcomes = 0;
-  if (entry.contains("error")) {
-    c.error = entry["error"].get<std::string>();
-    c.code = entry.value("code", "INVALID_ARGUMENT");
-    ++outcomes;
-  }
-  for (const char* kind : {"waypoints", "polyline"}) {
-    if (!entry.contains(kind)) continue;
-    c.kind = kind;
-    c.points = entry[kind] == "repeated" ? repeated : entry[kind].get<Points>();
-    ++outcomes;
-  }
-  EXPECT_EQ(outcomes, 1) << c.name << ": give exactly one outcome";
-  return c;
-}
 
 // The request's trajectory as the table writes it.
 void Flatten(const v1::EvaluateRiskRequest& request, std::string* kind, Points* points) {
@@ -234,15 +167,7 @@ TEST(TrajectoryTextTest, JsonFilesFollowTheSharedTable) {
   for (const Json& entry : table["file_cases"]) {
     const Case c = ReadCase(entry);
     SCOPED_TRACE(c.name);
-    const std::string path = (dir / ("case" + std::to_string(n++) + ".json")).string();
-    if (c.directory) {
-      std::filesystem::create_directory(path);
-    } else if (c.size >= 0) {
-      std::ofstream(path).close();
-      std::filesystem::resize_file(path, c.size);  // sparse: costs no disk
-    } else if (!c.missing) {
-      std::ofstream(path, std::ios::binary) << c.text;
-    }
+    const std::string path = MakeCaseFile(dir, n++, c);
     v1::EvaluateRiskRequest request = Prefilled();
     ExpectOutcome(c, ReadTrajectoryFile(path, &request), request, path);
   }

@@ -66,9 +66,10 @@
 //     A write failure finishes it at once only when Run() has already ended.
 //   - The cause of a cancel is kept even after Finish(): gRPC may report the
 //     cancel after the status was decided, and the client saw the cancel.
-//   - Finish() is never started while a write is in flight (gRPC forbids
-//     it); kFinishWhenIdle waits for that write's completion, successful or
-//     not.
+//   - Finish() is never started while a write is in flight, so that the
+//     status follows every message started and no write completes on a
+//     finished call; kFinishWhenIdle waits for that write's completion,
+//     successful or not.
 #ifndef RISKPLAN_SERVER_PLAN_CALL_STATE_H_
 #define RISKPLAN_SERVER_PLAN_CALL_STATE_H_
 

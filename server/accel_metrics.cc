@@ -8,7 +8,10 @@
 namespace riskplan::server {
 
 std::vector<prometheus::MetricFamily> AccelMetrics::Collect() const {
-  // Samples of one name form one family, in the order they first appear.
+  // EngineMetrics gives a flat list of samples (accel knows nothing of
+  // Prometheus); Prometheus wants one family per name holding every labelled
+  // sample of it. Samples of one name form one family, in the order they
+  // first appear, so the exposition is stable from scrape to scrape.
   std::vector<prometheus::MetricFamily> families;
   std::map<std::string, size_t> index;
   for (const accel::MetricSample& sample : accel::EngineMetrics(engine_->Stats())) {

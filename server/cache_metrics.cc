@@ -24,6 +24,9 @@ void Add(prometheus::MetricFamily* family, double value,
 
 }  // namespace
 
+// Read from the caches' own stats at every scrape rather than kept in gauges
+// updated on every change: the caches stay free of Prometheus, and reading
+// them costs a lock and a walk over at most a few dozen entries.
 std::vector<prometheus::MetricFamily> CacheMetrics::Collect() const {
   const RiskModelCache::Stats models = models_->stats();
   const FeasibilityCache::Stats checkers = checkers_->stats();

@@ -2,8 +2,13 @@
 
 #include <utility>
 
+#include "core/base/check.h"
+
 namespace riskplan::server {
 
+// Every option that changes what the checker computes, and the model by
+// address (the entry keeps the model alive, so the address cannot be reused
+// by another model while the entry exists).
 FeasibilityCache::Key FeasibilityCache::KeyOf(const RiskModel* model,
                                               const TwoTierOptions& options) {
   return Key{model, static_cast<int>(options.rule), options.detailed_segments, options.block_cells,
@@ -12,8 +17,12 @@ FeasibilityCache::Key FeasibilityCache::KeyOf(const RiskModel* model,
 
 std::shared_ptr<const SharedFeasibility> FeasibilityCache::Get(
     std::shared_ptr<const RiskModel> model, const TwoTierOptions& options) {
+  RISKPLAN_DCHECK(model != nullptr);
+  RISKPLAN_DCHECK(CheckTwoTierOptions(options).ok());
   const Key key = KeyOf(model.get(), options);
   {
+    // A list searched linearly: it holds at most `capacity_` entries (8 by
+    // default), and splice moves a hit to the front without reallocating.
     absl::MutexLock lock(&mu_);
     for (auto it = entries_.begin(); it != entries_.end(); ++it) {
       if (it->first != key) continue;
@@ -22,11 +31,15 @@ std::shared_ptr<const SharedFeasibility> FeasibilityCache::Get(
       return entries_.front().second;
     }
   }
+  // Built without the lock (20 to 40 ms): hits on other checkers must not
+  // wait for it. Two misses on one key may both build; see below.
   auto built = std::make_shared<const SharedFeasibility>(std::move(model), options);
   absl::MutexLock lock(&mu_);
   ++stats_.builds;
   for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-    if (it->first == key) return it->second;  // built meanwhile by another request
+    // Built meanwhile by another request: its copy is the cached one, and
+    // this one is dropped, so that every later request shares one checker.
+    if (it->first == key) return it->second;
   }
   entries_.emplace_front(key, built);
   while (entries_.size() > capacity_) {

@@ -43,9 +43,9 @@ class FeasibilityCache {
   // `capacity` >= 1 checkers are kept (0 is taken as 1).
   explicit FeasibilityCache(size_t capacity) : capacity_(capacity == 0 ? 1 : capacity) {}
 
-  // The checker of `model` with `options`, which must pass
-  // CheckTwoTierOptions(). Builds it on the calling thread when it is not
-  // cached: call this from a worker pool, never from a gRPC thread.
+  // The checker of `model` with `options`. Builds it on the calling thread
+  // when it is not cached: call this from a worker pool, never from a gRPC
+  // thread. REQUIRES: CheckTwoTierOptions(options).ok(), `model` not null.
   std::shared_ptr<const SharedFeasibility> Get(std::shared_ptr<const RiskModel> model,
                                                const TwoTierOptions& options);
 

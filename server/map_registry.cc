@@ -14,6 +14,8 @@ absl::StatusOr<std::unique_ptr<MapRegistry>> MapRegistry::LoadDirectory(const st
     return absl::Status(maps.status().code(),
                         absl::StrFormat("maps directory '%s': %s", dir, maps.status().message()));
   }
+  // A server with nothing to serve is a deployment mistake: refuse to start
+  // rather than answer every request with NOT_FOUND.
   if (maps->empty()) {
     return absl::NotFoundError(absl::StrFormat(
         "maps directory '%s' holds no map bundle (no sub-directory with a manifest.json)", dir));
@@ -37,6 +39,8 @@ absl::StatusOr<std::unique_ptr<MapRegistry>> MapRegistry::FromMaps(
       return absl::InvalidArgumentError(absl::StrFormat("two maps are called '%s'", name));
     }
   }
+  // by_name_ is ordered: ListMaps and error messages list the maps in the
+  // same order whatever the order of the directory or the arguments.
   for (const auto& [name, map] : registry->by_name_) registry->sorted_.push_back(map);
   return registry;
 }

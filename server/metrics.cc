@@ -10,7 +10,9 @@
 namespace riskplan::server {
 namespace {
 
-// first, first*factor, ... (count boundaries).
+// first, first*factor, ... (count boundaries). Exponential, because RPC and
+// plan durations span several orders of magnitude (a Ping against a plan of
+// minutes) and the relative resolution is what matters.
 prometheus::Histogram::BucketBoundaries Exponential(double first, double factor, int count) {
   prometheus::Histogram::BucketBoundaries b;
   double v = first;
@@ -56,6 +58,8 @@ ServerMetrics::ServerMetrics() : registry_(std::make_shared<prometheus::Registry
 ServerMetrics::~ServerMetrics() = default;
 
 absl::StatusOr<std::string> ServerMetrics::Expose(const std::string& address) {
+  // prometheus-cpp reports a failed bind by throwing (CivetWeb); the server
+  // reports start-up failures as a Status and an exit code.
   try {
     exposer_ = std::make_unique<prometheus::Exposer>(address, /*num_threads=*/1);
   } catch (const std::exception& e) {
@@ -64,6 +68,7 @@ absl::StatusOr<std::string> ServerMetrics::Expose(const std::string& address) {
   }
   exposer_->RegisterCollectable(registry_);
   for (const auto& c : collectables_) exposer_->RegisterCollectable(c);
+  // The bound port: the address may ask for port 0.
   const std::vector<int> ports = exposer_->GetListeningPorts();
   const std::string host = address.substr(0, address.rfind(':'));
   return absl::StrCat(host, ":", ports.empty() ? 0 : ports.front());
@@ -73,6 +78,8 @@ void ServerMetrics::RecordRpc(std::string_view method, grpc::StatusCode code,
                               absl::Duration duration) {
   rpcs_->Add({{"method", std::string(method)}, {"code", std::string(GrpcCodeName(code))}})
       .Increment();
+  // Leaked on purpose: never destroyed, so a call recorded while the
+  // process exits cannot read freed boundaries.
   static const auto* buckets =
       new prometheus::Histogram::BucketBoundaries(Exponential(0.0001, 2.0, 22));  // 100 us .. 210 s
   rpc_duration_->Add({{"method", std::string(method)}}, *buckets)
@@ -80,8 +87,9 @@ void ServerMetrics::RecordRpc(std::string_view method, grpc::StatusCode code,
 }
 
 void ServerMetrics::RecordPlan(std::string_view end_reason, absl::Duration planner_time) {
+  // 10 ms .. 655 s: past --max_plan_time_ms's default of 600 s.
   static const auto* buckets =
-      new prometheus::Histogram::BucketBoundaries(Exponential(0.01, 2.0, 17));  // 10 ms .. 655 s
+      new prometheus::Histogram::BucketBoundaries(Exponential(0.01, 2.0, 17));
   plan_duration_->Add({{"end_reason", std::string(end_reason)}}, *buckets)
       .Observe(absl::ToDoubleSeconds(planner_time));
 }
@@ -95,6 +103,8 @@ void ServerMetrics::SetMapMemory(const std::string& map, double bytes) {
   map_memory_->Add({{"map", map}}).Set(bytes);
 }
 
+// Kept as well as registered: a collectable added before Expose() is
+// registered when the exposer is created.
 void ServerMetrics::AddCollectable(std::shared_ptr<prometheus::Collectable> collectable) {
   collectables_.push_back(collectable);
   if (exposer_ != nullptr) exposer_->RegisterCollectable(collectable);

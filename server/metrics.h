@@ -42,6 +42,8 @@ class ServerMetrics {
   void RecordRpc(std::string_view method, grpc::StatusCode code, absl::Duration duration);
   void PlanAdmitted() { running_plans_->Increment(); }
   void PlanReleased() { running_plans_->Decrement(); }
+  // The riskplan_running_plans gauge (for checks of the admission bookkeeping).
+  double running_plans() const { return running_plans_->Value(); }
   void RecordPlan(std::string_view end_reason, absl::Duration planner_time);
   void RecordUpdates(int64_t sent, int64_t replaced);
   void SetMapMemory(const std::string& map, double bytes);

@@ -5,9 +5,13 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/notification.h"
+#include "core/base/check.h"
 
 namespace riskplan::server {
 
+// One overridden model, shared by the cache and every request waiting for it:
+// a waiter keeps its Entry even if the cache drops it (a failed build, or
+// eviction), so it still reads the result.
 struct RiskModelCache::Entry {
   absl::Notification built;
   absl::StatusOr<std::shared_ptr<const RiskModel>> model;  // valid once `built` is notified
@@ -17,6 +21,10 @@ struct RiskModelCache::Entry {
 absl::StatusOr<std::unique_ptr<RiskModelCache>> RiskModelCache::Create(const MapRegistry& registry,
                                                                        size_t max_overridden) {
   std::unique_ptr<RiskModelCache> cache(new RiskModelCache(registry, max_overridden));
+  // Built here, before the server listens: most requests use the defaults,
+  // and they then never wait for a build or take the lock (defaults_ is never
+  // written again); a map whose default model cannot be built stops start-up
+  // instead of failing requests.
   const ModelParams defaults;
   cache->default_fingerprint_ = Fingerprint(defaults);
   for (const std::shared_ptr<const RiskMap>& map : registry.maps()) {
@@ -62,6 +70,7 @@ std::shared_ptr<const RiskModel> RiskModelCache::Peek(const RiskMap& map,
 
 absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskMap& map,
                                                                      const ModelParams& params) {
+  RISKPLAN_DCHECK(ValidateModelParams(params).ok());
   const std::string fingerprint = Fingerprint(params);
   if (fingerprint == default_fingerprint_) {
     std::shared_ptr<const RiskModel> model = Default(map);
@@ -86,6 +95,9 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskM
     }
     entry = it->second;
   }
+  // Requests for this model wait on its entry, not on mu_: the build below
+  // runs without the lock (about 0.5 s with a glide layer), so lookups of
+  // other models go on meanwhile.
   if (!build) {
     entry->built.WaitForNotification();
     return entry->model;
@@ -106,6 +118,8 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskM
     }
   }
   {
+    // Notified under the lock together with the LRU update, so that a
+    // lookup that finds the entry built also finds it in lru_ (TouchLocked).
     absl::MutexLock lock(&mu_);
     entry->built.Notify();
     if (!entry->model.ok() || max_overridden_ == 0) {
@@ -120,6 +134,7 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskM
   return entry->model;
 }
 
+// Linear in the LRU's length, which is --model_cache_size (4 by default).
 void RiskModelCache::TouchLocked(const std::string& key) {
   auto it = std::find(lru_.begin(), lru_.end(), key);
   if (it != lru_.end()) lru_.splice(lru_.begin(), lru_, it);
@@ -137,6 +152,7 @@ RiskModelCache::Stats RiskModelCache::stats() const {
   absl::MutexLock lock(&mu_);
   Stats s = stats_;
   s.overridden_cached = lru_.size();
+  // Every key in lru_ has an entry: both change together under mu_.
   for (const std::string& key : lru_) s.overridden_bytes += entries_.at(key)->bytes;
   for (const auto& [name, model] : defaults_) s.default_bytes += model->MemoryBytes();
   return s;

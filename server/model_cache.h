@@ -36,9 +36,9 @@ class RiskModelCache {
   static absl::StatusOr<std::unique_ptr<RiskModelCache>> Create(const MapRegistry& registry,
                                                                 size_t max_overridden);
 
-  // The model of `map` (a map of the registry) with `params`, which must have
-  // passed ValidateModelParams(). Builds it on the calling thread when it is
-  // not cached: call this from a worker pool, never from a gRPC thread.
+  // The model of `map` (a map of the registry) with `params`. Builds it on
+  // the calling thread when it is not cached: call this from a worker pool,
+  // never from a gRPC thread. REQUIRES: ValidateModelParams(params).ok().
   absl::StatusOr<std::shared_ptr<const RiskModel>> Get(const RiskMap& map,
                                                        const ModelParams& params);
 

@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/base/check.h"
 #include "server/proto_convert.h"
 #include "server/rpc_log.h"
 #include "server/status_util.h"
@@ -21,6 +22,8 @@ bool ActivePlans::TryAdmit(const std::shared_ptr<PlanCall>& call) {
   return true;
 }
 
+// A linear search: the set holds at most --max_running_plans calls (a few
+// dozen), and a raw pointer cannot look up a set of shared_ptrs directly.
 void ActivePlans::Release(const PlanCall* call) {
   absl::MutexLock lock(&mu_);
   for (auto it = calls_.begin(); it != calls_.end(); ++it) {
@@ -31,7 +34,18 @@ void ActivePlans::Release(const PlanCall* call) {
   }
 }
 
+bool ActivePlans::IsAdmitted(const PlanCall* call) const {
+  absl::MutexLock lock(&mu_);
+  for (const std::shared_ptr<PlanCall>& admitted : calls_) {
+    if (admitted.get() == call) return true;
+  }
+  return false;
+}
+
 void ActivePlans::StopAll() {
+  // Stopped from a copy, outside mu_: the copy keeps each call alive while
+  // it is stopped, no call's lock is taken under mu_, and a call releasing
+  // its slot (Run, on a pool thread) does not wait for the whole loop.
   std::set<std::shared_ptr<PlanCall>> calls;
   {
     absl::MutexLock lock(&mu_);
@@ -63,6 +77,8 @@ std::string PeerOf(grpc::CallbackServerContext* ctx) { return ctx == nullptr ? "
 std::shared_ptr<PlanCall> PlanCall::Create(const PlanCallEnv& env, grpc::CallbackServerContext* ctx,
                                            PlanSpec spec) {
   std::shared_ptr<PlanCall> call(new PlanCall(env, ctx, std::move(spec)));
+  // gRPC holds a raw pointer to the reactor until OnDone: self_ is the
+  // reference that stands for it.
   call->self_ = call;
   if (env.open_calls != nullptr) env.open_calls->Opened();
   return call;
@@ -74,9 +90,11 @@ PlanCall::PlanCall(const PlanCallEnv& env, grpc::CallbackServerContext* ctx, Pla
       spec_(std::move(spec)),
       started_(absl::Now()),
       peer_(PeerOf(ctx)),
-      coalescer_(spec_.min_update_interval) {}
+      state_(spec_.min_update_interval) {}
 
 absl::Status PlanCall::CheckEndpointsIfModelReady() {
+  // Peek never builds: a model that needs building (seconds, for a glide
+  // layer) is left to the pool thread, and so is the check.
   std::shared_ptr<const RiskModel> model = env_.models->Peek(*spec_.map, spec_.params);
   if (model == nullptr) return absl::OkStatus();
   absl::Status status = CheckEndpoints(PlanningProblem{model, spec_.start, spec_.goal});
@@ -87,227 +105,199 @@ absl::Status PlanCall::CheckEndpointsIfModelReady() {
 void PlanCall::Reject(const grpc::Status& status) { FinishWith(status); }
 
 void PlanCall::StopForShutdown() {
-  shutdown_.store(true);
-  cancel_.Cancel();
+  Step step;
+  {
+    absl::MutexLock lock(&mu_);
+    step = state_.Shutdown();
+  }
+  Perform(step);
 }
 
 void PlanCall::Run() {
+  RISKPLAN_DCHECK(env_.active->IsAdmitted(this));
+  // PlanAdmitted() raised the gauge for this call and nothing has lowered it.
+  RISKPLAN_DCHECK(env_.metrics->running_plans() >= 1.0);
+  // Once Run has finished the call, OnDone may drop gRPC's reference on
+  // another thread; the pool task holds one too, but Run does not rely on
+  // how it is called.
   std::shared_ptr<PlanCall> keep = shared_from_this();
-  absl::Status error;
-  PlanResult result;
-  result.reason = StopReason::kCancelled;
-  // A call cancelled while queued (client gone, or shutdown) does not plan.
-  if (!cancel_.IsCancelled()) {
-    const uint64_t builds_before = env_.models->stats().builds;
-    absl::StatusOr<std::shared_ptr<const RiskModel>> model =
-        env_.models->Get(*spec_.map, spec_.params);
-    if (env_.models->stats().builds != builds_before) env_.metrics->RecordModelBuild();
-    if (!model.ok()) {
-      error = model.status();
-    } else {
-      const PlanningProblem problem{*model, spec_.start, spec_.goal};
-      if (!endpoints_checked_.load()) error = CheckEndpoints(problem);
-      if (error.ok()) {
-        // One evaluator per plan: it counts the plan's configurations.
-        std::unique_ptr<RiskEvaluator> evaluator =
-            env_.engine != nullptr ? env_.engine->NewEvaluator() : nullptr;
-        absl::StatusOr<std::unique_ptr<Planner>> planner =
-            MakePlanner(spec_.algorithm, evaluator.get());
-        if (!planner.ok()) {
-          error = planner.status();
-        } else {
-          absl::StatusOr<PlanResult> planned = (*planner)->Plan(
-              problem, spec_.options, cancel_,
-              [this](const PlanImprovement& improvement) { OnImprovement(improvement); });
-          if (planned.ok()) {
-            result = *std::move(planned);
-          } else {
-            error = planned.status();
-          }
-        }
-      }
-    }
-  }
+  absl::StatusOr<PlanResult> result = Plan();
   // The slot is free as soon as the planner is: the final message may still
   // be on its way to a slow client.
   env_.active->Release(this);
   env_.metrics->PlanReleased();
-  if (!error.ok()) {
-    FinishWith(ToGrpcStatus(error));
+  if (!result.ok()) {
+    FinishWith(ToGrpcStatus(result.status()));
     return;
   }
-  v1::PlanUpdate final_update = FinalUpdate(result);
-  env_.metrics->RecordPlan(v1::EndReason_Name(final_update.end_reason()),
-                           absl::Seconds(result.elapsed_s));
+  OfferFinal(*result);
+}
 
-  bool write = false;
+absl::StatusOr<PlanResult> PlanCall::Plan() {
+  // A call cancelled while queued (client gone, or shutdown) does not plan;
+  // its (empty) result still goes through OfferFinal, which writes nothing to
+  // a gone client and says SHUTDOWN to one that is still there.
+  if (cancel_.IsCancelled()) {
+    PlanResult cancelled;
+    cancelled.reason = StopReason::kCancelled;
+    return cancelled;
+  }
+
+  // A build is told from a hit by the cache's build count changing around
+  // Get: cheap, but a build by another call at the same moment is counted
+  // here as well (the metric can over-count under concurrent builds).
+  const uint64_t builds_before = env_.models->stats().builds;
+  absl::StatusOr<std::shared_ptr<const RiskModel>> model =
+      env_.models->Get(*spec_.map, spec_.params);
+  if (env_.models->stats().builds != builds_before) env_.metrics->RecordModelBuild();
+  if (!model.ok()) return model.status();
+
+  const PlanningProblem problem{*model, spec_.start, spec_.goal};
+  if (!endpoints_checked_.load()) {
+    if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
+  }
+  // One evaluator per plan: it counts the plan's configurations.
+  std::unique_ptr<RiskEvaluator> evaluator =
+      env_.engine != nullptr ? env_.engine->NewEvaluator() : nullptr;
+  absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec_.algorithm, evaluator.get());
+  if (!planner.ok()) return planner.status();
+  return (*planner)->Plan(
+      problem, spec_.options, cancel_,
+      [this](const PlanImprovement& improvement) { OnImprovement(improvement); });
+}
+
+void PlanCall::OfferFinal(const PlanResult& result) {
+  bool stopped_by_shutdown = false;
+  {
+    absl::MutexLock lock(&mu_);
+    stopped_by_shutdown = state_.stopped_by_shutdown();
+  }
+  const v1::EndReason end_reason = EndReasonToProto(result.reason, stopped_by_shutdown);
+  env_.metrics->RecordPlan(v1::EndReason_Name(end_reason), absl::Seconds(result.elapsed_s));
+  // Built outside the lock (the display path and the tree can be large): the
+  // plan thread pays for it, and gRPC's threads never wait for it.
+  absl::StatusOr<v1::PlanUpdate> final_update = FinalUpdateToProto(
+      result, end_reason, spec_.params, spec_.display_step_m, spec_.options.record_tree);
+  // A planner's best trajectory always converts; in a release build a
+  // failure still ends the call, with INTERNAL, instead of a final message
+  // without its trajectory.
+  RISKPLAN_DCHECK(final_update.ok());
+  Step step;
   {
     absl::MutexLock lock(&mu_);
     log_detail_ = absl::StrFormat(
         "end_reason=%s iterations=%d tree_size=%d improvements=%d risk=%.9g planner_s=%.3f",
-        v1::EndReason_Name(final_update.end_reason()), result.iterations, result.tree_size,
-        improvements_, result.best.has_value() ? result.best->risk : -1.0, result.elapsed_s);
-    if (finish_started_) return;
-    if (cancelled_ || write_failed_) {
-      // Nobody is listening: end without writing.
-      if (!coalescer_.write_in_flight()) {
-        finish_started_ = true;
-        final_status_ = grpc::Status(grpc::StatusCode::CANCELLED, "the call was cancelled");
-      } else {
-        finish_when_idle_ = grpc::Status(grpc::StatusCode::CANCELLED, "the call was cancelled");
-        return;
-      }
+        v1::EndReason_Name(end_reason), result.iterations, result.tree_size, improvements_,
+        result.best.has_value() ? result.best->risk : -1.0, result.elapsed_s);
+    if (final_update.ok()) {
+      final_update->set_improvements(improvements_);
+      step = state_.EndPlan(*std::move(final_update), absl::Now());
+      TakeWriteLocked(&step);
     } else {
-      final_update.set_improvements(improvements_);
-      Step step = coalescer_.OfferFinal(std::move(final_update), absl::Now());
-      write = TakeWriteLocked(&step);
-      if (!write) return;  // sent when the write in flight completes
+      step = state_.RequestFinish(ToGrpcStatus(final_update.status()));
     }
   }
-  if (write) {
-    StartWrite(&write_buffer_);
-  } else {
-    Finish(grpc::Status(grpc::StatusCode::CANCELLED, "the call was cancelled"));
-  }
-}
-
-v1::PlanUpdate PlanCall::FinalUpdate(const PlanResult& result) {
-  v1::PlanUpdate update;
-  update.set_final(true);
-  update.set_end_reason(EndReasonToProto(result.reason, shutdown_.load()));
-  update.set_elapsed_s(result.elapsed_s);
-  update.set_iterations(result.iterations);
-  update.set_tree_size(result.tree_size);
-  update.set_configurations_evaluated(result.configurations_evaluated);
-  if (result.best.has_value()) {
-    // Waypoints, risk and length are always set; only the display path can
-    // be missing, and only if the planner returned malformed waypoints.
-    (void)TrajectoryToProto(*result.best, spec_.params, spec_.display_step_m,
-                            update.mutable_trajectory());
-  }
-  if (spec_.options.record_tree) {
-    const size_t edges = std::min(result.tree.size(), kMaxTreeEdges);
-    update.mutable_tree_edges()->Reserve(static_cast<int>(edges));
-    for (size_t i = 0; i < edges; ++i) {
-      v1::TreeEdge* edge = update.add_tree_edges();
-      PoseToProto(result.tree[i].from, edge->mutable_from());
-      PoseToProto(result.tree[i].to, edge->mutable_to());
-    }
-    update.set_tree_truncated(result.tree.size() > edges);
-  }
-  return update;
+  if (!final_update.ok()) LogUpdateFailed("final", final_update.status());
+  Perform(step);
 }
 
 void PlanCall::OnImprovement(const PlanImprovement& improvement) {
   // Built outside the lock: the planner thread pays for it, not gRPC's.
-  v1::PlanUpdate update;
-  update.set_elapsed_s(improvement.elapsed_s);
-  update.set_iterations(improvement.iterations);
-  update.set_tree_size(improvement.tree_size);
-  (void)TrajectoryToProto(improvement, spec_.params, spec_.display_step_m,
-                          update.mutable_trajectory());
+  absl::StatusOr<v1::PlanUpdate> update =
+      ImprovementToProto(improvement, spec_.params, spec_.display_step_m);
+  // Never fails for a planner's output; in a release build the update is
+  // dropped (a later improvement or the final message carries a newer one).
+  RISKPLAN_DCHECK(update.ok());
   Step step;
   {
     absl::MutexLock lock(&mu_);
     ++improvements_;
-    if (finish_started_ || cancelled_ || write_failed_) return;
-    update.set_improvements(improvements_);
-    step = coalescer_.Offer(std::move(update), absl::Now());
-    if (!TakeWriteLocked(&step)) step.write.reset();
+    if (update.ok()) {
+      update->set_improvements(improvements_);
+      step = state_.Offer(*std::move(update), absl::Now());
+      TakeWriteLocked(&step);
+    }
   }
-  Perform(std::move(step));
+  if (!update.ok()) {
+    LogUpdateFailed("improvement", update.status());
+    return;
+  }
+  Perform(step);
 }
 
 void PlanCall::OnTimer() {
   Step step;
   {
     absl::MutexLock lock(&mu_);
-    if (finish_started_ || cancelled_ || write_failed_) return;
-    step = coalescer_.Poll(absl::Now());
-    if (!TakeWriteLocked(&step)) step.write.reset();
+    step = state_.Poll(absl::Now());
+    TakeWriteLocked(&step);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
-bool PlanCall::TakeWriteLocked(Step* step) {
-  if (step->finish) {
-    finish_started_ = true;
-    return false;
-  }
-  if (!step->write.has_value()) return false;
+void PlanCall::TakeWriteLocked(Step* step) {
+  if (!step->write.has_value()) return;
+  // Numbered here, at the moment it is sent, so that sequence numbers have
+  // no gaps however many updates the coalescer replaced.
   write_buffer_ = std::move(*step->write);
   write_buffer_.set_sequence(++sent_);
-  return true;
 }
 
-void PlanCall::Perform(Step step) {
+void PlanCall::Perform(const Step& step) {
+  if (step.stop_planner) cancel_.Cancel();
   if (step.wake_at.has_value()) {
+    // The timer's reference keeps the call alive until the wake-up has run,
+    // even if gRPC is done with it by then (OnTimer then does nothing).
     env_.timer->Schedule(*step.wake_at, [self = shared_from_this()] { self->OnTimer(); });
   }
   if (step.write.has_value()) {
     StartWrite(&write_buffer_);
-  } else if (step.finish) {
-    grpc::Status status;
-    {
-      absl::MutexLock lock(&mu_);
-      status = final_status_;
-    }
-    Finish(status);
+  } else if (step.finish.has_value()) {
+    Finish(*step.finish);
   }
 }
 
 void PlanCall::FinishWith(const grpc::Status& status) {
+  Step step;
   {
     absl::MutexLock lock(&mu_);
-    if (finish_started_) return;
-    if (coalescer_.write_in_flight()) {
-      finish_when_idle_ = status;
-      return;
-    }
-    finish_started_ = true;
-    final_status_ = status;
+    step = state_.RequestFinish(status);
   }
-  Finish(status);
+  Perform(step);
+}
+
+void PlanCall::LogUpdateFailed(std::string_view which, const absl::Status& status) const {
+  LogEvent("plan_update_failed",
+           absl::StrFormat("update=%s peer=%s map=%s algorithm=%s: %s", which, peer_,
+                           spec_.map ? spec_.map->name() : "",
+                           PlannerAlgorithmName(spec_.algorithm), status.message()));
 }
 
 void PlanCall::OnWriteDone(bool ok) {
+  // Finish, started below, may let OnDone run on another thread and drop
+  // gRPC's reference while this reaction is still running: hold the call
+  // until it returns.
   std::shared_ptr<PlanCall> keep = shared_from_this();
   Step step;
   {
     absl::MutexLock lock(&mu_);
-    if (!ok) {
-      // The client is gone: stop planning, and finish once Run() is done
-      // with the call (it offers the final message, or already has).
-      write_failed_ = true;
-      // Nothing is in flight any more: Run() must not wait for this write to
-      // complete before it finishes the call (it would wait forever).
-      coalescer_.OnWriteFailed();
-      cancel_.Cancel();
-      if (finish_started_ || (!coalescer_.final_offered() && !finish_when_idle_.has_value())) {
-        return;
-      }
-      finish_started_ = true;
-      final_status_ = grpc::Status(grpc::StatusCode::CANCELLED, "the stream broke");
-      step.finish = true;
-    } else if (finish_when_idle_.has_value()) {
-      finish_started_ = true;
-      final_status_ = *finish_when_idle_;
-      step.finish = true;
-    } else {
-      step = coalescer_.OnWriteDone(absl::Now());
-      if (!TakeWriteLocked(&step)) step.write.reset();
-    }
+    // A failed write means the client is gone: the state stops the planner
+    // and finishes the call once Run is done with it.
+    step = ok ? state_.WriteDone(absl::Now()) : state_.WriteFailed();
+    TakeWriteLocked(&step);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
 void PlanCall::OnCancel() {
+  // Read outside the lock: ctx_ is valid until OnDone, which runs after this.
+  const bool deadline_passed = ctx_->deadline() <= std::chrono::system_clock::now();
+  Step step;
   {
     absl::MutexLock lock(&mu_);
-    cancelled_ = true;
-    deadline_hit_ = ctx_->deadline() <= std::chrono::system_clock::now();
+    step = state_.Cancel(deadline_passed ? CancelCause::kDeadline : CancelCause::kClient);
   }
-  cancel_.Cancel();
+  Perform(step);
 }
 
 void PlanCall::OnDone() {
@@ -316,15 +306,12 @@ void PlanCall::OnDone() {
   int64_t sent = 0, replaced = 0;
   {
     absl::MutexLock lock(&mu_);
-    status = final_status_;
-    if (cancelled_) {
-      status = deadline_hit_
-                   ? grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the call's deadline passed")
-                   : grpc::Status(grpc::StatusCode::CANCELLED, "the client cancelled");
-    }
+    // gRPC calls OnDone only after Finish: the state must have got there.
+    RISKPLAN_DCHECK(state_.phase() == PlanCallPhase::kFinished);
+    status = state_.ReportedStatus();
     detail = log_detail_;
     sent = static_cast<int64_t>(sent_);
-    replaced = coalescer_.replaced();
+    replaced = state_.replaced();
   }
   const absl::Duration duration = absl::Now() - started_;
   env_.metrics->RecordRpc("PlanTrajectory", status.error_code(), duration);
@@ -336,6 +323,8 @@ void PlanCall::OnDone() {
           .peer = peer_,
           .map = spec_.map ? spec_.map->name() : "",
           .detail = detail});
+  // Counted down only after the log line: the drain waits for open calls, so
+  // a server that exits has written every call's line.
   if (env_.open_calls != nullptr) env_.open_calls->Done();
   // Drops gRPC's reference last: this may destroy the call.
   std::shared_ptr<PlanCall> last = std::move(self_);

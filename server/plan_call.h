@@ -3,19 +3,27 @@
 // Threads that touch a PlanCall:
 //   - a gRPC thread creates it (PlannerService::PlanTrajectory) and runs its
 //     reactions (OnWriteDone, OnCancel, OnDone);
-//   - a plan-pool thread runs Run(): builds or fetches the risk model, checks
-//     the endpoints, plans, and offers each improvement and the final message;
-//   - the TimerQueue thread sends an update withheld by min_update_interval_ms.
-// All three meet under mu_, where an UpdateCoalescer decides what to write;
-// the gRPC operations themselves (StartWrite, Finish) are started after the
-// lock is released. The call is owned by shared_ptrs: its own (dropped in
-// OnDone), the pool task's and each timer's, so whichever thread finishes
-// last frees it.
+//   - a plan-pool thread runs Run(): Plan() builds or fetches the risk model,
+//     checks the endpoints and plans, offering each improvement; then Run()
+//     offers the final message;
+//   - the TimerQueue thread sends an update withheld by min_update_interval_ms;
+//   - the main thread, on shutdown, calls StopForShutdown (ActivePlans::StopAll).
+// All of them meet under mu_, where a PlanCallState (server/plan_call_state.h:
+// the phases of the call's end, with its transition table, and the
+// UpdateCoalescer that decides what to write) turns each event into a Step.
+// The Step is performed after the lock is released: the gRPC operations
+// (StartWrite, Finish, which take gRPC's own stream lock), the planner's
+// cancellation and timer scheduling never run under mu_, so mu_ never nests
+// around another lock and the planner thread holds it only for a few field
+// updates.
+//
+// Ownership: shared_ptrs, its own (dropped in OnDone), the pool task's and
+// each timer's, so whichever thread finishes last frees it.
 //
 // Cancellation: the client's cancel or deadline (OnCancel), a failed write,
 // and the server's shutdown (StopForShutdown) all cancel the planner's
 // CancellationToken; the planner returns within milliseconds and Run()
-// releases the admission slot.
+// releases the admission slot and ends the call.
 #ifndef RISKPLAN_SERVER_PLAN_CALL_H_
 #define RISKPLAN_SERVER_PLAN_CALL_H_
 
@@ -24,8 +32,11 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <string_view>
 
 #include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "accel/risk_engine.h"
@@ -35,9 +46,9 @@
 #include "server/metrics.h"
 #include "server/model_cache.h"
 #include "server/open_calls.h"
+#include "server/plan_call_state.h"
 #include "server/request_validation.h"
 #include "server/timer_queue.h"
-#include "server/update_coalescer.h"
 
 namespace riskplan::server {
 
@@ -52,6 +63,8 @@ class ActivePlans {
   bool TryAdmit(const std::shared_ptr<PlanCall>& call);
   // Frees the slot of an admitted call. Idempotent.
   void Release(const PlanCall* call);
+  // Whether `call` holds a slot (admitted and not yet released).
+  bool IsAdmitted(const PlanCall* call) const;
   // Cancels every admitted plan with end reason SHUTDOWN.
   void StopAll();
   // Waits until no plan is admitted or `deadline` passes; true when none is.
@@ -72,7 +85,7 @@ struct PlanCallEnv {
   TimerQueue* timer = nullptr;
   ActivePlans* active = nullptr;
   accel::RiskEngine* engine = nullptr;  // null: the planner's own evaluator
-  OpenCalls* open_calls = nullptr;       // counts the call until its OnDone
+  OpenCalls* open_calls = nullptr;      // counts the call until its OnDone
 };
 
 class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
@@ -98,7 +111,7 @@ class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
   void Reject(const grpc::Status& status);
 
   // Cancels the planner; the plan ends with end reason SHUTDOWN and its best
-  // trajectory so far.
+  // trajectory so far. Safe from any thread, at any time.
   void StopForShutdown();
 
   // grpc::ServerWriteReactor.
@@ -107,19 +120,27 @@ class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
   void OnDone() override;
 
  private:
-  using Step = UpdateCoalescer<v1::PlanUpdate>::Step;
+  using State = PlanCallState<v1::PlanUpdate>;
+  using Step = State::Step;
 
   PlanCall(const PlanCallEnv& env, grpc::CallbackServerContext* ctx, PlanSpec spec);
 
-  void OnImprovement(const PlanImprovement& improvement);
-  void OnTimer();
-  // Performs a Step the coalescer returned: called without mu_ held.
-  void Perform(Step step) ABSL_LOCKS_EXCLUDED(mu_);
+  // The planning step: model, endpoints, planner, plan. A call cancelled
+  // while queued returns an empty result with StopReason::kCancelled.
+  absl::StatusOr<PlanResult> Plan();
+  // Offers the final message of `result` (or ends the call if nobody listens).
+  void OfferFinal(const PlanResult& result) ABSL_LOCKS_EXCLUDED(mu_);
+  void OnImprovement(const PlanImprovement& improvement) ABSL_LOCKS_EXCLUDED(mu_);
+  void OnTimer() ABSL_LOCKS_EXCLUDED(mu_);
   // Finishes the call with `status` once no write is in flight.
   void FinishWith(const grpc::Status& status) ABSL_LOCKS_EXCLUDED(mu_);
-  // Prepares the message of a Step for writing; returns whether to write.
-  bool TakeWriteLocked(Step* step) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-  v1::PlanUpdate FinalUpdate(const PlanResult& result);
+  // Moves the message of `step`, if any, into write_buffer_ and numbers it;
+  // step->write stays engaged, telling Perform to start the write.
+  void TakeWriteLocked(Step* step) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Performs a Step the state returned: called without mu_ held.
+  void Perform(const Step& step) ABSL_LOCKS_EXCLUDED(mu_);
+  // Logs an update that could not be built (a bug, see OnImprovement).
+  void LogUpdateFailed(std::string_view which, const absl::Status& status) const;
 
   const PlanCallEnv env_;
   grpc::CallbackServerContext* const ctx_;  // valid until OnDone
@@ -127,22 +148,22 @@ class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
   const absl::Time started_;
   const std::string peer_;
   std::shared_ptr<PlanCall> self_;  // gRPC's reference, dropped in OnDone
+  // Cancelled only by Perform, for Steps with stop_planner; read by the
+  // planner without any lock.
   CancellationToken cancel_;
-  std::atomic<bool> shutdown_{false};
+  // Set by CheckEndpointsIfModelReady on the gRPC thread before the call is
+  // queued, read by Plan() on the pool thread (the pool's queue orders the
+  // two; atomic so that this does not have to be argued).
   std::atomic<bool> endpoints_checked_{false};
 
   absl::Mutex mu_;
-  UpdateCoalescer<v1::PlanUpdate> coalescer_ ABSL_GUARDED_BY(mu_);
-  v1::PlanUpdate write_buffer_ ABSL_GUARDED_BY(mu_);  // the message in flight
-  uint64_t sent_ ABSL_GUARDED_BY(mu_) = 0;
-  int64_t improvements_ ABSL_GUARDED_BY(mu_) = 0;
-  bool cancelled_ ABSL_GUARDED_BY(mu_) = false;     // OnCancel ran
-  bool deadline_hit_ ABSL_GUARDED_BY(mu_) = false;  // ... because of the deadline
-  bool write_failed_ ABSL_GUARDED_BY(mu_) = false;
-  bool finish_started_ ABSL_GUARDED_BY(mu_) = false;  // Finish() called or decided
-  std::optional<grpc::Status> finish_when_idle_ ABSL_GUARDED_BY(mu_);
-  grpc::Status final_status_ ABSL_GUARDED_BY(mu_);
-  std::string log_detail_ ABSL_GUARDED_BY(mu_);
+  State state_ ABSL_GUARDED_BY(mu_);
+  // The message in flight. gRPC reads it between StartWrite and OnWriteDone,
+  // outside mu_; it is only replaced when the state has no write in flight.
+  v1::PlanUpdate write_buffer_ ABSL_GUARDED_BY(mu_);
+  uint64_t sent_ ABSL_GUARDED_BY(mu_) = 0;         // PlanUpdate.sequence of the last write
+  int64_t improvements_ ABSL_GUARDED_BY(mu_) = 0;  // the planner's, sent or not
+  std::string log_detail_ ABSL_GUARDED_BY(mu_);    // end reason and counts, for OnDone
 };
 
 }  // namespace riskplan::server

@@ -20,7 +20,9 @@ const grpc::Status kDraining(grpc::StatusCode::UNAVAILABLE,
 
 // The reactor of every unary RPC. Complete() logs the RPC and records its
 // metrics before finishing it, so a client that has its answer also finds
-// the log line written.
+// the log line written. Owned by gRPC from the handler's return to OnDone,
+// where it deletes itself; OpenCalls counts it for as long (the drain waits
+// for that count, see open_calls.h).
 class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
   UnaryCall(const char* method, grpc::CallbackServerContext* ctx, ServerMetrics* metrics,
@@ -59,7 +61,8 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   OpenCalls* const open_calls_;
 };
 
-// Risk of a validated trajectory (runs on the evaluation pool).
+// Risk of a validated trajectory (runs on the evaluation pool: building a
+// model and evaluating a long trajectory can take seconds).
 absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel::RiskEngine* engine,
                       const RequestLimits& limits, const EvaluateSpec& spec,
                       v1::EvaluateRiskResponse* response) {
@@ -108,16 +111,25 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
       active_(options.max_running_plans),
       eval_pool_(options.eval_threads, options.max_queued_evals),
       plan_pool_(options.plan_threads) {
+  // The maps never change while the server runs: ListMaps's answer is built
+  // once (MapInfoFromMap scans the terrain) and copied for every call.
   for (const std::shared_ptr<const RiskMap>& map : maps_.maps()) {
     *map_list_.add_maps() = MapInfoFromMap(*map);
     metrics_.SetMapMemory(map->name(), static_cast<double>(map->MemoryBytes()));
   }
 }
 
+// The members do the waiting: the plan pool, then the evaluation pool, run
+// every task still queued (each ends its call), then the timer drops its
+// wake-ups. Declared last, they are destroyed first, while everything their
+// tasks use is still alive (planner_service.h).
 PlannerService::~PlannerService() = default;
 
 grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
     grpc::CallbackServerContext* ctx, const v1::PlanRequest* request) {
+  // Every check comes before admission, so a request that will fail never
+  // holds a slot: a draining server refuses first, then validation, the
+  // endpoints (when the model is ready), admission and the plan pool.
   absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(*request, maps_, options_.limits);
   // A call that fails before admission still goes through a PlanCall, so
   // that every PlanTrajectory is logged and counted the same way.
@@ -150,7 +162,11 @@ grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
                                      active_.max_running())));
     return call.get();
   }
+  // Recorded before the task is queued: Run() may start at once, and it
+  // releases what was admitted (PlanCall::Run checks both).
   metrics_.PlanAdmitted();
+  // The pool's queue is unbounded (admission bounds it); it refuses only
+  // while it is being destroyed.
   if (!plan_pool_.TrySubmit([call] { call->Run(); })) {
     active_.Release(call.get());
     metrics_.PlanReleased();
@@ -172,6 +188,8 @@ grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerConte
     call->Complete(ToGrpcStatus(spec.status()), request->map());
     return call;
   }
+  // `response` stays valid until the call is finished (gRPC owns it), and
+  // `this` until every queued task has run (the pools are destroyed first).
   const bool queued = eval_pool_.TrySubmit([this, call, response, spec = *std::move(spec)] {
     absl::Status status =
         Evaluate(models_, *checkers_, options_.engine, options_.limits, spec, response);
@@ -224,6 +242,8 @@ grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContex
         request->map());
     return call;
   }
+  // Bounded so that the response stays at most 4096 x 4096 floats (64 MiB,
+  // the server's send limit); 512 by default, enough for a picture.
   int max_side = request->max_side_cells();
   if (max_side == 0) max_side = 512;
   if (max_side < 1 || max_side > 4096) {
@@ -249,6 +269,8 @@ grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContex
 grpc::ServerUnaryReactor* PlannerService::Ping(grpc::CallbackServerContext* ctx,
                                                const v1::PingRequest* /*request*/,
                                                v1::PingResponse* /*response*/) {
+  // Answered inline: there is nothing to compute, and a Ping that queued
+  // behind evaluations would say nothing about the server's liveness.
   auto* call = new UnaryCall("Ping", ctx, &metrics_, &open_calls_);
   call->Complete(draining() ? kDraining : grpc::Status::OK);
   return call;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/strings/str_format.h"
+#include "core/base/check.h"
 
 namespace riskplan::server {
 
@@ -60,6 +61,8 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samp
   }
   out->set_sample_count(samples);
   if (!include_samples) return;
+  // The caller evaluated with keep_samples; the count was bounded by
+  // --max_response_samples before the evaluation (CheckSampleCount).
   out->mutable_samples()->Reserve(static_cast<int>(evaluation.samples.size()));
   for (const SampleEvaluation& sample : evaluation.samples) {
     v1::Sample* s = out->add_samples();
@@ -122,6 +125,9 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   if (!pieces.ok()) return pieces.status();
   double total_m = 0.0;
   for (const TrajectoryPiece& piece : *pieces) total_m += piece.Length();
+  // The step grows with the path so that a long trajectory still fits in
+  // kMaxDisplayPathPoses poses (the message and the client's picture stay
+  // bounded); the loop's own bound below is a guard against rounding.
   const double step_m = std::max(display_step_m, total_m / (kMaxDisplayPathPoses - 1));
   // Samples at k * step_m of the whole path's arc length, then the end.
   double piece_start_m = 0.0;
@@ -136,6 +142,61 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   }
   if (!pieces->empty()) PoseToProto(pieces->back().End(), out->add_path());
   return absl::OkStatus();
+}
+
+absl::StatusOr<v1::PlanUpdate> ImprovementToProto(const PlanImprovement& improvement,
+                                                  const ModelParams& params,
+                                                  double display_step_m) {
+  v1::PlanUpdate update;
+  update.set_elapsed_s(improvement.elapsed_s);
+  update.set_iterations(improvement.iterations);
+  update.set_tree_size(improvement.tree_size);
+  if (absl::Status s =
+          TrajectoryToProto(improvement, params, display_step_m, update.mutable_trajectory());
+      !s.ok()) {
+    return absl::InternalError(
+        absl::StrFormat("the trajectory of the improvement found at iteration %d (%d waypoints) "
+                        "cannot be converted: %s",
+                        improvement.iterations, improvement.waypoints.size(), s.message()));
+  }
+  return update;
+}
+
+absl::StatusOr<v1::PlanUpdate> FinalUpdateToProto(const PlanResult& result,
+                                                  v1::EndReason end_reason,
+                                                  const ModelParams& params, double display_step_m,
+                                                  bool include_tree) {
+  v1::PlanUpdate update;
+  update.set_final(true);
+  update.set_end_reason(end_reason);
+  update.set_elapsed_s(result.elapsed_s);
+  update.set_iterations(result.iterations);
+  update.set_tree_size(result.tree_size);
+  update.set_configurations_evaluated(result.configurations_evaluated);
+  if (result.best.has_value()) {
+    if (absl::Status s =
+            TrajectoryToProto(*result.best, params, display_step_m, update.mutable_trajectory());
+        !s.ok()) {
+      return absl::InternalError(absl::StrFormat(
+          "the final message's best trajectory (found at iteration %d, %d waypoints) cannot be "
+          "converted: %s",
+          result.best->iterations, result.best->waypoints.size(), s.message()));
+    }
+  }
+  if (include_tree) {
+    // Bounded (docs/api.md): a long plan's tree can have millions of edges;
+    // 50,000 of them (about 4 MB) stay well inside the 64 MiB message limit
+    // of the server's sends and riskplan_client's receives.
+    const size_t edges = std::min(result.tree.size(), kMaxTreeEdges);
+    update.mutable_tree_edges()->Reserve(static_cast<int>(edges));
+    for (size_t i = 0; i < edges; ++i) {
+      v1::TreeEdge* edge = update.add_tree_edges();
+      PoseToProto(result.tree[i].from, edge->mutable_from());
+      PoseToProto(result.tree[i].to, edge->mutable_to());
+    }
+    update.set_tree_truncated(result.tree.size() > edges);
+  }
+  return update;
 }
 
 v1::MapInfo MapInfoFromMap(const RiskMap& map) {
@@ -178,6 +239,9 @@ v1::MapInfo MapInfoFromMap(const RiskMap& map) {
 
 v1::GetMapLayerResponse DownsampleLayer(const RiskMap& map, v1::MapLayer layer,
                                         int max_side_cells) {
+  RISKPLAN_DCHECK(max_side_cells >= 1);
+  RISKPLAN_DCHECK(layer == v1::POPULATION_DENSITY || layer == v1::SHELTER || layer == v1::TERRAIN ||
+                  layer == v1::NO_FLY);
   const int side = std::max(map.nx(), map.ny());
   const int factor = std::max(1, (side + max_side_cells - 1) / max_side_cells);
   const int nx = (map.nx() + factor - 1) / factor;
@@ -193,6 +257,8 @@ v1::GetMapLayerResponse DownsampleLayer(const RiskMap& map, v1::MapLayer layer,
   out.set_factor(factor);
   out.mutable_values()->Resize(nx * ny, 0.0f);
   float* values = out.mutable_values()->mutable_data();
+  // Written at bj * nx + bi with bi < nx, bj < ny below.
+  RISKPLAN_DCHECK(out.values_size() == nx * ny);
   for (int bj = 0; bj < ny; ++bj) {
     for (int bi = 0; bi < nx; ++bi) {
       double sum = 0.0;
@@ -217,6 +283,8 @@ v1::GetMapLayerResponse DownsampleLayer(const RiskMap& map, v1::MapLayer layer,
           ++count;
         }
       }
+      // A block is no-fly if any of its cells is, so a downsampled picture
+      // never hides a no-fly cell; the other layers are averaged.
       values[bj * nx + bi] = layer == v1::NO_FLY ? (any_nofly ? 1.0f : 0.0f)
                                                  : static_cast<float>(sum / std::max(count, 1));
     }

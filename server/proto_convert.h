@@ -41,6 +41,24 @@ void FeasibilityToProto(const FeasibilityResult& result, v1::TwoTierResult* out)
 absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelParams& params,
                                double display_step_m, v1::Trajectory* out);
 
+// The PlanUpdate of an improvement: its counts and trajectory (the caller
+// sets `improvements` and `sequence`). INTERNAL, naming the improvement and
+// what failed, when its waypoints do not make pieces (never for a planner's
+// output).
+absl::StatusOr<v1::PlanUpdate> ImprovementToProto(const PlanImprovement& improvement,
+                                                  const ModelParams& params,
+                                                  double display_step_m);
+
+// The final PlanUpdate of a plan: final, `end_reason`, the counts, the best
+// trajectory if there is one, and the first kMaxTreeEdges edges of the tree
+// when `include_tree` (the caller sets `improvements` and `sequence`).
+// INTERNAL, naming the best trajectory and what failed, when its waypoints do
+// not make pieces (never for a planner's output).
+absl::StatusOr<v1::PlanUpdate> FinalUpdateToProto(const PlanResult& result,
+                                                  v1::EndReason end_reason,
+                                                  const ModelParams& params, double display_step_m,
+                                                  bool include_tree);
+
 // Everything ListMaps says about `map`.
 v1::MapInfo MapInfoFromMap(const RiskMap& map);
 

@@ -29,6 +29,9 @@ absl::Status CheckFinite(double value, std::string_view field) {
 
 }  // namespace
 
+// By reflection: every field of ModelParameters is named after a ModelParam,
+// so a parameter added to both needs no code here. Only fields the request
+// sets (explicit presence) override the defaults.
 absl::StatusOr<ModelParams> ModelParamsFromProto(const v1::ModelParameters& proto) {
   ModelParams params;
   const google::protobuf::Descriptor* descriptor = proto.GetDescriptor();
@@ -80,6 +83,8 @@ absl::StatusOr<std::shared_ptr<const RiskMap>> FindMap(const MapRegistry& regist
 }
 
 absl::Status CheckInsideMap(const RiskMap& map, const Pose& pose, std::string_view field) {
+  // Only (x, y): altitude rules need the risk model and are the
+  // admissibility check's (CheckEndpoints), later.
   int i = 0, j = 0;
   if (map.CellOf(pose.x, pose.y, &i, &j)) return absl::OkStatus();
   return absl::InvalidArgumentError(absl::StrFormat(
@@ -201,6 +206,8 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   }
   spec.display_step_m = step == 0.0 ? 25.0 : step;
 
+  // Counts first, so that the loops below (and the planners) only ever see
+  // a bounded number of points and areas.
   if (static_cast<size_t>(request.obstacle_points_size()) > limits.max_obstacle_points) {
     return absl::InvalidArgumentError(
         absl::StrFormat("obstacle_points has %d points; the limit is %d",
@@ -280,6 +287,8 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   if (!map.ok()) return map.status();
   spec.map = *std::move(map);
 
+  // Point counts are checked before any point is read or copied, so a huge
+  // request costs no more than its parsing (which --max_request_bytes bounds).
   switch (request.trajectory_case()) {
     case v1::EvaluateRiskRequest::kWaypoints: {
       const auto& poses = request.waypoints().poses();
@@ -324,6 +333,8 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   if (!params.ok()) return params.status();
   spec.params = *params;
   spec.include_samples = request.include_samples();
+  // Checked even when disabled, so that a client learns of a bad option
+  // before it turns the check on.
   absl::StatusOr<TwoTierOptions> two_tier = TwoTierOptionsFromProto(request.two_tier());
   if (!two_tier.ok()) return two_tier.status();
   if (request.two_tier().enabled()) spec.two_tier = *two_tier;

@@ -14,6 +14,8 @@ namespace {
 std::atomic<bool> rpc_log_enabled{true};
 
 void WriteLine(nlohmann::ordered_json& line) {
+  // `replace`: a peer address or status message that is not valid UTF-8 is
+  // logged with replacement characters instead of throwing from a log call.
   std::string text = line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
   text.push_back('\n');
   // One write(2) per line: atomic with respect to other lines for pipes and
@@ -21,11 +23,14 @@ void WriteLine(nlohmann::ordered_json& line) {
   size_t done = 0;
   while (done < text.size()) {
     const ssize_t n = ::write(STDERR_FILENO, text.data() + done, text.size() - done);
+    // A closed or broken stderr loses the line; the RPC must not fail or
+    // spin because of its log.
     if (n <= 0) return;
     done += static_cast<size_t>(n);
   }
 }
 
+// UTC with milliseconds: lines from several replicas sort together.
 std::string Timestamp() {
   return absl::FormatTime("%Y-%m-%dT%H:%M:%E3SZ", absl::Now(), absl::UTCTimeZone());
 }
@@ -35,6 +40,8 @@ std::string Timestamp() {
 void SetRpcLogEnabled(bool enabled) { rpc_log_enabled.store(enabled); }
 
 void LogRpc(const RpcLogRecord& record) {
+  // Relaxed: the flag is set once at start-up, before any RPC, and a stale
+  // read could only log or skip one line.
   if (!rpc_log_enabled.load(std::memory_order_relaxed)) return;
   nlohmann::ordered_json line = {
       {"ts", Timestamp()},

@@ -5,6 +5,8 @@
 // best trajectory within --grace_period_ms, and the process exits 0.
 #include <signal.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -14,9 +16,12 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/flags/usage_config.h"
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
+#include "absl/strings/string_view.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "accel/engine_metrics.h"
@@ -122,16 +127,46 @@ constexpr char kUsage[] =
     "SIGINT it drains (see --grace_period_ms) and exits 0. Exit code 1: cannot start\n"
     "(bad map bundle, address in use); 2: bad flags. See docs/api.md.";
 
-int Fail(int code, const std::string& message) {
-  std::fprintf(stderr, "riskplan-server: %s\n", message.c_str());
+// kUsage, then each algorithm's planner parameters (PlanRequest.planner_params)
+// with their defaults and ranges, read from the planners themselves so the
+// help cannot fall behind them.
+std::string UsageMessage() {
+  std::string usage = kUsage;
+  usage += "\n\nPlanner parameters (PlanRequest.planner_params, `riskplan plan --planner_params`):";
+  for (PlannerAlgorithm algorithm : {PlannerAlgorithm::kRiskRrtStar, PlannerAlgorithm::kRrt,
+                                     PlannerAlgorithm::kGenetic, PlannerAlgorithm::kHarmonic}) {
+    usage += absl::StrFormat("\n  %s:", PlannerAlgorithmName(algorithm));
+    for (const PlannerParamInfo& p : PlannerParams(algorithm)) {
+      usage += absl::StrFormat("\n    %-20s default %g, range [%g, %g]: %s", p.name,
+                               p.default_value, p.min_value, p.max_value, p.help);
+    }
+  }
+  return usage;
+}
+
+int Fail(int code, absl::string_view message) {
+  std::fprintf(stderr, "riskplan-server: %.*s\n", static_cast<int>(message.size()), message.data());
   return code;
 }
 
-int Main() {
+// What the flags ask for, once checked.
+struct ServerConfig {
+  ServiceOptions options;  // `engine` is set once the engine exists
+  int64_t grace_ms = 0;
+  accel::KernelPrecision cpu_kernel = accel::KernelPrecision::kExact;
+};
+
+// The service's options from the flags, with their "0: automatic" defaults
+// resolved. Values out of range are clamped where a clamp is harmless (queue
+// and point bounds); the rest is left to CheckConfig.
+ServiceOptions ServiceOptionsFromFlags() {
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   ServiceOptions options;
   options.plan_threads = absl::GetFlag(FLAGS_plan_threads);
   if (options.plan_threads == 0) options.plan_threads = static_cast<int>(cores);
+  // Twice the planning threads by default: at most one admitted plan waits
+  // per thread, so it starts within about one plan's time; a client beyond
+  // that is refused at once rather than queued without bound (docs/api.md).
   options.max_running_plans = absl::GetFlag(FLAGS_max_running_plans);
   if (options.max_running_plans == 0) options.max_running_plans = 2 * options.plan_threads;
   options.eval_threads = absl::GetFlag(FLAGS_eval_threads);
@@ -142,171 +177,252 @@ int Main() {
   options.limits.default_plan_time_ms = absl::GetFlag(FLAGS_default_plan_time_ms);
   options.limits.max_waypoints =
       static_cast<size_t>(std::max(2, absl::GetFlag(FLAGS_max_waypoints)));
+  // Never above kMaxObstaclePoints, the most a planner accepts, whatever the
+  // flag says.
   options.limits.max_obstacle_points =
       std::min(kMaxObstaclePoints,
                static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_obstacle_points))));
   options.limits.max_eval_samples = absl::GetFlag(FLAGS_max_eval_samples);
   options.limits.max_response_samples = absl::GetFlag(FLAGS_max_response_samples);
-  const int64_t grace_ms = absl::GetFlag(FLAGS_grace_period_ms);
+  return options;
+}
+
+// Every flag check, in a fixed order (the first failure is the one printed).
+absl::StatusOr<ServerConfig> ConfigFromFlags() {
+  ServerConfig config;
+  config.options = ServiceOptionsFromFlags();
+  const ServiceOptions& options = config.options;
+  config.grace_ms = absl::GetFlag(FLAGS_grace_period_ms);
   if (options.plan_threads < 1 || options.max_running_plans < 1 || options.eval_threads < 1) {
-    return Fail(2, "--plan_threads, --max_running_plans and --eval_threads must be >= 0");
+    return absl::InvalidArgumentError(
+        "--plan_threads, --max_running_plans and --eval_threads must be >= 0");
   }
   if (options.limits.max_plan_time_ms < 1 || options.limits.default_plan_time_ms < 1 ||
       options.limits.default_plan_time_ms > options.limits.max_plan_time_ms) {
-    return Fail(2, "need 1 <= --default_plan_time_ms <= --max_plan_time_ms");
+    return absl::InvalidArgumentError("need 1 <= --default_plan_time_ms <= --max_plan_time_ms");
   }
-  if (grace_ms < 0 || absl::GetFlag(FLAGS_max_request_bytes) < 1024 ||
+  if (config.grace_ms < 0 || absl::GetFlag(FLAGS_max_request_bytes) < 1024 ||
       absl::GetFlag(FLAGS_model_cache_size) < 0) {
-    return Fail(2,
-                "--grace_period_ms and --model_cache_size must be >= 0, "
-                "--max_request_bytes >= 1024");
+    return absl::InvalidArgumentError(
+        "--grace_period_ms and --model_cache_size must be >= 0, --max_request_bytes >= 1024");
   }
-  accel::KernelPrecision cpu_kernel = accel::KernelPrecision::kExact;
-  if (!accel::ParseKernelPrecision(absl::GetFlag(FLAGS_cpu_kernel), &cpu_kernel)) {
-    return Fail(2, absl::StrFormat("--cpu_kernel=%s: must be exact or float32",
-                                   absl::GetFlag(FLAGS_cpu_kernel)));
+  if (!accel::ParseKernelPrecision(absl::GetFlag(FLAGS_cpu_kernel), &config.cpu_kernel)) {
+    return absl::InvalidArgumentError(absl::StrFormat("--cpu_kernel=%s: must be exact or float32",
+                                                      absl::GetFlag(FLAGS_cpu_kernel)));
   }
   for (const auto* flag : {&FLAGS_kernel_weights_cache_mb, &FLAGS_risk_cache_mb,
                            &FLAGS_prepared_map_cache_mb, &FLAGS_blob_cache_mb}) {
     if (absl::GetFlag(*flag) < 0) {
-      return Fail(
-          2, absl::StrFormat("--%s must be >= 0", absl::GetFlagReflectionHandle(*flag).Name()));
+      return absl::InvalidArgumentError(
+          absl::StrFormat("--%s must be >= 0", absl::GetFlagReflectionHandle(*flag).Name()));
     }
   }
   if (absl::GetFlag(FLAGS_feasibility_cache_size) < 1) {
-    return Fail(2, "--feasibility_cache_size must be >= 1");
+    return absl::InvalidArgumentError("--feasibility_cache_size must be >= 1");
   }
-  options.max_cached_checkers = static_cast<size_t>(absl::GetFlag(FLAGS_feasibility_cache_size));
-  SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
+  config.options.max_cached_checkers =
+      static_cast<size_t>(absl::GetFlag(FLAGS_feasibility_cache_size));
+  return config;
+}
 
-  // Every thread created from here on inherits the blocked signals, so that
-  // only sigwait() below sees SIGTERM and SIGINT.
+// Blocks SIGTERM and SIGINT in the calling thread and, because a new thread
+// inherits its creator's mask, in every thread started after this: only the
+// main thread's sigwait() (WaitAndDrain) ever sees them, so the drain runs as
+// ordinary code, with no async-signal-safety rules. Call before any thread
+// starts (map loading, the engine, the metrics server and gRPC all start some).
+sigset_t BlockStopSignals() {
   sigset_t stop_signals;
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGTERM);
   sigaddset(&stop_signals, SIGINT);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  return stop_signals;
+}
 
+// The maps and their default risk models, built before the server listens so
+// that the first request finds them ready and a bad bundle stops start-up.
+struct LoadedMaps {
+  std::unique_ptr<MapRegistry> registry;
+  std::unique_ptr<RiskModelCache> models;  // reads `registry`: declared after it
+};
+
+absl::StatusOr<LoadedMaps> LoadMaps() {
   const absl::Time load_start = absl::Now();
   const std::string maps_dir = absl::GetFlag(FLAGS_maps);
-  absl::StatusOr<std::unique_ptr<MapRegistry>> maps =
+  absl::StatusOr<std::unique_ptr<MapRegistry>> registry =
       maps_dir.empty()
           ? MapRegistry::DemoCity(DemoCityOptions{.size_m = absl::GetFlag(FLAGS_demo_city_size_m)})
           : MapRegistry::LoadDirectory(maps_dir);
-  if (!maps.ok()) return Fail(1, absl::StrFormat("cannot start: %s", maps.status().message()));
-  absl::StatusOr<std::unique_ptr<RiskModelCache>> models =
-      RiskModelCache::Create(**maps, static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)));
-  if (!models.ok()) {
-    return Fail(1, absl::StrFormat("cannot start: %s", models.status().message()));
-  }
-  LogEvent("maps_loaded", absl::StrFormat("maps=[%s] bytes=%d seconds=%.2f", (*maps)->NameList(),
-                                          (*maps)->MemoryBytes(),
+  if (!registry.ok()) return registry.status();
+  absl::StatusOr<std::unique_ptr<RiskModelCache>> models = RiskModelCache::Create(
+      **registry, static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)));
+  if (!models.ok()) return models.status();
+  LogEvent("maps_loaded", absl::StrFormat("maps=[%s] bytes=%d seconds=%.2f",
+                                          (*registry)->NameList(), (*registry)->MemoryBytes(),
                                           absl::ToDoubleSeconds(absl::Now() - load_start)));
+  return LoadedMaps{*std::move(registry), *std::move(models)};
+}
 
-  // The accelerator engine, only when asked for: it must outlive the service.
-  std::unique_ptr<accel::RiskEngine> engine;
+// The accelerator engine, only when a flag asks for one (null otherwise:
+// every plan and evaluation computes its own risks, as without an engine).
+absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(accel::KernelPrecision cpu_kernel) {
   const std::string shims = absl::GetFlag(FLAGS_fpga_shims);
-  if (absl::GetFlag(FLAGS_cpu_workers) > 0 || !shims.empty() ||
-      cpu_kernel != accel::KernelPrecision::kExact) {
-    accel::RiskEngineOptions engine_options;
-    engine_options.cpu_workers = absl::GetFlag(FLAGS_cpu_workers);
-    engine_options.caller_runs = absl::GetFlag(FLAGS_accel_caller_runs);
-    engine_options.site_cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_risk_cache_mb)) << 20;
-    engine_options.kernel.precision = cpu_kernel;
-    engine_options.kernel_weights_bytes =
-        static_cast<size_t>(absl::GetFlag(FLAGS_kernel_weights_cache_mb)) << 20;
-    engine_options.prepared_map_bytes =
-        static_cast<size_t>(absl::GetFlag(FLAGS_prepared_map_cache_mb)) << 20;
-    engine_options.blob_cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_blob_cache_mb)) << 20;
-    for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
-      engine_options.fpga_shims.emplace_back(s);
-    }
-    engine_options.on_worker_event = [](const accel::WorkerEvent& e) {
-      LogEvent("accel_worker", accel::WorkerEventJson(e));
-    };
-    absl::StatusOr<std::unique_ptr<accel::RiskEngine>> created =
-        accel::RiskEngine::Create(engine_options);
-    if (!created.ok()) {
-      return Fail(
-          1, absl::StrFormat("cannot start: accelerator engine: %s", created.status().message()));
-    }
-    engine = *std::move(created);
-    options.engine = engine.get();
-    LogEvent("accel_engine",
-             absl::StrFormat("cpu_workers=%d fpga_shims=[%s] caller_runs=%d cpu_kernel=%s",
-                             engine_options.cpu_workers, shims, engine_options.caller_runs,
-                             accel::KernelPrecisionName(cpu_kernel)));
+  if (absl::GetFlag(FLAGS_cpu_workers) <= 0 && shims.empty() &&
+      cpu_kernel == accel::KernelPrecision::kExact) {
+    return nullptr;
   }
-
-  ServerMetrics metrics;
-  if (engine != nullptr) metrics.AddCollectable(std::make_shared<AccelMetrics>(engine.get()));
-  if (const std::string address = absl::GetFlag(FLAGS_metrics_listen); !address.empty()) {
-    absl::StatusOr<std::string> bound = metrics.Expose(address);
-    if (!bound.ok()) return Fail(1, std::string(bound.status().message()));
-    LogEvent("metrics_listening", *bound);
+  accel::RiskEngineOptions engine_options;
+  engine_options.cpu_workers = absl::GetFlag(FLAGS_cpu_workers);
+  engine_options.caller_runs = absl::GetFlag(FLAGS_accel_caller_runs);
+  engine_options.site_cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_risk_cache_mb)) << 20;
+  engine_options.kernel.precision = cpu_kernel;
+  engine_options.kernel_weights_bytes =
+      static_cast<size_t>(absl::GetFlag(FLAGS_kernel_weights_cache_mb)) << 20;
+  engine_options.prepared_map_bytes =
+      static_cast<size_t>(absl::GetFlag(FLAGS_prepared_map_cache_mb)) << 20;
+  engine_options.blob_cache_bytes = static_cast<size_t>(absl::GetFlag(FLAGS_blob_cache_mb)) << 20;
+  for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
+    engine_options.fpga_shims.emplace_back(s);
   }
+  // Worker state changes (a board going down, coming back) go to the same
+  // structured log as the RPCs, so one stream tells what happened when.
+  engine_options.on_worker_event = [](const accel::WorkerEvent& e) {
+    LogEvent("accel_worker", accel::WorkerEventJson(e));
+  };
+  absl::StatusOr<std::unique_ptr<accel::RiskEngine>> engine =
+      accel::RiskEngine::Create(engine_options);
+  if (!engine.ok()) return engine.status();
+  LogEvent("accel_engine",
+           absl::StrFormat("cpu_workers=%d fpga_shims=[%s] caller_runs=%d cpu_kernel=%s",
+                           engine_options.cpu_workers, shims, engine_options.caller_runs,
+                           accel::KernelPrecisionName(cpu_kernel)));
+  return engine;
+}
 
-  PlannerService service(**maps, **models, metrics, options);
-  metrics.AddCollectable(std::make_shared<CacheMetrics>(
-      models->get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
-      service.checkers()));
+// The engine's metrics, and /metrics over HTTP with --metrics_listen.
+absl::Status StartMetrics(accel::RiskEngine* engine, ServerMetrics& metrics) {
+  if (engine != nullptr) metrics.AddCollectable(std::make_shared<AccelMetrics>(engine));
+  const std::string address = absl::GetFlag(FLAGS_metrics_listen);
+  if (address.empty()) return absl::OkStatus();
+  absl::StatusOr<std::string> bound = metrics.Expose(address);
+  if (!bound.ok()) return bound.status();
+  LogEvent("metrics_listening", *bound);
+  return absl::OkStatus();
+}
+
+// The gRPC server, listening and serving `service`, health and reflection.
+struct Serving {
+  std::unique_ptr<grpc::Server> server;
+  std::string host;  // of --listen
+  int port = 0;      // the bound one (--listen may ask for port 0)
+};
+
+absl::StatusOr<Serving> BuildAndStart(PlannerService& service) {
+  // Both must be set before the builder is created: they install themselves
+  // as builder plugins.
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   const std::string listen = absl::GetFlag(FLAGS_listen);
-  int port = 0;
-  builder.AddListeningPort(listen, grpc::InsecureServerCredentials(), &port);
+  Serving serving;
+  builder.AddListeningPort(listen, grpc::InsecureServerCredentials(), &serving.port);
   builder.SetMaxReceiveMessageSize(absl::GetFlag(FLAGS_max_request_bytes));
+  // Responses are bounded by the request limits (samples, tree edges, layer
+  // side); 64 MiB is the client library's receive limit too.
   builder.SetMaxSendMessageSize(64 << 20);
   if (const int64_t age_ms = absl::GetFlag(FLAGS_max_connection_age_ms); age_ms > 0) {
     builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_MS, static_cast<int>(age_ms));
   }
   builder.RegisterService(&service);
-  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
-  if (server == nullptr || port == 0) {
-    return Fail(1, absl::StrFormat("cannot start: cannot listen on --listen=%s", listen));
+  serving.server = builder.BuildAndStart();
+  // gRPC leaves the port at 0 when it could not bind.
+  if (serving.server == nullptr || serving.port == 0) {
+    return absl::UnavailableError(
+        absl::StrFormat("cannot start: cannot listen on --listen=%s", listen));
   }
-  grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
+  grpc::HealthCheckServiceInterface* health = serving.server->GetHealthCheckService();
   health->SetServingStatus("", true);
   health->SetServingStatus("riskplan.v1.Planner", true);
+  serving.host = listen.substr(0, listen.rfind(':'));
+  return serving;
+}
 
-  const std::string host = listen.substr(0, listen.rfind(':'));
-  std::printf("riskplan-server listening on %s:%d\n", host.c_str(), port);
+// The readiness line on stdout (scripts and tests wait for it, and read the
+// port from it), then the same as a log event.
+void AnnounceServing(const Serving& serving, const ServiceOptions& options) {
+  std::printf("riskplan-server listening on %s:%d\n", serving.host.c_str(), serving.port);
   std::fflush(stdout);
-  LogEvent(
-      "serving",
-      absl::StrFormat("address=%s:%d plan_threads=%d max_running_plans=%d eval_threads=%d", host,
-                      port, options.plan_threads, options.max_running_plans, options.eval_threads));
+  LogEvent("serving",
+           absl::StrFormat("address=%s:%d plan_threads=%d max_running_plans=%d eval_threads=%d",
+                           serving.host, serving.port, options.plan_threads,
+                           options.max_running_plans, options.eval_threads));
+}
 
+// Waits for SIGTERM or SIGINT, then drains: refuse new work, let running
+// plans use the grace period, then stop them so that they send their best
+// trajectory before the server stops.
+void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, grpc::Server& server,
+                  int64_t grace_ms) {
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);
 
-  // Drain: refuse new work, let running plans use the grace period, then stop
-  // them so that they send their best trajectory before the server stops.
   const absl::Time drain_start = absl::Now();
   const absl::Duration grace = absl::Milliseconds(grace_ms);
+  // Stopped plans still need time to return and write their final message.
   const absl::Duration stop_margin = std::min(absl::Seconds(1), grace / 2);
   // Draining first: a client that sees NOT_SERVING is sure to be refused.
   service.StartDraining();
-  health->SetServingStatus(false);
+  server.GetHealthCheckService()->SetServingStatus(false);
+  ActivePlans& plans = service.active_plans();
   LogEvent("draining", absl::StrFormat("signal=%d running_plans=%d grace_ms=%d", signal_number,
-                                       service.active_plans().running(), grace_ms));
-  if (!service.active_plans().WaitUntilIdle(drain_start + grace - stop_margin)) {
-    LogEvent("stopping_plans",
-             absl::StrFormat("running_plans=%d", service.active_plans().running()));
-    service.active_plans().StopAll();
-    service.active_plans().WaitUntilIdle(drain_start + grace);
+                                       plans.running(), grace_ms));
+  if (!plans.WaitUntilIdle(drain_start + grace - stop_margin)) {
+    LogEvent("stopping_plans", absl::StrFormat("running_plans=%d", plans.running()));
+    plans.StopAll();
+    plans.WaitUntilIdle(drain_start + grace);
   }
   // Final messages still in flight and evaluations get what is left of the
   // grace period; once none is open, gRPC is shut down at once (calls still
   // open after the grace period are cancelled). Waiting on gRPC's Shutdown
   // deadline alone would also wait for idle clients to acknowledge GOAWAY.
   const bool none_open = service.open_calls().WaitUntilNone(drain_start + grace);
-  server->Shutdown(absl::ToChronoTime(
+  server.Shutdown(absl::ToChronoTime(
       none_open ? absl::Now()
                 : std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
   LogEvent("stopped",
            absl::StrFormat("seconds=%.3f", absl::ToDoubleSeconds(absl::Now() - drain_start)));
+}
+
+// Exit codes: 2 for bad flags, 1 when the server cannot start, 0 after a
+// drain. Locals are destroyed in the reverse order of their declaration,
+// which is the order needed: the gRPC server before the service, the service
+// before the metrics and the engine (its calls use both), the metrics before
+// the engine (AccelMetrics reads it at every scrape), all before the maps.
+int Main() {
+  absl::StatusOr<ServerConfig> config = ConfigFromFlags();
+  if (!config.ok()) return Fail(2, config.status().message());
+  SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
+  const sigset_t stop_signals = BlockStopSignals();
+
+  absl::StatusOr<LoadedMaps> maps = LoadMaps();
+  if (!maps.ok()) return Fail(1, absl::StrFormat("cannot start: %s", maps.status().message()));
+  absl::StatusOr<std::unique_ptr<accel::RiskEngine>> engine = MakeEngine(config->cpu_kernel);
+  if (!engine.ok()) {
+    return Fail(1,
+                absl::StrFormat("cannot start: accelerator engine: %s", engine.status().message()));
+  }
+  config->options.engine = engine->get();
+  ServerMetrics metrics;
+  if (absl::Status s = StartMetrics(engine->get(), metrics); !s.ok()) return Fail(1, s.message());
+
+  PlannerService service(*maps->registry, *maps->models, metrics, config->options);
+  metrics.AddCollectable(std::make_shared<CacheMetrics>(
+      maps->models.get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
+      service.checkers()));
+  absl::StatusOr<Serving> serving = BuildAndStart(service);
+  if (!serving.ok()) return Fail(1, serving.status().message());
+  AnnounceServing(*serving, config->options);
+  WaitAndDrain(stop_signals, service, *serving->server, config->grace_ms);
   return 0;
 }
 
@@ -314,19 +430,7 @@ int Main() {
 }  // namespace riskplan::server
 
 int main(int argc, char** argv) {
-  // The usage lists each algorithm's planner parameters (PlanRequest.planner_params).
-  std::string usage = riskplan::server::kUsage;
-  usage += "\n\nPlanner parameters (PlanRequest.planner_params, `riskplan plan --planner_params`):";
-  for (riskplan::PlannerAlgorithm algorithm :
-       {riskplan::PlannerAlgorithm::kRiskRrtStar, riskplan::PlannerAlgorithm::kRrt,
-        riskplan::PlannerAlgorithm::kGenetic, riskplan::PlannerAlgorithm::kHarmonic}) {
-    usage += absl::StrFormat("\n  %s:", riskplan::PlannerAlgorithmName(algorithm));
-    for (const riskplan::PlannerParamInfo& p : riskplan::PlannerParams(algorithm)) {
-      usage += absl::StrFormat("\n    %-20s default %g, range [%g, %g]: %s", p.name,
-                               p.default_value, p.min_value, p.max_value, p.help);
-    }
-  }
-  absl::SetProgramUsageMessage(usage);
+  absl::SetProgramUsageMessage(riskplan::server::UsageMessage());
   // --help lists this file's flags (Abseil's default looks for a file named
   // after the program).
   absl::FlagsUsageConfig config;

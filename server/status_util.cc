@@ -14,6 +14,8 @@ grpc::Status ToGrpcStatus(const absl::Status& status) {
   return grpc::Status(grpc_code, std::string(status.message()));
 }
 
+// The names of google.rpc.Code, which the log and the metric labels share.
+// grpc::StatusCode is an int underneath: any other value is UNKNOWN.
 std::string_view GrpcCodeName(grpc::StatusCode code) {
   switch (code) {
     case grpc::StatusCode::OK:

@@ -5,11 +5,16 @@
 namespace riskplan::server {
 
 ThreadPool::ThreadPool(int threads, size_t max_queued) : max_queued_(max_queued) {
+  // At least one worker: a pool without workers would accept tasks that
+  // never run, and a PlanCall whose Run never runs never ends its call.
   if (threads < 1) threads = 1;
   workers_.reserve(threads);
   for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { WorkerLoop(); });
 }
 
+// Runs every task already accepted before joining: each task is what ends
+// its call (PlanCall::Run, an evaluation's Complete), and an accepted call
+// must be ended.
 ThreadPool::~ThreadPool() {
   {
     absl::MutexLock lock(&mu_);
@@ -43,6 +48,8 @@ void ThreadPool::WorkerLoop() {
       task = std::move(queue_.front());
       queue_.pop_front();
     }
+    // Run without the lock: tasks take seconds, and other workers and
+    // TrySubmit must go on meanwhile.
     task();
   }
 }

@@ -4,6 +4,9 @@ namespace riskplan::server {
 
 TimerQueue::TimerQueue() : thread_([this] { Loop(); }) {}
 
+// Callbacks not yet due are dropped, releasing the references they hold: the
+// service destroys the timer after gRPC has shut down and the pools have
+// drained, so no call is left to write to.
 TimerQueue::~TimerQueue() {
   {
     absl::MutexLock lock(&mu_);
@@ -44,6 +47,8 @@ void TimerQueue::Loop() {
       mu_.AwaitWithDeadline(changed, due);
       continue;
     }
+    // Run without the lock: a callback takes its call's lock (PlanCall::
+    // OnTimer) and may schedule another timer, which takes mu_.
     std::function<void()> callback = std::move(timers_.begin()->second);
     timers_.erase(timers_.begin());
     mu_.Unlock();

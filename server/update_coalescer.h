@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "absl/time/time.h"
+#include "core/base/check.h"
 
 namespace riskplan::server {
 
@@ -57,8 +58,9 @@ class UpdateCoalescer {
   }
 
   // The write in flight completed (successfully: on a failed write the caller
-  // stops writing altogether).
+  // stops writing altogether). REQUIRES: write_in_flight().
   Step OnWriteDone(absl::Time now) {
+    RISKPLAN_DCHECK(in_flight_);
     in_flight_ = false;
     if (final_written_) {
       Step step;
@@ -69,8 +71,11 @@ class UpdateCoalescer {
   }
 
   // The write in flight failed (the client is gone): nothing more will be
-  // written, and nothing is in flight any more.
-  void OnWriteFailed() { in_flight_ = false; }
+  // written, and nothing is in flight any more. REQUIRES: write_in_flight().
+  void OnWriteFailed() {
+    RISKPLAN_DCHECK(in_flight_);
+    in_flight_ = false;
+  }
 
   // A wake-up asked for by a previous Step is due.
   Step Poll(absl::Time now) {

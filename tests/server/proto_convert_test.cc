@@ -3,6 +3,7 @@
 #include <cmath>
 #include <vector>
 
+#include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "server/feasibility_cache.h"
 #include "server/model_cache.h"
@@ -100,6 +101,79 @@ TEST(ProtoConvertTest, TrajectoryPathIsSampledAndEndsAtTheGoal) {
         std::hypot(t.path(i).x() - t.path(i - 1).x(), t.path(i).y() - t.path(i - 1).y());
     EXPECT_LE(step, 25.0 + 1e-6);
   }
+}
+
+TEST(ProtoConvertTest, ImprovementUpdate) {
+  PlanImprovement improvement;
+  improvement.waypoints = {{0, 0, 200, 0}, {1000, 0, 200, 0}};
+  improvement.risk = 2e-7;
+  improvement.iterations = 7;
+  improvement.tree_size = 30;
+  improvement.elapsed_s = 0.25;
+  absl::StatusOr<v1::PlanUpdate> update = ImprovementToProto(improvement, ModelParams{}, 25.0);
+  ASSERT_TRUE(update.ok()) << update.status();
+  EXPECT_FALSE(update->final());
+  EXPECT_EQ(update->iterations(), 7);
+  EXPECT_EQ(update->tree_size(), 30);
+  EXPECT_DOUBLE_EQ(update->elapsed_s(), 0.25);
+  EXPECT_EQ(update->trajectory().waypoints_size(), 2);
+  EXPECT_EQ(update->trajectory().risk(), 2e-7);
+  EXPECT_GE(update->trajectory().path_size(), 2);
+}
+
+TEST(ProtoConvertTest, ImprovementThatDoesNotConvertIsAnInternalErrorNamingIt) {
+  PlanImprovement improvement;
+  improvement.waypoints = {{0, 0, 200, 0}};  // one waypoint makes no piece
+  improvement.iterations = 9;
+  absl::StatusOr<v1::PlanUpdate> update = ImprovementToProto(improvement, ModelParams{}, 25.0);
+  ASSERT_FALSE(update.ok());
+  EXPECT_EQ(update.status().code(), absl::StatusCode::kInternal);
+  EXPECT_THAT(std::string(update.status().message()),
+              ::testing::HasSubstr("improvement found at iteration 9 (1 waypoints)"));
+}
+
+TEST(ProtoConvertTest, FinalUpdateWithTrajectoryAndTruncatedTree) {
+  PlanResult result;
+  result.reason = StopReason::kBudgetExhausted;
+  result.best = PlanImprovement{.waypoints = {{0, 0, 200, 0}, {1000, 0, 200, 0}}, .risk = 3e-7};
+  result.iterations = 100;
+  result.tree_size = 60000;
+  result.elapsed_s = 1.5;
+  result.configurations_evaluated = 12345;
+  result.tree.resize(kMaxTreeEdges + 1, TreeEdge{{1, 2, 3, 0}, {4, 5, 6, 0}});
+  absl::StatusOr<v1::PlanUpdate> update =
+      FinalUpdateToProto(result, v1::BUDGET_EXHAUSTED, ModelParams{}, 25.0, true);
+  ASSERT_TRUE(update.ok()) << update.status();
+  EXPECT_TRUE(update->final());
+  EXPECT_EQ(update->end_reason(), v1::BUDGET_EXHAUSTED);
+  EXPECT_EQ(update->iterations(), 100);
+  EXPECT_EQ(update->tree_size(), 60000);
+  EXPECT_EQ(update->configurations_evaluated(), 12345u);
+  EXPECT_EQ(update->trajectory().risk(), 3e-7);
+  EXPECT_EQ(update->tree_edges_size(), static_cast<int>(kMaxTreeEdges));
+  EXPECT_TRUE(update->tree_truncated());
+  EXPECT_DOUBLE_EQ(update->tree_edges(0).to().y(), 5.0);
+
+  // Without the tree asked for, and without a solution.
+  result.best.reset();
+  update = FinalUpdateToProto(result, v1::SHUTDOWN, ModelParams{}, 25.0, false);
+  ASSERT_TRUE(update.ok()) << update.status();
+  EXPECT_EQ(update->end_reason(), v1::SHUTDOWN);
+  EXPECT_FALSE(update->has_trajectory());
+  EXPECT_EQ(update->tree_edges_size(), 0);
+  EXPECT_FALSE(update->tree_truncated());
+}
+
+TEST(ProtoConvertTest, FinalUpdateWhoseBestDoesNotConvertIsAnInternalErrorNamingIt) {
+  PlanResult result;
+  result.reason = StopReason::kConverged;
+  result.best = PlanImprovement{.waypoints = {{0, 0, 200, 0}, {1000, 0, NAN, 0}}, .iterations = 5};
+  absl::StatusOr<v1::PlanUpdate> update =
+      FinalUpdateToProto(result, v1::CONVERGED, ModelParams{}, 25.0, false);
+  ASSERT_FALSE(update.ok());
+  EXPECT_EQ(update.status().code(), absl::StatusCode::kInternal);
+  EXPECT_THAT(std::string(update.status().message()),
+              ::testing::HasSubstr("final message's best trajectory (found at iteration 5"));
 }
 
 TEST(ProtoConvertTest, EndReasons) {

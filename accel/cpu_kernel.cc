@@ -236,6 +236,7 @@ const float* CpuRiskKernel::DensityFor(const RiskModel& model, const float** she
 
 void CpuRiskKernel::Sums(const RiskModel& model, std::span<const LocatedSite> sites,
                          std::span<double> impact_factor, std::span<double> expected_shelter) {
+  RISKPLAN_DCHECK(impact_factor.size() == sites.size() && expected_shelter.size() == sites.size());
   const size_t n = sites.size();
   stats_.ewmms += n;
 #if defined(__x86_64__)

@@ -6,6 +6,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "accel/shim/component_regs.h"
+#include "core/base/check.h"
 
 namespace riskplan::accel {
 
@@ -154,6 +155,7 @@ absl::Status MmioDevice::RunJob(const QuantizedMap& map, const QuantizedKernelTa
 absl::Status MmioDevice::Evaluate(const QuantizedMap& map, const QuantizedKernelTable& kernels,
                                   std::span<const DeviceSite> sites, std::span<Accumulator> impact,
                                   std::span<Accumulator> shelter, uint64_t* cycles) {
+  RISKPLAN_DCHECK(impact.size() == sites.size() && shelter.size() == sites.size());
   *cycles = 0;
   // Sites are taken in the order they came: a planner's and EvaluateRisk's
   // batches list the samples of a trajectory one after the other, so

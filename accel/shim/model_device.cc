@@ -1,4 +1,5 @@
 #include "accel/shim/device.h"
+#include "core/base/check.h"
 
 namespace riskplan::accel {
 
@@ -14,6 +15,7 @@ ModelDevice::ModelDevice(NumberFormat format, std::string device) {
 absl::Status ModelDevice::Evaluate(const QuantizedMap& map, const QuantizedKernelTable& kernels,
                                    std::span<const DeviceSite> sites, std::span<Accumulator> impact,
                                    std::span<Accumulator> shelter, uint64_t* cycles) {
+  RISKPLAN_DCHECK(impact.size() == sites.size() && shelter.size() == sites.size());
   for (size_t n = 0; n < sites.size(); ++n) {
     const DeviceSite& s = sites[n];
     ModelEwmm(map, kernels.kernel(s.height_bin, s.heading_bin), s.impact_i, s.impact_j, &impact[n],

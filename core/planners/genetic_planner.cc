@@ -433,12 +433,8 @@ absl::StatusOr<PlanResult> GeneticPlanner::Plan(const PlanningProblem& problem,
                                                 const PlanOptions& options,
                                                 const CancellationToken& cancel,
                                                 const ImprovementCallback& on_improvement) {
-  auto params = PrepareSeedPlan(PlannerAlgorithm::kGenetic, ParamInfo(), problem, options);
-  if (!params.ok()) return params.status();
-  DirectRiskEvaluator direct;
-  RiskEvaluator* evaluator = evaluator_ != nullptr ? evaluator_ : &direct;
-  Run run(problem, options, *params, evaluator, cancel, on_improvement);
-  return run.Execute();
+  return PlanSeedRun<Run>(PlannerAlgorithm::kGenetic, ParamInfo(), evaluator_, problem, options,
+                          cancel, on_improvement);
 }
 
 }  // namespace riskplan

@@ -212,12 +212,8 @@ absl::StatusOr<PlanResult> RrtPlanner::Plan(const PlanningProblem& problem,
                                             const PlanOptions& options,
                                             const CancellationToken& cancel,
                                             const ImprovementCallback& on_improvement) {
-  auto params = PrepareSeedPlan(PlannerAlgorithm::kRrt, ParamInfo(), problem, options);
-  if (!params.ok()) return params.status();
-  DirectRiskEvaluator direct;
-  RiskEvaluator* evaluator = evaluator_ != nullptr ? evaluator_ : &direct;
-  Run run(problem, options, *params, evaluator, cancel, on_improvement);
-  return run.Execute();
+  return PlanSeedRun<Run>(PlannerAlgorithm::kRrt, ParamInfo(), evaluator_, problem, options, cancel,
+                          on_improvement);
 }
 
 }  // namespace riskplan

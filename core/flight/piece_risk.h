@@ -85,6 +85,14 @@ class PieceRisk {
   }
   // Midpoints added so far.
   int64_t added() const { return added_; }
+  // End of the next run of at most `chunk` midpoints after those added,
+  // min(added() + chunk, parts()): a planner that evaluates an edge chunk by
+  // chunk generates midpoints [added(), ChunkEnd(chunk)) next.
+  // REQUIRES: chunk >= 1.
+  int64_t ChunkEnd(int64_t chunk) const {
+    RISKPLAN_DCHECK(chunk >= 1);
+    return parts_ - added_ > chunk ? added_ + chunk : parts_;
+  }
   bool complete() const { return added_ == parts_; }
 
   // lambda * sum(M) * ds / v over the midpoints added so far: never more than

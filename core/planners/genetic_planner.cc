@@ -67,9 +67,7 @@ struct PieceMemo {
   int violations = 0;
   bool has_risk = false;
   bool pending = false;  // its samples are in the current batch
-  size_t begin = 0;      // [begin, end) of the batch
-  size_t end = 0;
-  double risk = 0.0;  // the piece risk by the fitness's step, once has_risk
+  double risk = 0.0;     // the piece risk by the fitness's step, once has_risk
 };
 
 class Run {
@@ -209,7 +207,8 @@ absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
   // Bounded memory; cleared only here, so references stay valid below.
   if (pieces_.size() > (size_t{1} << 18)) pieces_.clear();
   batch_.clear();
-  // The pieces whose samples are in this batch, with their risk rules.
+  // The pieces whose samples are in this batch, with their risk rules, in
+  // the order of their samples in batch_.
   std::vector<std::pair<PieceMemo*, PieceRisk>> pending;
   std::vector<std::pair<size_t, std::vector<PieceMemo*>>> feasible;
   for (size_t c = first; c < pool->size(); ++c) {
@@ -236,9 +235,7 @@ absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
       PieceRisk rule(
           TrajectoryPiece::Manoeuvre(poses[k], poses[k + 1], mp.turn_radius_m, mp.max_climb_rad),
           risk_step_m_, mp);
-      m.begin = batch_.size();
       rule.AppendMidpoints(0, rule.parts(), &batch_);
-      m.end = batch_.size();
       m.pending = true;
       pending.emplace_back(&m, std::move(rule));
     }
@@ -248,8 +245,9 @@ absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
   if (!batch_.empty()) {
     if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_, risks_); !s.ok()) return s;
   }
+  size_t cursor = 0;
   for (auto& [m, rule] : pending) {
-    for (size_t k = m->begin; k < m->end; ++k) rule.Add(risks_[k]);
+    while (!rule.complete()) rule.Add(risks_[cursor++]);
     m->risk = rule.Risk();
     m->pending = false;
     m->has_risk = true;

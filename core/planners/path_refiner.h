@@ -54,8 +54,11 @@ class PathRefiner {
   // `scale_m`: the largest standard deviation of a new waypoint's horizontal
   // offset, m. `chunk`: midpoints generated, checked and evaluated at a time.
   // `evaluator` and `model` must outlive the refiner.
-  PathRefiner(const RiskModel& model, RiskEvaluator* evaluator, double scale_m, int chunk)
-      : model_(model), evaluator_(evaluator), scale_m_(scale_m), chunk_(std::max(1, chunk)) {}
+  PathRefiner(const RiskModel& model, RiskEvaluator* evaluator, double scale_m, int64_t chunk)
+      : model_(model),
+        evaluator_(evaluator),
+        scale_m_(scale_m),
+        chunk_(std::max<int64_t>(1, chunk)) {}
 
   // Draws one edit of the trajectory `waypoints` (start ... goal, at least 2)
   // whose piece i (waypoints[i] -> waypoints[i + 1]) has the exact risk
@@ -151,7 +154,7 @@ class PathRefiner {
     PieceRisk rule(piece, mp.sample_step_m, mp);
     while (!rule.complete()) {
       const int64_t done = rule.added();
-      const int64_t end = rule.parts() - done > chunk_ ? done + chunk_ : rule.parts();
+      const int64_t end = rule.ChunkEnd(chunk_);
       poses_.clear();
       for (int64_t i = done; i < end; ++i) {
         const Pose q = rule.Midpoint(i);
@@ -171,7 +174,7 @@ class PathRefiner {
   const RiskModel& model_;
   RiskEvaluator* evaluator_;
   const double scale_m_;
-  const int chunk_;
+  const int64_t chunk_;
   TrajectoryPiece pieces_[2];
   std::vector<Pose> poses_;
   std::vector<ConfigurationRisk> risks_;

@@ -51,8 +51,7 @@ void Run::AddCandidate(const Pose& from, const Pose& to, int32_t node, double ba
 
 absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
                                      int32_t* winner) {
-  const int64_t chunk =
-      params_.batch_chunk > 0 ? params_.batch_chunk : std::numeric_limits<int64_t>::max();
+  const int64_t chunk = params_.MidpointsPerBatch();
   double best = kInf;
   for (const CandidateEdge& e : *edges) best = std::min(best, e.limit);
   if (winner != nullptr) *winner = -1;
@@ -64,8 +63,7 @@ absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool sha
       e.in_batch = 0;
       if (!e.alive || e.rule.complete()) continue;
       const int64_t done = e.rule.added();
-      const int64_t parts = e.rule.parts();
-      const int64_t end = parts - done > chunk ? done + chunk : parts;
+      const int64_t end = e.rule.ChunkEnd(chunk);
       const size_t mark = batch_poses_.size();
       for (int64_t i = done; i < end; ++i) {
         const Pose q = e.rule.Midpoint(i);

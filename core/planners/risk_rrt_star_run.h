@@ -41,7 +41,7 @@ struct Params {
   int nearest_candidates = 8;
   int64_t max_nodes = 200000;
   int risk_cache_log2 = 0;
-  int batch_chunk = 16;
+  int batch_chunk = 16;         // 0: whole edges
   double refine_edits = 8;      // fractions accumulate between iterations
   double refine_scale_m = 0.0;  // 0 in the request: step_m / 2
   double guide_cell_m = 100.0;  // 0: no guide route
@@ -49,6 +49,10 @@ struct Params {
   // The defaults overridden by `given` (PlannerParamValues::Parse's checks),
   // integer parameters rounded down, and goal_bias + path_bias <= 0.9.
   static absl::StatusOr<Params> Parse(const std::map<std::string, double>& given);
+
+  // Midpoints of one candidate edge per risk batch: batch_chunk, or with 0
+  // as many as any edge has.
+  int64_t MidpointsPerBatch() const { return batch_chunk > 0 ? batch_chunk : kMaxPartCount; }
 };
 
 struct Node {
@@ -96,8 +100,7 @@ class Run {
         limits_(options.budget, cancel),
         rng_(options.seed),
         refine_rng_(options.seed ^ 0x5265666e65526e67ULL),
-        refiner_(model_, evaluator, params.refine_scale_m,
-                 params.batch_chunk > 0 ? params.batch_chunk : std::numeric_limits<int>::max()),
+        refiner_(model_, evaluator, params.refine_scale_m, params.MidpointsPerBatch()),
         grid_(model_.map().x0(), model_.map().y0(), model_.map().width_m(), model_.map().height_m(),
               std::max(50.0, params.near_radius_m / 2.0)) {}
 

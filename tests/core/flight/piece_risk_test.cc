@@ -98,10 +98,11 @@ TEST(PieceRiskTest, ChunkedSumsEqualEvaluateTrajectoryBitForBit) {
   auto evaluation = EvaluateTrajectory(**model, *pieces);
   ASSERT_TRUE(evaluation.ok());
   for (size_t p = 0; p < pieces->size(); ++p) {
-    for (int64_t chunk : {int64_t{1}, int64_t{7}, int64_t{16}, int64_t{1} << 40}) {
+    for (int64_t chunk : {int64_t{1}, int64_t{7}, int64_t{16}, int64_t{1} << 40, kMaxPartCount}) {
       PieceRisk rule((*pieces)[p], mp.sample_step_m, mp);
       while (!rule.complete()) {
         const int64_t end = std::min(rule.parts(), rule.added() + chunk);
+        EXPECT_EQ(rule.ChunkEnd(chunk), end);
         std::vector<Pose> batch;
         rule.AppendMidpoints(rule.added(), end, &batch);
         for (const Pose& q : batch) rule.Add((*model)->Evaluate(q));

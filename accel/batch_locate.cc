@@ -91,6 +91,7 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
   alignas(32) double ci[kLocateBlock];
   alignas(32) double cj[kLocateBlock];
   bool defined[kLocateBlock];
+  int half_width[kLocateBlock];
   KernelSite site[kLocateBlock];
   const __m256d x0 = _mm256_set1_pd(c.x0);
   const __m256d y0 = _mm256_set1_pd(c.y0);
@@ -183,6 +184,7 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
       const ImpactKernel& kernel = table.kernel(b, k);
       site[t].height_bin = b;
       site[t].heading_bin = k;
+      half_width[t] = kernel.half_width;
       ox[t] = kernel.offset_x_m;
       oy[t] = kernel.offset_y_m;
     }
@@ -193,7 +195,15 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
       _mm256_store_pd(ci + t, _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(x, x0), res), kFloor));
       _mm256_store_pd(cj + t, _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(y, y0), res), kFloor));
     }
+    // The window rule of spec version 2 (RiskModel::WindowInsideMap): a
+    // window reaching past the map leaves M undefined. The impact cells are
+    // integral doubles, compared as doubles so that none is converted out of
+    // int's range.
     for (size_t t = 0; t < m; ++t) {
+      if (defined[t]) {
+        const double hw = half_width[t];
+        defined[t] = ci[t] >= hw && cj[t] >= hw && ci[t] < c.nx - hw && cj[t] < c.ny - hw;
+      }
       if (!defined[t]) {
         out[base + t] = ConfigurationRisk{};
         continue;

@@ -1,6 +1,9 @@
-// Steps 1-3 of the spec (locating: terrain, bins, impact cell) for a batch
-// of configurations, exactly RiskModel::Locate for each: the CPU kernel's
-// first stage, and what the FPGA workers send to a board (sites).
+// Steps 1-3 of the spec (locating: terrain, bins, impact cell) and the window
+// rule of step 4 for a batch of configurations, exactly RiskModel::Locate for
+// each: the CPU kernel's first stage, and what the FPGA workers send to a
+// board (sites). A configuration whose impact window reaches past the map
+// gets no site, so no kernel, board or RTL ever computes sums for it from
+// padding: its M stays undefined (spec version 2).
 #ifndef RISKPLAN_ACCEL_BATCH_LOCATE_H_
 #define RISKPLAN_ACCEL_BATCH_LOCATE_H_
 

@@ -101,9 +101,9 @@ class EdgePrefetcher {
 // Windows ahead whose leading edges are prefetched along trajectories.
 constexpr size_t kEdgeAhead = 16;
 
-// Whether the window of a site lies inside the padded layers (the condition
-// of RiskModel::Ewmm) and fits the vector loops; if so its kernel and first
-// cell.
+// Whether the window of a site (inside the map, as Locate gives only such
+// sites) with its rows' zero-weight tails lies inside the padded layers and
+// fits the vector loops; if so its kernel and first cell.
 inline bool WindowOf(const RiskModel& model, const KernelSite& s, const ImpactKernel** kernel,
                      int64_t* first) {
   const RiskMap& m = model.map();

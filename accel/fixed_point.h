@@ -83,8 +83,10 @@ void AccumulatorToWords(Accumulator acc, uint32_t words[4]);
 Accumulator AccumulatorFromWords(const uint32_t words[4]);
 
 // A map quantised for the datapath: both layers with a border of `pad` cells
-// holding the spec's out-of-map values (density 0, shelter 10), so that any
-// window within `pad` of the map reads without checks.
+// holding density 0 and shelter 10, so that any window within `pad` of the map
+// reads without checks. The server sends a board only sites whose windows lie
+// inside the map (spec version 2), so the border is read by the RTL's and the
+// model's checks of every edge, never for a risk the engine reports.
 struct QuantizedMap {
   int nx = 0;
   int ny = 0;

@@ -29,6 +29,8 @@ v1::ViolationKind ViolationKindToProto(ViolationKind kind) {
       return v1::BELOW_SAFE_ALTITUDE;
     case ViolationKind::kAboveMaxAltitude:
       return v1::ABOVE_MAX_ALTITUDE;
+    case ViolationKind::kImpactOutsideMap:
+      return v1::IMPACT_OUTSIDE_MAP;
   }
   return v1::VIOLATION_KIND_UNSPECIFIED;
 }

@@ -80,6 +80,10 @@ std::string Violation::ToString() const {
     case ViolationKind::kAboveMaxAltitude:
       return where + absl::StrFormat(": altitude %.1f m > ceiling %.1f m (terrain + max_agl)",
                                      pose.z, limit_m);
+    case ViolationKind::kImpactOutsideMap:
+      return where +
+             ": the impact window of a fall from here reaches past the map's edge, where the "
+             "ground is unknown";
     default:
       return where;
   }

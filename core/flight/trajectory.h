@@ -58,8 +58,9 @@ struct SampleEvaluation {
 
 struct TrajectoryEvaluation {
   // Sum of piece risks (expected casualties per flight). Where a sample's M is
-  // undefined (outside the map, at or below terrain) it adds nothing; such a
-  // trajectory is never admissible, and a planner treats it as infinite risk.
+  // undefined (outside the map, at or below terrain, impact window past the
+  // map) it adds nothing; such a trajectory is never admissible, and a
+  // planner treats it as infinite risk.
   double risk = 0.0;
   double length_m = 0.0;
   bool admissible = true;

@@ -55,7 +55,7 @@ absl::Status CheckLayerValues(const char* layer, const std::vector<T>& values, i
 }
 
 // Copies one layer into the centre of a padded raster whose border holds
-// `fill` (the spec's out-of-map value).
+// `fill` (finite, and never weighed: see RiskMap::padded_density()).
 std::vector<float> PadLayer(const std::vector<float>& layer, int nx, int ny, float fill) {
   const int pnx = nx + 2 * RiskMap::kPad;
   const int pny = ny + 2 * RiskMap::kPad;

@@ -137,9 +137,12 @@ class RiskMap {
   const MapLayers& layers() const { return layers_; }
   const std::vector<LandingSite>& landing_sites() const { return layers_.landing_sites; }
 
-  // Density and shelter with a border of kPad cells on every side holding the
-  // out-of-map values of the spec (density 0, shelter 10), so that a kernel
-  // never needs a bounds check. Row-major, stride padded_nx(); in-map cell
+  // Density and shelter with a border of kPad cells on every side (density 0,
+  // shelter 10, as version 1 of the spec read unknown ground), so that the
+  // EWMM loops read whole vectors of a row without bounds checks. Since
+  // version 2 no kernel weighs a padding cell: windows lie wholly inside the
+  // map (RiskModel::Locate), and only the zero weights that round a row up to
+  // whole vectors fall on the padding. Row-major, stride padded_nx(); in-map cell
   // (i, j) is at PaddedIndex(i, j).
   int padded_nx() const { return header_.nx + 2 * kPad; }
   int padded_ny() const { return header_.ny + 2 * kPad; }

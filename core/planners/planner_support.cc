@@ -54,6 +54,10 @@ absl::Status CheckBudget(const PlannerBudget& b) {
 bool CellBand(const RiskModel& model, int i, int j, double* low_m, double* high_m) {
   const RiskMap& map = model.map();
   if (!map.Contains(i, j) || map.nofly(i, j)) return false;
+  // A cell near the edge, where a fall's impact window may reach past the
+  // map, is left out whole (spec version 2): inside the margins, no height in
+  // the band and no heading breaks the window rule.
+  if (!model.band_margins().Inside(i, j, map.nx(), map.ny())) return false;
   // The same arithmetic as RiskModel::CheckConfiguration, so that a z inside
   // [low, high] passes it (z > terrain holds because min_agl >= 0 and the
   // band is checked to lie above the terrain).

@@ -5,7 +5,9 @@
 // extensions; a coarse estimate of the risk field gives that choice at once.
 // Each coarse cell (side `cell_m`) gets the mean configuration risk M of its
 // centre over four headings, low in its flight band; cells whose centre cannot
-// be flown (outside, no-fly, empty band) are closed. The route is the cheapest
+// be flown (outside, no-fly, empty band) or whose risk is undefined for one of
+// the four headings (the impact window reaching past the map, spec version 2)
+// are closed. The route is the cheapest
 // 8-connected path from the start's cell to the goal's under
 // cost = length x (lambda / v) x M (plus a small cost per metre, so that it
 // does not wander over empty ground), resampled every `spacing_m` as
@@ -89,14 +91,23 @@ inline absl::StatusOr<std::vector<Pose>> CoarseRiskRoute(const RiskModel& model,
   std::vector<double> density(static_cast<size_t>(nx) * ny, kClosed);  // risk per metre
   const double per_metre = mp.failure_rate_per_s / mp.airspeed_mps;
   double total = 0.0;
+  size_t priced = 0;
   for (size_t c = 0; c < open_cells.size(); ++c) {
+    // A cell where some heading's impact window reaches past the map is
+    // closed: unknown ground is never cheap (spec version 2).
     double sum = 0.0;
-    for (int h = 0; h < 4; ++h) sum += risks[4 * c + h].defined ? risks[4 * c + h].risk : 0.0;
+    bool defined = true;
+    for (int h = 0; h < 4; ++h) {
+      defined = defined && risks[4 * c + h].defined;
+      sum += risks[4 * c + h].risk;
+    }
+    if (!defined) continue;
     density[open_cells[c]] = per_metre * 0.25 * sum;
     total += density[open_cells[c]];
+    ++priced;
   }
   // A cost per metre of 1 % of the mean: shortest among routes of equal risk.
-  const double floor_cost = open_cells.empty() ? 0.0 : 0.01 * total / open_cells.size();
+  const double floor_cost = priced == 0 ? 0.0 : 0.01 * total / priced;
   const auto cell_of = [&](const Pose& p) {
     const int ci = std::clamp(static_cast<int>(std::floor((p.x - map.x0()) / cell_m)), 0, nx - 1);
     const int cj = std::clamp(static_cast<int>(std::floor((p.y - map.y0()) / cell_m)), 0, ny - 1);

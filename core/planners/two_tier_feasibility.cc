@@ -86,7 +86,9 @@ TwoTierFeasibility::TwoTierFeasibility(const RiskModel& model, TwoTierOptions op
         detailed_.floor[k] = terrain_f;  // exact: the layer is float
         continue;
       }
-      if (map.nofly(i, j)) {
+      // No-fly cells, and cells where a fall's impact window may reach past
+      // the map (spec version 2), are closed at every altitude.
+      if (map.nofly(i, j) || !model.band_margins().Inside(i, j, map.nx(), map.ny())) {
         detailed_.floor[k] = kFloatInf;
         detailed_.ceiling[k] = -kFloatInf;
         continue;
@@ -153,6 +155,8 @@ bool TwoTierFeasibility::CellCollides(const Tier& tier, int i, int j, double z_l
   const RiskMap& map = model_.map();
   if (map.nofly(i, j)) {
     *kind = ViolationKind::kNoFlyZone;
+  } else if (!model_.band_margins().Inside(i, j, map.nx(), map.ny())) {
+    *kind = ViolationKind::kImpactOutsideMap;
   } else if (z_low - kAltitudeSlackM <= map.terrain(i, j)) {
     *kind = ViolationKind::kTerrainCollision;
   } else {

@@ -42,7 +42,9 @@ enum class CollisionRule {
   // Seed 001: a collision is z <= terrain (and any point outside the map).
   kTerrain = 0,
   // Spec section 6 per cell: outside the map, no-fly, z <= terrain,
-  // z < safe altitude or z > terrain + max_agl.
+  // z < safe altitude or z > terrain + max_agl, and the cells near the edge
+  // where a fall's impact window may reach past the map (the model's
+  // band_margins(), whole cells, conservative).
   kFlightBand = 1,
 };
 
@@ -73,8 +75,8 @@ struct FeasibilityResult {
   int cell_i = -1;
   int cell_j = -1;
   Point3 position;  // where the segment enters that cell
-  // kOutsideMap, kNoFlyZone, kTerrainCollision, kBelowSafeAltitude or
-  // kAboveMaxAltitude. For the coarse tier it names the pooled limit broken
+  // kOutsideMap, kNoFlyZone, kImpactOutsideMap, kTerrainCollision,
+  // kBelowSafeAltitude or kAboveMaxAltitude. For the coarse tier it names the pooled limit broken
   // (kTerrainCollision or kBelowSafeAltitude for the floor, kAboveMaxAltitude).
   ViolationKind kind = ViolationKind::kNone;
   int64_t cells_checked = 0;    // cells compared, both tiers

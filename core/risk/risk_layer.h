@@ -42,9 +42,11 @@ struct RiskLayer {
   double y0 = 0.0;     // m
   double res_m = 0.0;  // m, cell side of the layer (stride * map res)
   // M per layer cell (expected casualties given a failure at the cell's
-  // centre), row-major, row 0 south. NaN where M is undefined for the
-  // heading considered, or (maximum over headings) for any heading bin; the
-  // spec leaves M undefined at h <= 0, which for a positive height happens
+  // centre), row-major, row 0 south. NaN (NODATA) where M is undefined for
+  // the heading considered, or (maximum over headings) for any heading bin:
+  // along the map's edges, a band as wide as the impact window's reach at
+  // that height (spec version 2: the ground outside is unknown); and at
+  // h <= 0, which for a positive height happens
   // only where terrain + height_agl_m rounds back to the terrain in double
   // (terrain of about 1e6 m and heights below 1e-10 m).
   std::vector<double> risk;

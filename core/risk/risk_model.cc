@@ -1,5 +1,6 @@
 #include "core/risk/risk_model.h"
 
+#include <algorithm>
 #include <cmath>
 
 #if defined(__x86_64__)
@@ -11,6 +12,58 @@
 #include "core/base/check.h"
 
 namespace riskplan {
+namespace {
+
+// Steps 1-3 of spec section 3 for a q inside the map (cell (i, j)) and above
+// its terrain by h > 0, with a finite heading: the bins and the impact cell,
+// whether or not the window lies inside the map.
+KernelSite SiteOf(const RiskMap& map, const ImpactTable& table, const Pose& q, double h) {
+  KernelSite site;
+  site.height_bin = table.HeightBinOf(h);
+  site.heading_bin = table.HeadingBinOf(q.theta);
+  const ImpactKernel& kernel = table.kernel(site.height_bin, site.heading_bin);
+  site.impact_i = static_cast<int>(std::floor((q.x + kernel.offset_x_m - map.x0()) / map.res()));
+  site.impact_j = static_cast<int>(std::floor((q.y + kernel.offset_y_m - map.y0()) / map.res()));
+  return site;
+}
+
+// CellMargins over height bins [b_first, b_last] and every heading bin. The
+// impact cell of a configuration in cell i is floor(i + f + o/res) for some
+// f in [0, 1), that is i + floor(o/res) or one more; one cell more on each
+// side absorbs the rounding of the division.
+CellMargins MarginsOver(const ImpactTable& table, int b_first, int b_last) {
+  CellMargins m;
+  const double res = table.res_m();
+  for (int b = b_first; b <= b_last; ++b) {
+    for (int k = 0; k < table.heading_bins(); ++k) {
+      const ImpactKernel& kernel = table.kernel(b, k);
+      const int hw = kernel.half_width;
+      const int fx = static_cast<int>(std::floor(kernel.offset_x_m / res));
+      const int fy = static_cast<int>(std::floor(kernel.offset_y_m / res));
+      m.west = std::max(m.west, hw + 1 - fx);
+      m.east = std::max(m.east, hw + 2 + fx);
+      m.south = std::max(m.south, hw + 1 - fy);
+      m.north = std::max(m.north, hw + 2 + fy);
+    }
+  }
+  return m;
+}
+
+}  // namespace
+
+double ImpactReach::Max() const { return std::max({west_m, east_m, south_m, north_m}); }
+
+int64_t ImpactReach::CellsClear(const RiskMap& map) const {
+  const auto clear = [&](int n, double back_m, double ahead_m) {
+    int64_t count = 0;
+    for (int i = 0; i < n; ++i) {
+      const double centre = (i + 0.5) * map.res();
+      if (centre >= back_m && n * map.res() - centre > ahead_m) ++count;
+    }
+    return count;
+  };
+  return clear(map.nx(), west_m, east_m) * clear(map.ny(), south_m, north_m);
+}
 
 std::string_view ViolationKindName(ViolationKind kind) {
   switch (kind) {
@@ -26,6 +79,8 @@ std::string_view ViolationKindName(ViolationKind kind) {
       return "BELOW_SAFE_ALTITUDE";
     case ViolationKind::kAboveMaxAltitude:
       return "ABOVE_MAX_ALTITUDE";
+    case ViolationKind::kImpactOutsideMap:
+      return "IMPACT_OUTSIDE_MAP";
   }
   return "UNKNOWN";
 }
@@ -65,6 +120,9 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
                              m.landing_sites(), params.glide_ratio, params.glide_clearance_m));
     model->glide_ = model->own_glide_.get();
   }
+  const ImpactTable& t = *model->table_;
+  model->band_margins_ =
+      MarginsOver(t, t.HeightBinOf(params.min_agl_m), t.HeightBinOf(params.max_agl_m));
   return std::shared_ptr<const RiskModel>(std::move(model));
 }
 
@@ -79,7 +137,9 @@ ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) cons
   if (limit_m != nullptr) *limit_m = std::numeric_limits<double>::quiet_NaN();
   int i = 0;
   int j = 0;
-  if (!std::isfinite(q.z) || !map_->CellOf(q.x, q.y, &i, &j)) return ViolationKind::kOutsideMap;
+  if (!std::isfinite(q.z) || !std::isfinite(q.theta) || !map_->CellOf(q.x, q.y, &i, &j)) {
+    return ViolationKind::kOutsideMap;
+  }
   if (map_->nofly(i, j)) return ViolationKind::kNoFlyZone;
   const double terrain = map_->terrain(i, j);
   if (q.z <= terrain) {
@@ -95,6 +155,10 @@ ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) cons
   if (q.z > ceiling) {
     if (limit_m != nullptr) *limit_m = ceiling;
     return ViolationKind::kAboveMaxAltitude;
+  }
+  // Last, as it needs the height bin: the impact window inside the map.
+  if (!WindowInsideMap(SiteOf(*map_, *table_, q, q.z - terrain))) {
+    return ViolationKind::kImpactOutsideMap;
   }
   return ViolationKind::kNone;
 }
@@ -185,33 +249,20 @@ void RiskModel::Ewmm(const ImpactKernel& kernel, int ci, int cj, double* impact_
   const int side = kernel.Side();
   const int stride = kernel.Stride();
   const RiskMap& m = *map_;
-  // Rows are read `stride` cells wide (zero weights past the kernel), so the
-  // whole read must stay inside the padded layers.
-  const bool inside_padding = ci - hw >= -RiskMap::kPad && cj - hw >= -RiskMap::kPad &&
-                              ci - hw + stride <= m.nx() + RiskMap::kPad &&
-                              cj + hw < m.ny() + RiskMap::kPad;
-  if (inside_padding) {
-    const int64_t first = m.PaddedIndex(ci - hw, cj - hw);
-    kEwmmRows(kernel.weights, side, stride, m.padded_density() + first, m.padded_shelter() + first,
-              m.padded_nx(), impact_factor, expected_shelter);
+  // Unknown ground: no sums (spec version 2). Locate never gives such a site.
+  if (ci - hw < 0 || cj - hw < 0 || ci + hw >= m.nx() || cj + hw >= m.ny()) {
+    RISKPLAN_DCHECK(false && "Ewmm of a window reaching past the map");
+    *impact_factor = std::numeric_limits<double>::quiet_NaN();
+    *expected_shelter = std::numeric_limits<double>::quiet_NaN();
     return;
   }
-  // Far outside the map (only with unusual parameters): read cell by cell, in
-  // the same lane order as the EWMM loops.
-  double acc_rho[kKernelLanes] = {};
-  double acc_shelter[kKernelLanes] = {};
-  for (int v = 0; v < side; ++v) {
-    for (int u = 0; u < stride; ++u) {
-      const int i = ci - hw + u;
-      const int j = cj - hw + v;
-      const double w = kernel.weights[v * stride + u];
-      const bool in = m.Contains(i, j);
-      acc_rho[u % kKernelLanes] += w * (in ? static_cast<double>(m.density(i, j)) : 0.0);
-      acc_shelter[u % kKernelLanes] += w * (in ? static_cast<double>(m.shelter(i, j)) : 10.0);
-    }
-  }
-  *impact_factor = ReduceLanes(acc_rho);
-  *expected_shelter = ReduceLanes(acc_shelter);
+  // Rows are read `stride` cells wide: the columns past the kernel's side
+  // have zero weights and fall on the layers' padding, which is finite. The
+  // padding holds no data that is ever weighed.
+  static_assert(RiskMap::kPad >= kKernelLanes - 1, "a row's zero-weight tail stays in the padding");
+  const int64_t first = m.PaddedIndex(ci - hw, cj - hw);
+  kEwmmRows(kernel.weights, side, stride, m.padded_density() + first, m.padded_shelter() + first,
+            m.padded_nx(), impact_factor, expected_shelter);
 }
 
 bool RiskModel::Locate(const Pose& q, KernelSite* site) const {
@@ -222,15 +273,25 @@ bool RiskModel::Locate(const Pose& q, KernelSite* site) const {
   }
   const double h = q.z - static_cast<double>(map_->terrain(i, j));
   if (!(h > 0.0)) return false;
+  *site = SiteOf(*map_, *table_, q, h);
+  return WindowInsideMap(*site);
+}
+
+ImpactReach RiskModel::Reach(double height_agl_m) const {
   const ImpactTable& t = *table_;
-  site->height_bin = t.HeightBinOf(h);
-  site->heading_bin = t.HeadingBinOf(q.theta);
-  const ImpactKernel& kernel = t.kernel(site->height_bin, site->heading_bin);
-  site->impact_i =
-      static_cast<int>(std::floor((q.x + kernel.offset_x_m - map_->x0()) / map_->res()));
-  site->impact_j =
-      static_cast<int>(std::floor((q.y + kernel.offset_y_m - map_->y0()) / map_->res()));
-  return true;
+  ImpactReach r;
+  r.height_bin = t.HeightBinOf(height_agl_m);
+  r.west_m = r.east_m = r.south_m = r.north_m = -std::numeric_limits<double>::infinity();
+  const double res = map_->res();
+  for (int k = 0; k < t.heading_bins(); ++k) {
+    const ImpactKernel& kernel = t.kernel(r.height_bin, k);
+    const double window = kernel.half_width * res;
+    r.west_m = std::max(r.west_m, window - kernel.offset_x_m);
+    r.east_m = std::max(r.east_m, window + kernel.offset_x_m);
+    r.south_m = std::max(r.south_m, window - kernel.offset_y_m);
+    r.north_m = std::max(r.north_m, window + kernel.offset_y_m);
+  }
+  return r;
 }
 
 ConfigurationRisk RiskModel::FromSums(const KernelSite& site, double impact_factor,

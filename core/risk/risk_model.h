@@ -23,11 +23,12 @@ namespace riskplan {
 // Why a configuration is not admissible, in the order the checks are made.
 enum class ViolationKind {
   kNone = 0,
-  kOutsideMap,         // (x, y) outside the grid, or not finite
+  kOutsideMap,         // (x, y) outside the grid, or x, y, z or theta not finite
   kNoFlyZone,          // cell is a no-fly cell
   kTerrainCollision,   // z <= T(cell)
   kBelowSafeAltitude,  // z < safe_alt(cell) (includes "no landing site reachable")
   kAboveMaxAltitude,   // z > T(cell) + max_agl
+  kImpactOutsideMap,   // the impact window reaches past the map (unknown ground)
 };
 
 // "OUTSIDE_MAP", "NO_FLY_ZONE", ...
@@ -42,7 +43,9 @@ struct ConfigurationRisk {
   double exposed_area_m2 = 0.0;       // A_exp
   int height_bin = 0;                 // b
   int heading_bin = 0;                // k
-  bool defined = false;               // false when q is outside the map or at/below the terrain
+  // False where the spec leaves M undefined: q outside the map or not finite,
+  // at or below the terrain, or its impact window reaching past the map.
+  bool defined = false;
 };
 
 // Where a configuration's risk comes from: M(q) depends on q only through its
@@ -51,8 +54,41 @@ struct ConfigurationRisk {
 struct KernelSite {
   int height_bin = 0;
   int heading_bin = 0;
-  int impact_i = 0;  // impact cell (may lie outside the map)
+  int impact_i = 0;  // impact cell; with its window, inside the map
   int impact_j = 0;
+};
+
+// How far the impact window of a configuration at one height above the
+// ground reaches, per side of the map, over every heading bin: a
+// configuration at (x, y) with that height has its window inside the map, for
+// every heading, when x - x0 >= west, (x0 + nx res) - x > east,
+// y - y0 >= south and (y0 + ny res) - y > north. In metres; negative when the
+// window never reaches that far back (a long fall with a small kernel).
+struct ImpactReach {
+  int height_bin = 0;
+  double west_m = 0.0;
+  double east_m = 0.0;
+  double south_m = 0.0;
+  double north_m = 0.0;
+  // The widest of the four: the band along every edge where M is undefined
+  // for some heading.
+  double Max() const;
+  // Cells of `map` whose centre is clear of the reach on every side: there a
+  // configuration at this height has a defined M for every heading.
+  int64_t CellsClear(const RiskMap& map) const;
+};
+
+// A conservative margin in whole cells: every configuration in cell (i, j),
+// at any height bin and heading the margin was taken over, has its window
+// inside the map when west <= i < nx - east and south <= j < ny - north.
+struct CellMargins {
+  int west = 0;
+  int east = 0;
+  int south = 0;
+  int north = 0;
+  bool Inside(int i, int j, int nx, int ny) const {
+    return i >= west && j >= south && i < nx - east && j < ny - north;
+  }
 };
 
 class RiskModel {
@@ -72,22 +108,42 @@ class RiskModel {
   const ModelParams& params() const { return params_; }
 
   // M(q) of spec section 3. Never fails: `defined` is false where the spec
-  // leaves M undefined (outside the map, h <= 0).
+  // leaves M undefined (outside the map or not finite, h <= 0, or the impact
+  // window reaching past the map).
   ConfigurationRisk Evaluate(const Pose& q) const;
 
-  // Steps 1-3 of spec section 3: false where M is undefined.
+  // Steps 1-3 of spec section 3 and the window rule of step 4: false where M
+  // is undefined. Every site it returns has its window inside the map.
   bool Locate(const Pose& q, KernelSite* site) const;
+  // True when the (2hw+1)^2 window of `site`'s kernel, centred on its impact
+  // cell, lies wholly inside the map (spec version 2, section 3 step 4).
+  bool WindowInsideMap(const KernelSite& site) const {
+    const int hw = table_->kernel(site.height_bin, site.heading_bin).half_width;
+    return site.impact_i >= hw && site.impact_j >= hw && site.impact_i < map_->nx() - hw &&
+           site.impact_j < map_->ny() - hw;
+  }
   // Steps 5-7 from the EWMM sums of step 4.
   ConfigurationRisk FromSums(const KernelSite& site, double impact_factor,
                              double expected_shelter) const;
 
-  // The EWMM sums alone, for a kernel centred on impact cell (ci, cj), which
-  // may lie outside the map (out-of-map cells read density 0, shelter 10).
+  // The EWMM sums alone, for a kernel centred on impact cell (ci, cj).
+  // REQUIRES: the window lies inside the map (a site from Locate). Where it
+  // does not, both sums are NaN: no number is made up for unknown ground.
   void Ewmm(const ImpactKernel& kernel, int ci, int cj, double* impact_factor,
             double* expected_shelter) const;
 
-  // Admissibility of one sample (spec section 6). Also reports the altitude
-  // limit that was broken (NaN when the kind has none).
+  // The reach of the impact window at `height_agl_m` above the ground (its
+  // height bin as spec step 2 rounds it), over every heading bin.
+  ImpactReach Reach(double height_agl_m) const;
+  // Whole-cell margins over every heading bin and every height bin a sample
+  // inside the flight band [min_agl, max_agl] can have: a cell outside them
+  // may hold an admissible configuration only if some height or heading
+  // keeps its window in; a cell inside them never breaks the window rule.
+  const CellMargins& band_margins() const { return band_margins_; }
+
+  // Admissibility of one sample (spec section 6), the rules in the spec's
+  // order, the impact window last. Also reports the altitude limit that was
+  // broken (NaN when the kind has none).
   ViolationKind CheckConfiguration(const Pose& q, double* limit_m = nullptr) const;
 
   // safe_alt(cell) with this model's glide layer and min_agl.
@@ -107,6 +163,7 @@ class RiskModel {
   // Points at the map's own layer or at own_glide_ below.
   const std::vector<double>* glide_ = nullptr;
   std::shared_ptr<const std::vector<double>> own_glide_;
+  CellMargins band_margins_;
 };
 
 }  // namespace riskplan

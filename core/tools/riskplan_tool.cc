@@ -258,6 +258,21 @@ int Info() {
   std::printf("landing sites   %zu\n", m.landing_sites().size());
   std::printf("provenance      %s\n", m.header().provenance.c_str());
   std::printf("memory          %.1f MiB\n", m.MemoryBytes() / 1048576.0);
+  // Spec version 2: where a fall's impact window reaches past the map, the
+  // risk is undefined and flight is not admissible. The flyable area is the
+  // map minus this reach at each height.
+  auto model = RiskModel::Create(*map, *params);
+  if (!model.ok()) return Fail(model.status());
+  const double total = static_cast<double>(m.nx()) * m.ny();
+  for (auto [agl, which] :
+       {std::pair{params->min_agl_m, "min_agl"}, {params->max_agl_m, "max_agl"}}) {
+    const ImpactReach r = (*model)->Reach(agl);
+    std::printf(
+        "impact reach    at %g m AGL (%s, height bin %d): %.1f m (west %.1f, east %.1f, south "
+        "%.1f, north %.1f m); window inside the map for every heading on %.1f %% of the map\n",
+        agl, which, r.height_bin, r.Max(), r.west_m, r.east_m, r.south_m, r.north_m,
+        100.0 * static_cast<double>(r.CellsClear(m)) / total);
+  }
   return 0;
 }
 

@@ -54,7 +54,9 @@ TEST(BoardAuditTest, CorrectSumsPassInBothFormats) {
   for (const NumberFormat& format : {NumberFormat::Board(), NumberFormat::Precise()}) {
     BoardScales scales;
     const std::vector<BoardSums> sums = CorrectBoard(model, configs, format, &scales);
-    ASSERT_GT(sums.size(), 2800u);
+    // Most are defined (the rest lie outside the map, under the terrain or
+    // with their impact windows past the map).
+    ASSERT_GT(sums.size(), 2500u);
     for (const BoardSums& b : sums) {
       ASSERT_TRUE(AuditBoardSums(model, b.site, scales, b.impact, b.shelter).ok())
           << format.Name() << " cell " << b.site.impact_i << ", " << b.site.impact_j;

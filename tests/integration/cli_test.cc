@@ -123,7 +123,7 @@ TEST_F(CliTest, PlanShowsProgressAndWritesPictures) {
 TEST_F(CliTest, PlanWithoutSolutionExitsThree) {
   CommandResult r =
       Cli("plan --start=300,375,240,0.785 --goal=1700,1625,250,0.785 "
-          "--budget_ms=0 --iterations=1");
+          "--budget_ms=0 --iterations=1 --planner_params=guide_cell_m=0");
   EXPECT_EQ(r.exit_code, 3) << r.output;
   EXPECT_THAT(r.output, HasSubstr("NO_SOLUTION"));
 }

@@ -138,8 +138,11 @@ TEST_F(PlanStreamTest, MinimumIntervalSpacesUpdates) {
 }
 
 TEST_F(PlanStreamTest, NoSolutionIsANormalEnd) {
-  // One iteration cannot connect start and goal 2 km apart.
-  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(0, 1));
+  // One iteration cannot connect start and goal 2 km apart (without the
+  // guide route, which can: it is found before the first iteration).
+  v1::PlanRequest request = SmallCityPlan(0, 1);
+  (*request.mutable_planner_params())["guide_cell_m"] = 0.0;
+  PlanOutcome plan = RunPlan(*client_, request);
   ASSERT_TRUE(plan.status.ok()) << plan.status.error_message();
   ASSERT_EQ(plan.updates.size(), 1u);
   EXPECT_TRUE(plan.updates[0].final());

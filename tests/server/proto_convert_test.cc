@@ -293,13 +293,21 @@ TEST(FeasibilityCacheTest, CachesPerModelAndOptionsWithLruBound) {
   EXPECT_EQ(cache.stats().evictions, 1u);
   EXPECT_EQ(cache.stats().cached, 2u);
 
-  // An evicted checker stays usable by whoever holds it, and keeps its model.
-  model_a.reset();
+  // An evicted checker stays usable by whoever holds it, keeps its model and
+  // answers as a fresh one. (On this 100 x 60 m map every cell is within the
+  // margin where a fall's impact window may reach past the map, so both
+  // paths are infeasible: the first for that, the second under the terrain.)
   const Point3 path[] = {{1010.0, 2010.0, 150.0}, {1080.0, 2040.0, 150.0}};
-  EXPECT_TRUE(other_model->checker.CheckPath(path).feasible);
-  EXPECT_FALSE(other_model->checker
-                   .CheckPath(std::vector<Point3>{{1010.0, 2010.0, 150.0}, {1080.0, 2040.0, 90.0}})
-                   .feasible);
+  const Point3 low[] = {{1010.0, 2010.0, 150.0}, {1080.0, 2040.0, 90.0}};
+  const FeasibilityResult fresh = TwoTierFeasibility(*model_a, defaults).CheckPath(path);
+  EXPECT_EQ(fresh.kind, ViolationKind::kImpactOutsideMap);
+  model_a.reset();
+  const FeasibilityResult kept = other_model->checker.CheckPath(path);
+  EXPECT_FALSE(kept.feasible);
+  EXPECT_EQ(kept.kind, fresh.kind);
+  EXPECT_EQ(kept.cell_i, fresh.cell_i);
+  EXPECT_EQ(kept.cell_j, fresh.cell_j);
+  EXPECT_FALSE(other_model->checker.CheckPath(low).feasible);
 }
 
 }  // namespace

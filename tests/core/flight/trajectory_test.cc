@@ -106,13 +106,29 @@ TEST_F(TrajectoryTest, FirstViolationHasKindPositionAndArcLength) {
 }
 
 TEST_F(TrajectoryTest, EndpointOutsideMapIsAViolation) {
-  auto pieces = PiecesFromPolyline(std::vector<Point3>{{1000, 1000, 200}, {2000, 1000, 200}});
-  ASSERT_TRUE(pieces.ok());
-  auto eval = EvaluateTrajectory(*model_, *pieces);
+  // Flying in from the border: the start (x = 2000) is outside.
+  auto in = PiecesFromPolyline(std::vector<Point3>{{2000, 1000, 200}, {1000, 1000, 200}});
+  ASSERT_TRUE(in.ok());
+  auto eval = EvaluateTrajectory(*model_, *in);
   ASSERT_TRUE(eval.ok());
   EXPECT_FALSE(eval->admissible);
   EXPECT_EQ(eval->first_violation->kind, ViolationKind::kOutsideMap);
-  EXPECT_NEAR(eval->first_violation->arc_length_m, 1000.0, 1e-9);  // x = 2000 is the border
+  EXPECT_EQ(eval->first_violation->arc_length_m, 0.0);
+  // Flying out to it: well before the border, a fall's impact window reaches
+  // past the map (spec version 2), so that is the first violation.
+  auto out = PiecesFromPolyline(std::vector<Point3>{{1000, 1000, 200}, {2000, 1000, 200}});
+  ASSERT_TRUE(out.ok());
+  eval = EvaluateTrajectory(*model_, *out);
+  ASSERT_TRUE(eval.ok());
+  EXPECT_FALSE(eval->admissible);
+  EXPECT_EQ(eval->first_violation->kind, ViolationKind::kImpactOutsideMap);
+  EXPECT_GT(eval->first_violation->arc_length_m, 800.0);
+  EXPECT_LT(eval->first_violation->arc_length_m, 1000.0);
+  EXPECT_TRUE(std::isnan(eval->first_violation->limit_m));
+  EXPECT_NE(eval->first_violation->ToString().find("IMPACT_OUTSIDE_MAP"), std::string::npos);
+  // The sample just before it is defined, and the one reported is not.
+  const Pose& q = eval->first_violation->pose;
+  EXPECT_FALSE(model_->Evaluate(q).defined);
 }
 
 TEST_F(TrajectoryTest, BadInputIsRefusedWithIndexAndValue) {

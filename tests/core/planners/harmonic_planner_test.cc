@@ -204,14 +204,20 @@ TEST(HarmonicPlannerTest, ObstacleAddedBeforeConvergenceIsAvoided) {
 // ends. The goal's potential decays steeply along it; the planner converges
 // (SOR, then Gauss-Seidel), descends and flies it.
 TEST(HarmonicPlannerTest, SerpentineCorridorIsSolved) {
+  // The serpentine spans (150, 200) to (1150, 1600) of a map with 150-200 m
+  // of open ground around it: the planners keep a fall's impact window inside
+  // the map, with whole-cell margins up to 150 m wide here.
   const auto model =
-      testing_maps::SyntheticModel("serpentine", 100, 140, 10.0, [](double x, double y) {
+      testing_maps::SyntheticModel("serpentine", 130, 180, 10.0, [](double x0, double y0) {
+        const double x = x0 - 150.0;
+        const double y = y0 - 200.0;
+        if (y < 0.0 || y >= 1400.0) return false;
         const int period = static_cast<int>(y / 300.0);
         if (y - 300.0 * period < 200.0) return false;
         return period % 2 == 0 ? x < 750.0 : x > 250.0;
       });
-  const Pose start{150.0, 1300.0, kFlightZM, 0.0};
-  const Pose goal{150.0, 100.0, kFlightZM, kPi};
+  const Pose start{300.0, 1500.0, kFlightZM, 0.0};
+  const Pose goal{300.0, 300.0, kFlightZM, kPi};
   const Outcome out = RunPlan(kHarmonic, model, start, goal, 200000, 1);
   ExpectSoundStream(*model, start, goal, out);
   EXPECT_EQ(out.result->reason, StopReason::kConverged);

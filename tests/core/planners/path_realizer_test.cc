@@ -79,10 +79,11 @@ TEST(PathRealizerTest, CheckerCountsSamplesAndChords) {
   const auto model = testing_maps::SyntheticModel("open", 100, 100, 10.0, nullptr);
   const ObstaclePointSet points({{500.0, 505.0}}, 20.0);
   const TrajectoryChecker checker(*model, &points, 20.0, {{700.0, 400.0, 720.0, 600.0}});
-  const Pose a{100.0, 500.0, kFlightZM, 0.0};
-  const Pose b{900.0, 500.0, kFlightZM, 0.0};
+  // Clear of the edges, where a fall's impact window would reach past the map.
+  const Pose a{250.0, 500.0, kFlightZM, 0.0};
+  const Pose b{850.0, 500.0, kFlightZM, 0.0};
   const TrajectoryPiece piece = TrajectoryPiece::Manoeuvre(a, b, 50.0, 0.15);
-  // 160 samples 5 m apart: chords within 20 m of the point (about 8) and
+  // 120 samples 5 m apart: chords within 20 m of the point (about 8) and
   // crossing the 20 m wide area (about 5).
   const int violations = checker.Violations(piece, /*first_only=*/false);
   EXPECT_GE(violations, 10);
@@ -90,7 +91,7 @@ TEST(PathRealizerTest, CheckerCountsSamplesAndChords) {
   EXPECT_EQ(checker.Violations(piece, /*first_only=*/true), 1);
   const TrajectoryChecker plain(*model, nullptr, 0.0);
   EXPECT_EQ(plain.Violations(piece, /*first_only=*/false), 0);
-  const Pose high{900.0, 500.0, 400.0, 0.0};
+  const Pose high{850.0, 500.0, 400.0, 0.0};
   EXPECT_GT(plain.Violations(std::vector<Pose>{a, high}, /*first_only=*/false), 0);
 }
 

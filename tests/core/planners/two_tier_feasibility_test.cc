@@ -147,13 +147,15 @@ TEST(TwoTierFeasibilityTest, CoarseTierIsConservative) {
 }
 
 TEST(TwoTierFeasibilityTest, ReportsWhichTierAndSegmentFoundTheCollision) {
-  const auto model = SyntheticModel("spike", 64, 64, 10.0, [](double x, double y) {
-    return x > 400.0 && x < 420.0 && y > 400.0 && y < 420.0;  // no-fly
+  // 1 km square; routes keep 250 m from the edges, beyond the margins where a
+  // fall's impact window may reach past the map.
+  const auto model = SyntheticModel("spike", 100, 100, 10.0, [](double x, double y) {
+    return x > 600.0 && x < 620.0 && y > 600.0 && y < 620.0;  // no-fly
   });
   const TwoTierFeasibility checker(*model, {CollisionRule::kFlightBand, 2});
   // Segments 0 and 1 clear; segment 2 crosses the no-fly square.
   std::vector<Point3> path = {
-      {50.0, 50.0, 190.0}, {50.0, 300.0, 190.0}, {300.0, 300.0, 190.0}, {500.0, 500.0, 190.0}};
+      {250.0, 250.0, 190.0}, {250.0, 500.0, 190.0}, {500.0, 500.0, 190.0}, {700.0, 700.0, 190.0}};
   FeasibilityResult r = checker.CheckPath(path);
   EXPECT_FALSE(r.feasible);
   EXPECT_EQ(r.tier, FeasibilityTier::kCoarse);
@@ -161,20 +163,26 @@ TEST(TwoTierFeasibilityTest, ReportsWhichTierAndSegmentFoundTheCollision) {
   EXPECT_EQ(r.kind, ViolationKind::kBelowSafeAltitude);  // the block's pooled floor
   EXPECT_GT(r.cells_checked, 50);
   // The same square crossed by the first segment: the detailed tier, exactly.
-  path = {{300.0, 300.0, 190.0}, {500.0, 500.0, 190.0}};
+  path = {{500.0, 500.0, 190.0}, {700.0, 700.0, 190.0}};
   r = checker.CheckPath(path);
   EXPECT_EQ(r.tier, FeasibilityTier::kDetailed);
   EXPECT_EQ(r.segment, 0);
   EXPECT_EQ(r.kind, ViolationKind::kNoFlyZone);
-  EXPECT_EQ(r.cell_i, 40);
-  EXPECT_EQ(r.cell_j, 40);
+  EXPECT_EQ(r.cell_i, 60);
+  EXPECT_EQ(r.cell_j, 60);
   // Too high, and outside the map.
-  r = checker.CheckPath(std::vector<Point3>{{50.0, 50.0, 190.0}, {100.0, 50.0, 260.0}});
+  r = checker.CheckPath(std::vector<Point3>{{250.0, 250.0, 190.0}, {300.0, 250.0, 260.0}});
   EXPECT_EQ(r.kind, ViolationKind::kAboveMaxAltitude);
-  r = checker.CheckPath(std::vector<Point3>{{50.0, 50.0, 190.0}, {-10.0, 50.0, 190.0}});
+  r = checker.CheckPath(std::vector<Point3>{{250.0, 250.0, 190.0}, {-10.0, 250.0, 190.0}});
   EXPECT_EQ(r.kind, ViolationKind::kOutsideMap);
+  // Towards the west edge: the margin where an impact window may reach past
+  // the map, in whole cells, before the edge itself.
+  r = checker.CheckPath(std::vector<Point3>{{250.0, 250.0, 190.0}, {5.0, 250.0, 190.0}});
+  EXPECT_EQ(r.tier, FeasibilityTier::kDetailed);
+  EXPECT_EQ(r.kind, ViolationKind::kImpactOutsideMap);
+  EXPECT_EQ(r.cell_i, model->band_margins().west - 1);
   // Counting every colliding cell.
-  path = {{300.0, 410.0, 190.0}, {500.0, 410.0, 190.0}};
+  path = {{500.0, 610.0, 190.0}, {700.0, 610.0, 190.0}};
   EXPECT_EQ(checker.CheckPath(path, /*count_all=*/true).colliding_cells, 2);
   EXPECT_EQ(checker.CheckPath(path).colliding_cells, 1);
 }

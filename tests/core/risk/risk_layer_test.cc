@@ -15,7 +15,7 @@ namespace {
 // origin away from (0, 0) and sides that no stride above 1 divides, so that a
 // value computed anywhere but at its cell's centre, or a raster origin or cell
 // size that does not match, shows.
-std::shared_ptr<const RiskMap> IrregularMap(int nx = 41, int ny = 27, float high_terrain = 0.0f) {
+std::shared_ptr<const RiskMap> IrregularMap(int nx = 101, int ny = 89, float high_terrain = 0.0f) {
   MapHeader header;
   header.name = "irregular";
   header.x0 = -250.0;
@@ -50,6 +50,12 @@ double DirectRisk(const RiskModel& model, double x, double y, double height_agl_
   return cr.defined ? cr.risk : std::nan("");
 }
 
+// Equal, or both NaN (NODATA).
+::testing::AssertionResult SameValue(double a, double b) {
+  if (a == b || (std::isnan(a) && std::isnan(b))) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << a << " vs " << b;
+}
+
 TEST(RiskLayerTest, EveryCellIsTheConfigurationRiskAtItsCentre) {
   auto map = MakeDemoCity({.size_m = 1000.0, .res_m = 10.0});
   ASSERT_TRUE(map.ok()) << map.status();
@@ -60,14 +66,26 @@ TEST(RiskLayerTest, EveryCellIsTheConfigurationRiskAtItsCentre) {
   ASSERT_EQ(layer->nx, 100);
   ASSERT_EQ(layer->ny, 100);
   EXPECT_EQ(layer->evaluations, 10000);
+  int defined = 0;
+  int nodata = 0;
   for (int j = 0; j < 100; j += 7) {
     for (int i = 0; i < 100; i += 3) {
       const double x = (i + 0.5) * 10.0;
       const double y = (j + 0.5) * 10.0;
       const double z = (*map)->terrain(i, j) + 80.0;
-      EXPECT_EQ(layer->risk[j * 100 + i], (*model)->Evaluate(Pose{x, y, z, 1.0}).risk);
+      const ConfigurationRisk cr = (*model)->Evaluate(Pose{x, y, z, 1.0});
+      if (cr.defined) {
+        EXPECT_EQ(layer->risk[j * 100 + i], cr.risk);
+        ++defined;
+      } else {
+        // The impact window reaches past the map (spec version 2).
+        EXPECT_TRUE(std::isnan(layer->risk[j * 100 + i]));
+        ++nodata;
+      }
     }
   }
+  EXPECT_GT(defined, 200);
+  EXPECT_GT(nodata, 20);
 }
 
 TEST(RiskLayerTest, StridedCellsHoldTheRiskAtTheCentreOfTheirBlock) {
@@ -84,14 +102,15 @@ TEST(RiskLayerTest, StridedCellsHoldTheRiskAtTheCentreOfTheirBlock) {
         ComputeRiskLayer(**model, {.height_agl_m = 60.0, .heading_rad = theta, .stride = stride});
     ASSERT_TRUE(layer.ok()) << layer.status();
     // Whole blocks only: the raster never reaches past the map.
-    EXPECT_EQ(layer->nx, 41 / stride);
-    EXPECT_EQ(layer->ny, 27 / stride);
+    EXPECT_EQ(layer->nx, 101 / stride);
+    EXPECT_EQ(layer->ny, 89 / stride);
     EXPECT_EQ(layer->x0, -250.0);
     EXPECT_EQ(layer->y0, 130.0);
     EXPECT_EQ(layer->res_m, 5.0 * stride);
     EXPECT_LE(layer->x0 + layer->nx * layer->res_m, map->x0() + map->width_m());
     EXPECT_LE(layer->y0 + layer->ny * layer->res_m, map->y0() + map->height_m());
     EXPECT_EQ(layer->evaluations, int64_t{layer->nx} * layer->ny);
+    int finite = 0;
     for (int r = 0; r < layer->ny; ++r) {
       for (int c = 0; c < layer->nx; ++c) {
         // The centre of block (c, r), from the map's own geometry.
@@ -99,13 +118,18 @@ TEST(RiskLayerTest, StridedCellsHoldTheRiskAtTheCentreOfTheirBlock) {
         const double y = 130.0 + (r * stride + stride / 2.0) * 5.0;
         EXPECT_EQ(layer->centre_x(c), x);
         EXPECT_EQ(layer->centre_y(r), y);
-        ASSERT_EQ(layer->at(c, r), DirectRisk(**model, x, y, 60.0, theta)) << c << ", " << r;
+        ASSERT_TRUE(SameValue(layer->at(c, r), DirectRisk(**model, x, y, 60.0, theta)))
+            << c << ", " << r;
+        finite += std::isfinite(layer->at(c, r)) ? 1 : 0;
         if (stride % 2 == 1) {
           // An odd block's centre is the centre of its middle map cell.
-          EXPECT_EQ(layer->at(c, r), fine->at(c * stride + stride / 2, r * stride + stride / 2));
+          EXPECT_TRUE(SameValue(layer->at(c, r),
+                                fine->at(c * stride + stride / 2, r * stride + stride / 2)));
         }
       }
     }
+    // Most of the map is inside the reach at 60 m (about 90 m from the edge).
+    EXPECT_GT(finite, layer->nx * layer->ny / 3);
   }
 }
 
@@ -121,7 +145,10 @@ TEST(RiskLayerTest, MaxOverHeadingsIsTheLargestOfAllHeadingBins) {
   ASSERT_EQ(layer->nx, 20);
   EXPECT_EQ(layer->evaluations, 20 * 20 * 72);
   int cells_where_east_is_not_the_max = 0;
-  for (auto [c, r] : {std::pair{0, 0}, {3, 17}, {9, 10}, {10, 9}, {14, 4}, {19, 19}, {12, 12}}) {
+  // The corners are NODATA: at 120 m the window reaches about 125 m.
+  EXPECT_TRUE(std::isnan(layer->at(0, 0)));
+  EXPECT_TRUE(std::isnan(layer->at(19, 19)));
+  for (auto [c, r] : {std::pair{3, 3}, {3, 16}, {9, 10}, {10, 9}, {14, 4}, {16, 16}, {12, 12}}) {
     SCOPED_TRACE(::testing::Message() << c << ", " << r);
     const double x = layer->centre_x(c);
     const double y = layer->centre_y(r);
@@ -149,7 +176,10 @@ TEST(RiskLayerTest, ThreadsDoNotChangeTheResult) {
   auto one = ComputeRiskLayer(**model, {.heading_rad = std::nan(""), .threads = 1, .stride = 3});
   auto three = ComputeRiskLayer(**model, {.heading_rad = std::nan(""), .threads = 3, .stride = 3});
   ASSERT_TRUE(one.ok() && three.ok());
-  EXPECT_EQ(one->risk, three->risk);
+  ASSERT_EQ(one->risk.size(), three->risk.size());
+  for (size_t k = 0; k < one->risk.size(); ++k) {
+    ASSERT_TRUE(SameValue(one->risk[k], three->risk[k])) << k;
+  }
   EXPECT_EQ(one->nx, 33);
   EXPECT_EQ(one->evaluations, 33 * 33 * 72);
 }
@@ -157,23 +187,30 @@ TEST(RiskLayerTest, ThreadsDoNotChangeTheResult) {
 TEST(RiskLayerTest, UndefinedRiskIsNaNForOneHeadingAndForTheMaximum) {
   // 1e6 m + 1e-11 m rounds back to 1e6 m in double: h = 0 over the western
   // five columns, where the spec leaves M undefined; elsewhere h = 1e-11 m > 0.
-  auto map = IrregularMap(20, 10, 1.0e6f);
+  auto map = IrregularMap(40, 30, 1.0e6f);
   ASSERT_NE(map, nullptr);
   auto model = RiskModel::Create(map, ModelParams{});
   ASSERT_TRUE(model.ok());
+  // The lowest height bin's window, and so the NODATA band along the edges,
+  // reaches less than 10 cells (50 m).
+  const ImpactReach reach = (*model)->Reach(1e-11);
+  ASSERT_LT(reach.Max(), 10 * 5.0);
   for (double heading : {0.7, std::nan("")}) {
     SCOPED_TRACE(heading);
     auto layer = ComputeRiskLayer(**model, {.height_agl_m = 1e-11, .heading_rad = heading});
     ASSERT_TRUE(layer.ok()) << layer.status();
+    int finite = 0;
     for (int r = 0; r < layer->ny; ++r) {
       for (int c = 0; c < layer->nx; ++c) {
         if (c < 5) {
           EXPECT_TRUE(std::isnan(layer->at(c, r))) << c << ", " << r << ": " << layer->at(c, r);
-        } else {
+        } else if (c >= 10 && c < 30 && r >= 10 && r < 20) {
           EXPECT_TRUE(std::isfinite(layer->at(c, r))) << c << ", " << r;
+          ++finite;
         }
       }
     }
+    EXPECT_EQ(finite, 20 * 10);
   }
 }
 

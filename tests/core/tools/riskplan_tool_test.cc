@@ -221,9 +221,9 @@ TEST_F(RiskplanToolTest, BadInputGetsAClearErrorAndExitCode2) {
 TEST_F(RiskplanToolTest, RiskLayerGridAndProjectionPutEveryValueWhereItWasComputed) {
   const std::string prefix = *dir_ + "/geo-layer";
   const Output out = RunTool("risk-layer --map=" + *dir_ + "/geo --out=" + prefix +
-                             " --agl_m=90 --heading_deg=30 --stride=2 --threads=2");
+                             " --agl_m=30 --heading_deg=30 --stride=2 --threads=2");
   ASSERT_EQ(out.exit_code, 0) << out.text;
-  EXPECT_THAT(out.text, HasSubstr("15 x 10 cells of 20 m at 90 m AGL, heading 30 deg"));
+  EXPECT_THAT(out.text, HasSubstr("15 x 10 cells of 20 m at 30 m AGL, heading 30 deg"));
   EXPECT_THAT(out.text, HasSubstr("wrote " + prefix + ".png, " + prefix + ".asc and " + prefix +
                                   ".prj (azimuthal equidistant on WGS84 centred at 50.0875, "
                                   "14.4213 deg = map point (1000, -500) m"));
@@ -242,20 +242,28 @@ TEST_F(RiskplanToolTest, RiskLayerGridAndProjectionPutEveryValueWhereItWasComput
   auto model = RiskModel::Create(*map, ModelParams{});
   ASSERT_TRUE(model.ok());
   const double theta = 30.0 * kPi / 180.0;
+  // On this 300 x 200 m map the impact window at 30 m reaches past the map
+  // (NODATA) everywhere but in the middle (spec version 2).
   int positive = 0;
-  for (auto [c, r] : {std::pair{0, 0}, {2, 9}, {7, 4}, {8, 5}, {11, 1}, {14, 9}, {14, 0}}) {
+  int nodata = 0;
+  for (auto [c, r] : {std::pair{0, 0}, {2, 9}, {7, 4}, {8, 5}, {6, 5}, {11, 1}, {14, 9}, {14, 0}}) {
     const double x = grid.header.at("xllcorner") + (c + 0.5) * grid.header.at("cellsize");
     const double y = grid.header.at("yllcorner") + (r + 0.5) * grid.header.at("cellsize");
     int i = 0;
     int j = 0;
     ASSERT_TRUE((*map)->CellOf(x, y, &i, &j));
     const ConfigurationRisk cr =
-        (*model)->Evaluate(Pose{x, y, (*map)->terrain(i, j) + 90.0, theta});
-    ASSERT_TRUE(cr.defined);
+        (*model)->Evaluate(Pose{x, y, (*map)->terrain(i, j) + 30.0, theta});
+    if (!cr.defined) {
+      EXPECT_EQ(grid.rows[r][c], -9999.0) << c << ", " << r;
+      ++nodata;
+      continue;
+    }
     EXPECT_NEAR(grid.rows[r][c], cr.risk, 1e-8 * cr.risk) << c << ", " << r;
     positive += cr.risk > 0.0;
   }
-  EXPECT_GE(positive, 4);
+  EXPECT_GE(positive, 2);
+  EXPECT_GE(nodata, 4);
 
   const std::string wkt = ReadFile(prefix + ".prj");
   EXPECT_THAT(wkt, HasSubstr("PROJCS[\"riskplan_geo-test_local_AEQD\",GEOGCS[\"GCS_WGS_1984\","
@@ -307,12 +315,25 @@ TEST_F(RiskplanToolTest, RiskLayerMarksUndefinedRiskAsNodataAndGrey) {
   const std::vector<png_byte> rgb = ReadPngRgb(prefix + ".png", &width, &height);
   ASSERT_EQ(width, 30);
   ASSERT_EQ(height, 20);
+  // The band along the edges where the impact window reaches past the map
+  // (spec version 2) is NODATA too.
+  auto map = LoadMapBundle(*dir_ + "/geo");
+  ASSERT_TRUE(map.ok()) << map.status();
+  auto model = RiskModel::Create(*map, ModelParams{});
+  ASSERT_TRUE(model.ok());
+  const ImpactReach reach = (*model)->Reach(1e-11);
   int zero = 0;
+  int band = 0;
   for (int r = 0; r < 20; ++r) {
     for (int c = 0; c < 30; ++c) {
       const png_byte* px = &rgb[((19 - r) * 30 + c) * 3];  // north row first
       const bool grey = px[0] == 128 && px[1] == 128 && px[2] == 128;
-      if (c < 5) {
+      const double dx = (c + 0.5) * 10.0;
+      const double dy = (r + 0.5) * 10.0;
+      const bool clear = dx >= reach.west_m && 300.0 - dx > reach.east_m && dy >= reach.south_m &&
+                         200.0 - dy > reach.north_m;
+      if (c < 5 || !clear) {
+        band += c >= 5 ? 1 : 0;
         EXPECT_EQ(grid.rows[r][c], -9999.0) << c << ", " << r;
         EXPECT_TRUE(grey) << c << ", " << r;
       } else {
@@ -326,6 +347,7 @@ TEST_F(RiskplanToolTest, RiskLayerMarksUndefinedRiskAsNodataAndGrey) {
     }
   }
   EXPECT_GT(zero, 0);
+  EXPECT_GT(band, 50);
 }
 
 TEST_F(RiskplanToolTest, RiskLayerRefusesBadOptionsAndABadGeoReference) {

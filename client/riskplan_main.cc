@@ -117,7 +117,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "--budget_ms=5000 --picture=plan.svg",
        join(join({"server", "map", "timeout_ms"}, planning),
             {"params", "picture", "picture_size", "trajectory_out"})},
-      {"load", "load test: --rpc=eval|plan|ping, --mode=closed|open, --ceiling, --report_json",
+      {"load", "load test of one RPC (eval, plan or ping), closed or open loop",
        "  riskplan load [--rpc=eval|plan|ping] [--mode=closed|open] [flags]\n"
        "\n"
        "--rpc=eval sends the trajectory of eval's flags, --rpc=plan the plan of plan's.\n"

@@ -92,6 +92,18 @@ void AppendWrapped(std::string* out, absl::string_view text, size_t indent) {
   }
 }
 
+// A program's own text (usage, footer): its prose lines wrapped, its
+// indented lines (synopses, examples) kept as they are, to be copied.
+void AppendText(std::string* out, absl::string_view text) {
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    if (absl::StartsWith(line, " ") || line.size() <= kLineWidth) {
+      absl::StrAppend(out, line, "\n");
+    } else {
+      AppendWrapped(out, line, 0);
+    }
+  }
+}
+
 // "  --name=DEFAULT" and the help text under it. An empty default, or one
 // with spaces, is quoted so that the line can be copied as it is.
 void AppendFlag(std::string* out, const absl::CommandLineFlag& flag, absl::string_view text) {
@@ -168,13 +180,14 @@ std::optional<HelpRequest> FindHelpRequest(int argc, char* const* argv, const Pr
 }
 
 std::string ProgramHelpText(const ProgramHelp& help, bool full) {
-  std::string out = absl::StrCat(help.program, ": ", help.usage, "\n");
+  std::string out;
+  AppendText(&out, absl::StrCat(help.program, ": ", help.usage));
   if (!help.commands.empty()) AppendCommands(&out, help);
   out += "\nFlags (each with its default):\n";
   for (const absl::CommandLineFlag* flag : RegisteredFlags(/*abseil=*/false)) {
     AppendFlag(&out, *flag, flag->Help());
   }
-  if (!help.footer.empty()) absl::StrAppend(&out, "\n", help.footer, "\n");
+  if (!help.footer.empty()) AppendText(&out, absl::StrCat("\n", help.footer));
   if (full) {
     out += "\nFlags of the command-line parser (Abseil):\n";
     for (const absl::CommandLineFlag* flag : RegisteredFlags(/*abseil=*/true)) {
@@ -185,7 +198,8 @@ std::string ProgramHelpText(const ProgramHelp& help, bool full) {
 }
 
 std::string BriefHelpText(const ProgramHelp& help) {
-  std::string out = absl::StrCat(help.program, ": ", help.usage, "\n");
+  std::string out;
+  AppendText(&out, absl::StrCat(help.program, ": ", help.usage));
   if (!help.commands.empty()) AppendCommands(&out, help);
   absl::StrAppend(&out, "\n`", help.program, " --help` lists every flag.\n");
   return out;
@@ -197,8 +211,9 @@ absl::StatusOr<std::string> CommandHelpText(const ProgramHelp& help, absl::strin
     return absl::NotFoundError(
         absl::StrCat("unknown command '", command, "'; the commands are ", CommandNames(help)));
   }
-  std::string out = absl::StrCat(help.program, " ", c->name, ": ", c->summary, "\n");
-  if (!c->usage.empty()) absl::StrAppend(&out, "\n", c->usage, "\n");
+  std::string out;
+  AppendText(&out, absl::StrCat(help.program, " ", c->name, ": ", c->summary));
+  if (!c->usage.empty()) AppendText(&out, absl::StrCat("\n", c->usage));
   out += "\nFlags (each with its default):\n";
   for (const std::string& name : c->flags) {
     const absl::CommandLineFlag* flag = absl::FindCommandLineFlag(name);

@@ -34,7 +34,9 @@ struct CommandHelp {
   std::vector<std::string> flags;
 };
 
-// What a program's help says.
+// What a program's help says. In the program's own texts (usage, footer,
+// a command's summary and usage) a line longer than 80 columns is wrapped,
+// unless it is indented: synopses and examples are kept whole, to be copied.
 struct ProgramHelp {
   std::string program;  // as typed: "riskplan"
   std::string usage;    // what the program is and how to call it, first in every help

@@ -90,6 +90,19 @@ TEST(HelpTextTest, ProgramHelpListsCommandsAndEveryFlagWithItsDefault) {
   }
 }
 
+TEST(HelpTextTest, LongProseIsWrappedAndExamplesAreNot) {
+  ProgramHelp help = TestHelp();
+  const std::string example = "  prog plan --tree " + std::string(70, 'x');
+  help.usage =
+      "a test program whose description is long enough to run past the eightieth "
+      "column of a terminal.\n\n" +
+      example;
+  const std::string text = ProgramHelpText(help, /*full=*/false);
+  EXPECT_THAT(text, HasSubstr("prog: a test program whose description is long enough to run past "
+                              "the eightieth\ncolumn of a terminal.\n\n" +
+                              example + "\n"));
+}
+
 TEST(HelpTextTest, LinesAreWrappedAtEightyColumns) {
   const std::string text = ProgramHelpText(TestHelp(), /*full=*/false);
   for (absl::string_view line : absl::StrSplit(text, '\n')) EXPECT_LE(line.size(), 80u) << line;

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/match.h"
+#include "absl/strings/str_split.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/integration/server_process.h"
@@ -37,6 +39,16 @@ void ExpectNoBuildPaths(const std::string& output, const std::string& what) {
   EXPECT_THAT(output, Not(HasSubstr(RISKPLAN_BIN_DIR))) << what;
 }
 
+// Prose fits a terminal; only indented lines (synopses, examples) may be
+// longer, to be copied whole.
+void ExpectProseWithinEightyColumns(const std::string& output, const std::string& what) {
+  for (absl::string_view line : absl::StrSplit(output, '\n')) {
+    if (!absl::StartsWith(line, " ")) {
+      EXPECT_LE(line.size(), 80u) << what << ": " << line;
+    }
+  }
+}
+
 // A flag as a help lists it: at the start of a line, with its default.
 std::string Listed(const std::string& flag) { return "\n  --" + flag + "="; }
 
@@ -51,6 +63,7 @@ void ExpectHelp(const Program& p) {
       EXPECT_THAT(r.output, HasSubstr("\n  " + c.name + " ")) << what;
     }
     ExpectNoBuildPaths(r.output, what);
+    ExpectProseWithinEightyColumns(r.output, what);
   }
   for (const Command& c : p.commands) {
     const std::string what = p.name + " " + c.name + " --help";
@@ -62,6 +75,7 @@ void ExpectHelp(const Program& p) {
       EXPECT_THAT(r.output, Not(HasSubstr(Listed(flag)))) << what;
     }
     ExpectNoBuildPaths(r.output, what);
+    ExpectProseWithinEightyColumns(r.output, what);
     // The same help three ways.
     EXPECT_EQ(RunProgram(p.name + " help " + c.name).output, r.output) << what;
     EXPECT_EQ(RunProgram(p.name + " --help " + c.name).output, r.output) << what;

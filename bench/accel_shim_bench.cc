@@ -10,6 +10,7 @@
 // Latency is the wall time of one batch (Evaluate call); the machine is
 // shared, so compare side by side in one run and quote medians.
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -124,10 +125,25 @@ BENCHMARK(BM_ShimBatch)
 }  // namespace riskplan
 
 int main(int argc, char** argv) {
+  // --shim is taken out of argv, so that Google Benchmark, which answers
+  // --help (exit 0) with its own flags and refuses flags it does not know,
+  // sees only its own.
+  int kept = 1;
   for (int i = 1; i < argc; ++i) {
-    if (std::strncmp(argv[i], "--shim=", 7) == 0) riskplan::g_external_shim = argv[i] + 7;
+    if (std::strncmp(argv[i], "--shim=", 7) == 0) {
+      riskplan::g_external_shim = argv[i] + 7;
+    } else {
+      argv[kept++] = argv[i];
+    }
   }
-  benchmark::Initialize(&argc, argv);
+  argc = kept;
+  benchmark::Initialize(&argc, argv, [] {
+    benchmark::PrintDefaultHelp();
+    std::fprintf(stdout,
+                 "          [--shim=HOST:PORT] (a running riskplan-fpga-shim to measure instead "
+                 "of one in this process)\n");
+  });
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   return 0;
 }

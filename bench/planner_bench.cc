@@ -16,10 +16,9 @@
 #include <vector>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
-#include "absl/flags/usage.h"
 #include "absl/strings/str_split.h"
 #include "bench/scenarios.h"
+#include "cmdline/help.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
 
@@ -164,8 +163,9 @@ int Main() {
 }  // namespace riskplan
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(
-      "riskplan-bench-planner: anytime planner benchmark on demo-city scenarios");
-  absl::ParseCommandLine(argc, argv);
+  riskplan::cmdline::ParseCommandLine(
+      argc, argv,
+      {.program = "riskplan-bench-planner",
+       .usage = "anytime planner benchmark on the demo-city scenarios (docs/benchmarks.md)."});
   return riskplan::Main();
 }

@@ -18,10 +18,9 @@
 #include <vector>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
-#include "absl/flags/usage.h"
 #include "absl/strings/str_split.h"
 #include "bench/scenarios.h"
+#include "cmdline/help.h"
 #include "core/flight/trajectory.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
@@ -165,8 +164,9 @@ int Main() {
 }  // namespace riskplan
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(
-      "riskplan-bench-compare: every planner on the demo-city scenarios, same budget");
-  absl::ParseCommandLine(argc, argv);
+  riskplan::cmdline::ParseCommandLine(
+      argc, argv,
+      {.program = "riskplan-bench-compare",
+       .usage = "every planner on the demo-city scenarios, same budget (docs/benchmarks.md)."});
   return riskplan::Main();
 }

@@ -18,10 +18,14 @@
 #include <string>
 #include <vector>
 
+#include "absl/flags/flag.h"
 #include "bench/scenarios.h"
+#include "cmdline/help.h"
 #include "core/flight/trajectory.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
+
+ABSL_FLAG(bool, eval_only, false, "only the evaluations, no planner runs");
 
 namespace riskplan {
 namespace {
@@ -34,7 +38,7 @@ uint64_t Fnv(uint64_t h, double v) {
   }
   return h;
 }
-int Main(int argc, char** argv) {
+int Main() {
   auto map = MakeDemoCity();
   if (!map.ok()) return 1;
   auto model = RiskModel::Create(*map, ModelParams{});
@@ -49,7 +53,7 @@ int Main(int argc, char** argv) {
                         {"RRT", PlannerAlgorithm::kRrt, 3000},
                         {"GENETIC", PlannerAlgorithm::kGenetic, 30},
                         {"HARMONIC", PlannerAlgorithm::kHarmonic, 400}};
-  const bool only_eval = argc > 1 && std::string(argv[1]) == "--eval_only";
+  const bool only_eval = absl::GetFlag(FLAGS_eval_only);
   for (const auto& sc : scenarios) {
     // EvaluateTrajectory on the straight line and on the Dubins join.
     std::vector<Point3> line = {{sc.start.x, sc.start.y, sc.start.z},
@@ -103,4 +107,14 @@ int Main(int argc, char** argv) {
 }
 }  // namespace
 }  // namespace riskplan
-int main(int argc, char** argv) { return riskplan::Main(argc, argv); }
+int main(int argc, char** argv) {
+  riskplan::cmdline::ParseCommandLine(
+      argc, argv,
+      {.program = "riskplan-bench-fingerprint",
+       .usage = "every planner's final trajectory and EvaluateTrajectory on the demo-city "
+                "scenarios as exact bits, to diff before and after a change that must not "
+                "change them.\n"
+                "\n"
+                "  riskplan-bench-fingerprint [--eval_only] > fingerprint.txt"});
+  return riskplan::Main();
+}

@@ -24,13 +24,13 @@
 #include <vector>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_split.h"
 #include "accel/blobs.h"
 #include "accel/rtl/verilated_component.h"
 #include "accel/shim/mmio_device.h"
 #include "bench/demo_city_configs.h"
+#include "cmdline/help.h"
 #include "core/map/demo_city.h"
 #include "core/risk/risk_model.h"
 
@@ -135,6 +135,10 @@ int Main() {
 }  // namespace riskplan::accel
 
 int main(int argc, char** argv) {
-  absl::ParseCommandLine(argc, argv);
+  riskplan::cmdline::ParseCommandLine(
+      argc, argv,
+      {.program = "riskplan-bench-rtl",
+       .usage = "cycles per configuration risk of the verilated RTL by lane count "
+                "(docs/rtl.md)."});
   return riskplan::accel::Main();
 }

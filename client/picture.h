@@ -1,9 +1,13 @@
 // Pictures of a plan: the map's population density (log colour scale), its
 // no-fly zones and landing sites, the planner's tree, every improved
-// trajectory (older ones lighter), and the start and goal.
+// trajectory (older ones lighter), and the start and goal; a caption above
+// the map, and under it a legend (the density scale with its decades in
+// people per m², a key to every colour and marker, and a scale bar of a
+// round number of metres). client/picture_layout.h places each part.
 //
-// Written as SVG (the density raster embedded as a PNG, the trajectories as
-// vector paths) or as a plain PNG, chosen by the file name's extension.
+// Written as SVG (the density raster embedded as a PNG, the trajectories and
+// the legend as vector elements) or as a plain PNG (the legend's text in a
+// built-in bitmap font), chosen by the file name's extension.
 #ifndef RISKPLAN_CLIENT_PICTURE_H_
 #define RISKPLAN_CLIENT_PICTURE_H_
 
@@ -25,7 +29,7 @@ struct PictureInput {
   std::vector<v1::TreeEdge> tree;            // may be empty
   v1::Pose start;
   v1::Pose goal;
-  std::string caption;  // one line of text above the map (SVG only)
+  std::string caption;  // text above the map, word-wrapped to the picture's width
 };
 
 // An RGBA image, row 0 at the top.
@@ -43,7 +47,12 @@ absl::StatusOr<std::string> EncodePng(const RgbaImage& image);
 // REQUIRES: input.density holds nx * ny values (WritePicture checks it).
 RgbaImage RenderMapRaster(const PictureInput& input);
 
-// The SVG document.
+// The PNG picture: caption, map (one pixel per layer cell) with everything
+// drawn on it, and legend, where LayoutPicture(input) places them.
+// REQUIRES: input.density holds nx * ny values (WritePicture checks it).
+RgbaImage RenderPicture(const PictureInput& input);
+
+// The SVG document, laid out as RenderPicture's.
 // REQUIRES: input.density holds nx * ny values (WritePicture checks it).
 std::string RenderSvg(const PictureInput& input);
 

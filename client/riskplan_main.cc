@@ -1,6 +1,6 @@
 // riskplan: the command-line client of riskplan-server.
 //
-// Only flag parsing lives here. The commands (commands.h) take their options
+// Only flags and the help live here. The commands (commands.h) take their options
 // as a plain CliOptions struct, never reading flags themselves, so that they
 // carry no global state and could be driven from other code as well.
 #include <cstdio>
@@ -8,9 +8,8 @@
 #include <vector>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
-#include "absl/flags/usage.h"
 #include "client/commands.h"
+#include "cmdline/help.h"
 
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server address, HOST:PORT");
 ABSL_FLAG(std::string, map, "demo-city", "Map name (see `riskplan maps`)");
@@ -75,41 +74,79 @@ ABSL_FLAG(std::string, report_json, "", "load: also write the report as JSON to 
 
 namespace {
 
-constexpr char kUsage[] =
-    "the client of riskplan-server.\n"
-    "\n"
-    "  riskplan --server=HOST:PORT <command> [flags]\n"
-    "\n"
-    "Commands:\n"
-    "  maps   the server's maps\n"
-    "  eval   risk, length and admissibility of a trajectory\n"
-    "  plan   plan a trajectory, showing each improvement as it streams; --picture=F.svg\n"
-    "  load   load test: --rpc=eval|plan|ping, --mode=closed|open, --ceiling, --report_json\n"
-    "\n"
-    "Examples:\n"
-    "  riskplan maps\n"
-    "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'\n"
-    "  riskplan plan --start=1200,1500,250,0.785 --goal=6800,6500,250,0.785 "
-    "--budget_ms=5000 --picture=plan.svg\n"
-    "  riskplan load --rpc=eval --polyline='1000,1000,250;2000,1000,250' --concurrency=4 "
-    "--ceiling\n"
-    "\n"
-    "Exit codes: 0 success, 1 the RPC failed, 2 bad input, 3 plan found no trajectory.\n"
-    "Units: metres, metres above mean sea level, radians counter-clockwise from east.";
+// The help: every command with the flags it reads (cmdline/help.h checks
+// that each flag above is read by one at least).
+riskplan::cmdline::ProgramHelp Help() {
+  riskplan::cmdline::ProgramHelp help;
+  help.program = "riskplan";
+  help.usage =
+      "the client of riskplan-server.\n"
+      "\n"
+      "  riskplan --server=HOST:PORT COMMAND [flags]";
+  const std::vector<std::string> trajectory = {"waypoints", "polyline", "trajectory_file"};
+  const std::vector<std::string> two_tier = {"two_tier", "two_tier_rule",
+                                             "two_tier_detailed_segments", "two_tier_block_cells",
+                                             "two_tier_bresenham"};
+  const std::vector<std::string> planning = {
+      "start",          "goal",       "algorithm",
+      "budget_ms",      "iterations", "seed",
+      "planner_params", "obstacles",  "min_update_interval_ms",
+      "display_step_m", "tree"};
+  auto join = [](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  help.commands = {
+      {"maps", "the server's maps", "  riskplan maps [--json]", {"server", "timeout_ms", "json"}},
+      {"eval", "risk, length and admissibility of a trajectory",
+       "  riskplan eval (--waypoints=... | --polyline=... | --trajectory_file=F) [flags]\n"
+       "\n"
+       "Example:\n"
+       "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'",
+       join(join({"server", "map", "timeout_ms", "json"}, trajectory),
+            join({"samples", "params"}, two_tier))},
+      {"plan", "plan a trajectory, showing each improvement as it streams",
+       "  riskplan plan --start=X,Y,Z,THETA --goal=X,Y,Z,THETA [flags]\n"
+       "\n"
+       "--picture=F.svg or F.png draws the plan: population density, no-fly zones,\n"
+       "landing sites, every improvement and the final trajectory, with a legend and\n"
+       "a scale bar. Exit code 3: the plan ended without a trajectory.\n"
+       "\n"
+       "Example:\n"
+       "  riskplan plan --start=1200,1500,250,0.785 --goal=6800,6500,250,0.785 "
+       "--budget_ms=5000 --picture=plan.svg",
+       join(join({"server", "map", "timeout_ms"}, planning),
+            {"params", "picture", "picture_size", "trajectory_out"})},
+      {"load", "load test of one RPC (eval, plan or ping), closed or open loop",
+       "  riskplan load [--rpc=eval|plan|ping] [--mode=closed|open] [flags]\n"
+       "\n"
+       "--rpc=eval sends the trajectory of eval's flags, --rpc=plan the plan of plan's.\n"
+       "\n"
+       "Example:\n"
+       "  riskplan load --rpc=eval --polyline='1000,1000,250;2000,1000,250' --concurrency=4 "
+       "--ceiling",
+       join(join({"server", "map", "timeout_ms", "rpc", "mode", "concurrency", "rate", "duration_s",
+                  "max_outstanding", "ceiling", "report_json"},
+                 join(trajectory, join({"samples", "params"}, two_tier))),
+            planning)},
+  };
+  help.footer =
+      "Examples:\n"
+      "  riskplan maps\n"
+      "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'\n"
+      "  riskplan plan --start=1200,1500,250,0.785 --goal=6800,6500,250,0.785 "
+      "--budget_ms=5000 --picture=plan.svg\n"
+      "\n"
+      "Exit codes: 0 success; 1 the RPC failed, or a flag is unknown or malformed;\n"
+      "2 bad input; 3 plan found no trajectory.\n"
+      "Units: metres, metres above mean sea level, radians counter-clockwise from east.";
+  return help;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(kUsage);
-  std::vector<char*> positional = absl::ParseCommandLine(argc, argv);
-  // positional[0] is the program; exactly one command follows. Anything more
-  // is refused rather than ignored, as it is most likely a flag whose "--"
-  // or "=" went missing.
-  if (positional.size() != 2) {
-    std::fprintf(stderr, "riskplan: give one command (maps, eval, plan, load); see --help\n");
-    return 2;
-  }
-  const std::string command = positional[1];
+  const std::string command = riskplan::cmdline::ParseCommand(argc, argv, Help());
 
   riskplan::client::CliOptions o;
   o.server = absl::GetFlag(FLAGS_server);
@@ -156,7 +193,5 @@ int main(int argc, char** argv) {
   if (command == "maps") return riskplan::client::RunMaps(o, client);
   if (command == "eval") return riskplan::client::RunEval(o, client);
   if (command == "plan") return riskplan::client::RunPlan(o, client);
-  if (command == "load") return riskplan::client::RunLoad(o, client);
-  std::fprintf(stderr, "riskplan: unknown command '%s'; see --help\n", command.c_str());
-  return 2;
+  return riskplan::client::RunLoad(o, client);  // ParseCommand allows no other
 }

@@ -13,12 +13,8 @@
 #include <thread>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
-#include "absl/flags/usage.h"
-#include "absl/flags/usage_config.h"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
@@ -26,6 +22,7 @@
 #include "absl/time/time.h"
 #include "accel/engine_metrics.h"
 #include "accel/risk_engine.h"
+#include "cmdline/help.h"
 #include "core/planners/planner.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/grpcpp.h"
@@ -125,23 +122,24 @@ constexpr char kUsage[] =
     "grpc.health.v1.Health and server reflection. Prints\n"
     "'riskplan-server listening on HOST:PORT' on stdout once it serves. On SIGTERM or\n"
     "SIGINT it drains (see --grace_period_ms) and exits 0. Exit code 1: cannot start\n"
-    "(bad map bundle, address in use); 2: bad flags. See docs/api.md.";
+    "(bad map bundle, address in use) or a flag unknown or malformed; 2: a flag's value\n"
+    "out of range. See docs/api.md.";
 
-// kUsage, then each algorithm's planner parameters (PlanRequest.planner_params)
-// with their defaults and ranges, read from the planners themselves so the
-// help cannot fall behind them.
-std::string UsageMessage() {
-  std::string usage = kUsage;
-  usage += "\n\nPlanner parameters (PlanRequest.planner_params, `riskplan plan --planner_params`):";
+// Each algorithm's planner parameters (PlanRequest.planner_params) with
+// their defaults and ranges, read from the planners themselves so the help
+// cannot fall behind them.
+std::string PlannerParamsHelp() {
+  std::string text =
+      "Planner parameters (PlanRequest.planner_params, `riskplan plan --planner_params`):";
   for (PlannerAlgorithm algorithm : {PlannerAlgorithm::kRiskRrtStar, PlannerAlgorithm::kRrt,
                                      PlannerAlgorithm::kGenetic, PlannerAlgorithm::kHarmonic}) {
-    usage += absl::StrFormat("\n  %s:", PlannerAlgorithmName(algorithm));
+    text += absl::StrFormat("\n  %s:", PlannerAlgorithmName(algorithm));
     for (const PlannerParamInfo& p : PlannerParams(algorithm)) {
-      usage += absl::StrFormat("\n    %-20s default %g, range [%g, %g]: %s", p.name,
-                               p.default_value, p.min_value, p.max_value, p.help);
+      text += absl::StrFormat("\n    %-20s default %g, range [%g, %g]: %s", p.name, p.default_value,
+                              p.min_value, p.max_value, p.help);
     }
   }
-  return usage;
+  return text;
 }
 
 int Fail(int code, absl::string_view message) {
@@ -430,15 +428,10 @@ int Main() {
 }  // namespace riskplan::server
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(riskplan::server::UsageMessage());
-  // --help lists this file's flags (Abseil's default looks for a file named
-  // after the program).
-  absl::FlagsUsageConfig config;
-  config.contains_help_flags = [](absl::string_view file) {
-    return absl::StrContains(file, "server/server_main.cc");
-  };
-  config.contains_helpshort_flags = config.contains_help_flags;
-  absl::SetFlagsUsageConfig(config);
-  absl::ParseCommandLine(argc, argv);
+  riskplan::cmdline::ProgramHelp help;
+  help.program = "riskplan-server";
+  help.usage = riskplan::server::kUsage;
+  help.footer = riskplan::server::PlannerParamsHelp();
+  riskplan::cmdline::ParseCommandLine(argc, argv, help);
   return riskplan::server::Main();
 }

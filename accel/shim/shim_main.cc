@@ -28,10 +28,6 @@
 #include <utility>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
-#include "absl/flags/usage.h"
-#include "absl/flags/usage_config.h"
-#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "accel/shim/component_model.h"
 #include "accel/shim/component_regs.h"
@@ -39,6 +35,7 @@
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/register_bus.h"
 #include "accel/shim/shim_server.h"
+#include "cmdline/help.h"
 #ifdef RISKPLAN_HAVE_VERILATOR
 #include "accel/rtl/verilated_component.h"
 #endif
@@ -233,17 +230,19 @@ int Main() {
 }  // namespace riskplan::accel
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(
-      "the riskplan FPGA shim: serves the shim protocol for one board.\n"
-      "  riskplan-fpga-shim --listen=HOST:PORT --device=<model|mmio|verilator> ...");
-  // --help lists this file's flags (Abseil's default looks for a file named
-  // after the program).
-  absl::FlagsUsageConfig config;
-  config.contains_help_flags = [](absl::string_view file) {
-    return absl::StrContains(file, "shim/shim_main.cc");
-  };
-  config.contains_helpshort_flags = config.contains_help_flags;
-  absl::SetFlagsUsageConfig(config);
-  absl::ParseCommandLine(argc, argv);
+  riskplan::cmdline::ProgramHelp help;
+  help.program = "riskplan-fpga-shim";
+  help.usage =
+      "the daemon of an FPGA board (or of a model of one).\n"
+      "\n"
+      "Serves the shim protocol (docs/shim-protocol.md) to riskplan servers' FPGA workers.\n"
+      "\n"
+      "  riskplan-fpga-shim --listen=HOST:PORT --device=model [--format=board]\n"
+      "  riskplan-fpga-shim --device=mmio --mmio_device=/dev/mem --mmio_base=0xff200000\n"
+      "  riskplan-fpga-shim --device=verilator [--rtl_config=l8-board] [--report_clock_hz=50e6]";
+  help.footer =
+      "Prints 'riskplan-fpga-shim listening on HOST:PORT' once it listens; SIGTERM or SIGINT\n"
+      "stop it, and it then reports what the device did on stderr.";
+  riskplan::cmdline::ParseCommandLine(argc, argv, help);
   return riskplan::accel::Main();
 }

@@ -26,14 +26,13 @@
 #include <vector>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
-#include "absl/flags/usage.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "bench/ompl/ompl_runs.h"
 #include "bench/ompl/run_record.h"
 #include "bench/ompl/self_check.h"
 #include "bench/scenarios.h"
+#include "cmdline/help.h"
 #include "core/flight/trajectory.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
@@ -295,9 +294,10 @@ int Main() {
 }  // namespace riskplan::bench
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(
-      "riskplan-bench-ompl: RISK_RRT_STAR against OMPL's RRT*, Informed RRT* and BIT* on "
-      "demo-city");
-  absl::ParseCommandLine(argc, argv);
+  riskplan::cmdline::ParseCommandLine(
+      argc, argv,
+      {.program = "riskplan-bench-ompl",
+       .usage = "RISK_RRT_STAR against OMPL's RRT*, Informed RRT* and BIT* on demo-city "
+                "(docs/benchmarks.md)."});
   return riskplan::bench::Main();
 }

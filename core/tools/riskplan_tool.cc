@@ -1,11 +1,6 @@
-// riskplan-tool: offline access to riskplan's core (no server needed).
-//
-//   riskplan-tool evaluate [--map=DIR] (--waypoints=... | --polyline=... | --trajectory_file=F)
-//                          [--samples] [--json] [--params=name=value,...]
-//   riskplan-tool write-map --out=DIR [--seed=N] [--size_m=M] [--res_m=R]
-//   riskplan-tool info [--map=DIR]
-//   riskplan-tool risk-layer [--map=DIR] --out=PREFIX [--agl_m=100] [--heading_deg=0|max]
-//                            [--threads=N] [--stride=1]
+// riskplan-tool: offline access to riskplan's core (no server needed). Its
+// commands, their synopses and flags are in Help() below (`riskplan-tool
+// --help`, `riskplan-tool COMMAND --help`).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -14,13 +9,12 @@
 #include <vector>
 
 #include "absl/flags/flag.h"
-#include "absl/flags/parse.h"
-#include "absl/flags/usage.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
+#include "cmdline/help.h"
 #include "core/flight/trajectory.h"
 #include "core/flight/trajectory_io.h"
 #include "core/map/demo_city.h"
@@ -60,22 +54,48 @@ ABSL_FLAG(int, stride, 1,
 namespace riskplan {
 namespace {
 
-constexpr char kUsage[] =
-    "offline risk evaluation and map tools.\n"
-    "\n"
-    "Commands:\n"
-    "  evaluate   risk, length and admissibility of a trajectory on a map\n"
-    "  write-map  write the built-in demo-city as a map bundle (--out=DIR)\n"
-    "  info       describe a map\n"
-    "  risk-layer configuration risk of every cell at a height above ground, as a PNG\n"
-    "             heat map (PREFIX.png) and an ESRI ASCII grid (PREFIX.asc), plus its\n"
-    "             projection (PREFIX.prj) when the map has a geo-reference\n"
-    "\n"
-    "Examples:\n"
-    "  riskplan-tool evaluate --waypoints='1000,1000,250,0; 7000,7000,250,1.57'\n"
-    "  riskplan-tool evaluate --map=maps/demo-city --polyline='0,0,200;100,0,200' --samples\n"
-    "  riskplan-tool write-map --out=maps/demo-city\n"
-    "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2\n";
+// The help: every command with the flags it reads (cmdline/help.h checks
+// that each flag above is read by one at least).
+cmdline::ProgramHelp Help() {
+  cmdline::ProgramHelp help;
+  help.program = "riskplan-tool";
+  help.usage =
+      "offline risk evaluation and map tools (no server needed).\n"
+      "\n"
+      "  riskplan-tool COMMAND [flags]";
+  help.commands = {
+      {"evaluate",
+       "risk, length and admissibility of a trajectory on a map",
+       "  riskplan-tool evaluate [--map=DIR] (--waypoints=... | --polyline=... |\n"
+       "                         --trajectory_file=F) [--samples] [--json] [--params=...]\n"
+       "\n"
+       "Examples:\n"
+       "  riskplan-tool evaluate --waypoints='1000,1000,250,0; 7000,7000,250,1.57'\n"
+       "  riskplan-tool evaluate --map=maps/demo-city --polyline='0,0,200;100,0,200' --samples",
+       {"map", "waypoints", "polyline", "trajectory_file", "samples", "json", "params"}},
+      {"write-map",
+       "write the built-in demo-city as a map bundle (--out=DIR)",
+       "  riskplan-tool write-map --out=DIR [--seed=N] [--size_m=M] [--res_m=R]\n"
+       "\n"
+       "Example:\n"
+       "  riskplan-tool write-map --out=maps/demo-city",
+       {"out", "seed", "size_m", "res_m", "params"}},
+      {"info", "describe a map", "  riskplan-tool info [--map=DIR]", {"map", "params"}},
+      {"risk-layer",
+       "configuration risk of every cell at a height above ground",
+       "  riskplan-tool risk-layer [--map=DIR] --out=PREFIX [--agl_m=100] [--heading_deg=0|max]\n"
+       "                           [--threads=N] [--stride=1]\n"
+       "\n"
+       "Writes a PNG heat map (PREFIX.png) and an ESRI ASCII grid (PREFIX.asc), plus its\n"
+       "projection (PREFIX.prj) when the map has a geo-reference.\n"
+       "\n"
+       "Example:\n"
+       "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2",
+       {"map", "out", "agl_m", "heading_deg", "threads", "stride", "params"}},
+  };
+  help.footer = "Exit codes: 0 success; 1 failure, or a flag unknown or malformed; 2 bad input.";
+  return help;
+}
 
 int Fail(const absl::Status& status) {
   std::fprintf(stderr, "riskplan-tool: %s\n", std::string(status.message()).c_str());
@@ -356,18 +376,9 @@ int RiskLayerCommand() {
 }  // namespace riskplan
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage(riskplan::kUsage);
-  std::vector<char*> args = absl::ParseCommandLine(argc, argv);
-  if (args.size() != 2) {
-    std::fprintf(stderr, "%s\nriskplan-tool: give exactly one command (see --help)\n",
-                 riskplan::kUsage);
-    return 2;
-  }
-  const std::string command = args[1];
+  const std::string command = riskplan::cmdline::ParseCommand(argc, argv, riskplan::Help());
   if (command == "evaluate") return riskplan::Evaluate();
   if (command == "write-map") return riskplan::WriteMap();
   if (command == "info") return riskplan::Info();
-  if (command == "risk-layer") return riskplan::RiskLayerCommand();
-  std::fprintf(stderr, "riskplan-tool: unknown command '%s' (see --help)\n", command.c_str());
-  return 2;
+  return riskplan::RiskLayerCommand();  // ParseCommand allows no other
 }

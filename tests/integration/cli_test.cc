@@ -1,6 +1,9 @@
 // The `riskplan` CLI against the real server.
+#include <png.h>
+
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -43,6 +46,24 @@ class CliTest : public ::testing::Test {
   static ServerProcess* server_;
   static std::string* dir_;
 };
+
+// How many pixels of the PNG at `path` have colour (r, g, b); -1 when it
+// cannot be read.
+int CountPngPixels(const std::string& path, int r, int g, int b, int* width, int* height) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&image, path.c_str())) return -1;
+  image.format = PNG_FORMAT_RGBA;
+  std::vector<png_byte> pixels(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, pixels.data(), 0, nullptr)) return -1;
+  *width = static_cast<int>(image.width);
+  *height = static_cast<int>(image.height);
+  int n = 0;
+  for (size_t i = 0; i + 3 < pixels.size(); i += 4) {
+    n += pixels[i] == r && pixels[i + 1] == g && pixels[i + 2] == b;
+  }
+  return n;
+}
 
 ServerProcess* CliTest::server_ = nullptr;
 std::string* CliTest::dir_ = nullptr;
@@ -118,6 +139,17 @@ TEST_F(CliTest, PlanShowsProgressAndWritesPictures) {
           png);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(Read(png).substr(1, 3), "PNG");
+  // The 2 km map at 5 m is 400 x 400 pixels; the caption and the legend make
+  // the picture taller. The final trajectory is drawn in its dark blue, 3
+  // pixels wide over about 2 km (400 pixels), and the start and goal markers
+  // are there.
+  int width = 0, height = 0;
+  EXPECT_GT(CountPngPixels(png, 0, 40, 200, &width, &height), 3 * 300);
+  EXPECT_EQ(width, 400);
+  EXPECT_GT(height, 400 + 60);
+  EXPECT_GT(CountPngPixels(png, 0, 170, 70, &width, &height), 100);   // start
+  EXPECT_GT(CountPngPixels(png, 200, 0, 160, &width, &height), 100);  // goal
+  EXPECT_GT(CountPngPixels(png, 0, 0, 0, &width, &height), 40);       // the scale bar
 }
 
 TEST_F(CliTest, PlanWithoutSolutionExitsThree) {

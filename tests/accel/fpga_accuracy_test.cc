@@ -101,3 +101,71 @@ TEST(FpgaAccuracyTest, MmioBackendOnTheComponentModel) {
 
 }  // namespace
 }  // namespace riskplan::accel
+
+namespace riskplan::accel {
+namespace {
+
+// Spec version 2: a configuration whose impact window reaches past the map has
+// no risk. Whatever would compute its sums from padding (the exact CPU
+// kernel, the float32 path, a board through the shim with its quantised
+// out-of-map values), the engine reports it undefined, and one cell further
+// in it reports a number.
+TEST(UnknownGroundTest, NoPathReportsARiskForAWindowPastTheMap) {
+  const RiskModel& model = *SmallCity();
+  const RiskMap& map = model.map();
+  // A row of configurations heading west near the west edge, 1 m apart, at
+  // 60 m above the ground: the first ones see past the map, the others not.
+  std::vector<Pose> configs;
+  for (double x = 0.5; x < 200.0; x += 1.0) {
+    const double y = 1500.0;
+    int i = 0, j = 0;
+    ASSERT_TRUE(map.CellOf(x, y, &i, &j));
+    configs.push_back(Pose{x, y, map.terrain(i, j) + 60.0, kPi});
+  }
+  std::vector<bool> defined(configs.size());
+  size_t undefined = 0;
+  for (size_t n = 0; n < configs.size(); ++n) {
+    KernelSite site;
+    defined[n] = model.Locate(configs[n], &site);
+    undefined += defined[n] ? 0 : 1;
+    if (n > 0) {
+      ASSERT_LE(defined[n - 1], defined[n]) << "one boundary along the row";
+    }
+  }
+  ASSERT_GT(undefined, 20u);
+  ASSERT_LT(undefined, configs.size() - 20);
+
+  const auto check = [&](RiskEngine& engine, const char* which) {
+    SCOPED_TRACE(which);
+    std::vector<ConfigurationRisk> out(configs.size());
+    for (ConfigurationRisk& r : out) r.risk = -1.0;  // sentinel
+    ASSERT_TRUE(engine.Evaluate(model, configs, out).ok());
+    for (size_t n = 0; n < configs.size(); ++n) {
+      ASSERT_EQ(out[n].defined, defined[n]) << "configuration " << n;
+      if (defined[n]) {
+        EXPECT_TRUE(std::isfinite(out[n].risk) && out[n].risk >= 0.0) << n;
+      } else {
+        EXPECT_EQ(out[n].risk, 0.0) << n;  // ConfigurationRisk{}: no number
+      }
+    }
+  };
+  for (KernelPrecision precision : {KernelPrecision::kExact, KernelPrecision::kFloat32}) {
+    RiskEngineOptions options;
+    options.cpu_workers = 1;
+    options.kernel.precision = precision;
+    auto engine = RiskEngine::Create(options);
+    ASSERT_TRUE(engine.ok()) << engine.status();
+    check(**engine, precision == KernelPrecision::kExact ? "exact" : "float32");
+  }
+  auto shim = ShimProcess::Start({"--device=model", "--format=board"});
+  ASSERT_NE(shim, nullptr);
+  std::unique_ptr<RiskEngine> board = testing::BoardOnlyEngine(shim->endpoint(), 2000);
+  ASSERT_NE(board, nullptr);
+  check(*board, "board");
+  // Every chunk went to the board (none came back to the CPU).
+  EXPECT_EQ(board->Stats().fpga[0].configurations, configs.size());
+  EXPECT_EQ(board->Stats().fpga[0].failures, 0u);
+}
+
+}  // namespace
+}  // namespace riskplan::accel

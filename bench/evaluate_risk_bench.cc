@@ -17,6 +17,8 @@
 #include <vector>
 
 #include "accel/kernel_evaluator.h"
+#include "accel/kernel_weights.h"
+#include "accel/prepared_map.h"
 #include "benchmark/benchmark.h"
 #include "core/flight/piece_risk.h"
 #include "core/flight/trajectory.h"
@@ -142,6 +144,21 @@ void BM_Checks(benchmark::State& state) {
 }
 BENCHMARK(BM_Checks);
 
+void BM_Checks_GivenRisk(benchmark::State& state) {
+  std::vector<ConfigurationRisk> risks(Midpoints().size());
+  (void)accel::ThreadKernelEvaluator().EvaluateBatch(Model(), Midpoints(), risks);
+  int bad = 0;
+  for (auto _ : state) {
+    for (size_t n = 0; n < risks.size(); ++n) {
+      double limit = 0.0;
+      bad += Model().CheckConfiguration(Midpoints()[n], risks[n], &limit) != ViolationKind::kNone;
+    }
+  }
+  benchmark::DoNotOptimize(bad);
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Checks_GivenRisk);
+
 void BM_Risks_Core(benchmark::State& state) {
   std::vector<ConfigurationRisk> out(Midpoints().size());
   for (auto _ : state) {
@@ -162,6 +179,21 @@ void BM_Risks_Kernel(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_Risks_Kernel);
+
+// The kernel with the engine's caches but the site cache: the map's layers
+// on 2 MiB pages (PreparedMap) and 64-byte-aligned weights.
+void BM_Risks_KernelPrepared(benchmark::State& state) {
+  static accel::PreparedMapCache maps(size_t{1} << 30);
+  static accel::KernelWeightsCache weights(size_t{1} << 30);
+  accel::CpuRiskKernel kernel(&maps, nullptr, {}, &weights);
+  std::vector<ConfigurationRisk> out(Midpoints().size());
+  for (auto _ : state) {
+    kernel.Evaluate(Model(), Midpoints(), out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Risks_KernelPrepared);
 
 }  // namespace
 }  // namespace riskplan

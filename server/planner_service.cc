@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "accel/kernel_evaluator.h"
 #include "core/flight/trajectory.h"
 #include "server/proto_convert.h"
 #include "server/rpc_log.h"
@@ -85,9 +86,11 @@ absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel:
       !s.ok()) {
     return s;
   }
+  // Without an engine: accel's exact kernel on this thread (RiskModel::Evaluate bit for bit).
   std::unique_ptr<RiskEvaluator> evaluator = engine != nullptr ? engine->NewEvaluator() : nullptr;
   absl::StatusOr<TrajectoryEvaluation> evaluation = EvaluateTrajectory(
-      **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples}, evaluator.get());
+      **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples},
+      evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator());
   if (!evaluation.ok()) return evaluation.status();
   EvaluationToProto(*evaluation, spec.include_samples, response);
   if (spec.two_tier.has_value()) {

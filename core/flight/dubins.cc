@@ -340,4 +340,54 @@ Pose DubinsAirplanePath::PoseAt(double s) const {
   return pose;
 }
 
+void DubinsAirplanePath::PosesAt(std::span<const double> arcs, Pose* out) const {
+  if (!(length_m_ > 0.0)) {
+    for (size_t n = 0; n < arcs.size(); ++n) out[n] = PoseAt(arcs[n]);
+    return;
+  }
+  // PoseAt's arithmetic, operation for operation; only the states it reaches
+  // at the start of the spiral and of each planar segment (which do not depend
+  // on s) are computed once: at[i] is where segment i begins.
+  const double spiral_length = kTwoPi * radius_ * spiral_turns_;
+  const PlanarState spiral_start = MakeState(start_.x, start_.y, start_.theta);
+  const DubinsPath2D& p = planar_;
+  const std::array<Segment, 3>& segments = SegmentsOf(p.word);
+  std::array<PlanarState, 3> at;
+  at[0] = MakeState(p.x, p.y, p.theta);
+  at[1] = at[0];
+  Advance(segments[0], p.segment_length_m[0], p.radius, &at[1]);
+  at[2] = at[1];
+  Advance(segments[1], p.segment_length_m[1], p.radius, &at[2]);
+  const double planar_length = p.Length();
+  for (size_t n = 0; n < arcs.size(); ++n) {
+    const double s = arcs[n];
+    const double fraction = s > 0.0 ? std::min(s / length_m_, 1.0) : 0.0;
+    const double z = start_.z + (goal_.z - start_.z) * fraction;
+    const double horizontal = fraction * horizontal_length_m_;
+    Pose pose;
+    if (horizontal < spiral_length) {
+      PlanarState st = spiral_start;
+      Advance(segments[0], horizontal, radius_, &st);
+      pose = Pose{st.x, st.y, 0.0, OutputHeading(st.theta)};
+    } else {
+      // DubinsPath2D::PoseAt(horizontal - spiral_length).
+      const double planar_s = horizontal - spiral_length;
+      double remaining = planar_s > 0.0 ? std::min(planar_s, planar_length) : 0.0;
+      PlanarState st = at[0];
+      for (int i = 0; i < 3 && remaining > 0.0; ++i) {
+        const double l = std::min(remaining, p.segment_length_m[i]);
+        if (i < 2 && l == p.segment_length_m[i]) {
+          st = at[i + 1];  // the whole segment from at[i]: Advance gives at[i + 1]
+        } else {
+          Advance(segments[i], l, p.radius, &st);
+        }
+        remaining -= l;
+      }
+      pose = Pose{st.x, st.y, 0.0, OutputHeading(st.theta)};
+    }
+    pose.z = z;
+    out[n] = pose;
+  }
+}
+
 }  // namespace riskplan

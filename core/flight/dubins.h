@@ -12,6 +12,7 @@
 #define RISKPLAN_CORE_FLIGHT_DUBINS_H_
 
 #include <array>
+#include <span>
 #include <string_view>
 
 #include "core/base/geometry.h"
@@ -83,6 +84,11 @@ class DubinsAirplanePath {
   // Pose after 3-D arc length s in [0, Length()] (clamped); theta is the
   // heading of the horizontal tangent, normalised to [0, 2*pi).
   Pose PoseAt(double s) const;
+  // out[n] = PoseAt(s[n]) for every n, bit for bit; faster for many samples:
+  // the states where the planar path's segments begin (and their sines and
+  // cosines) are computed once instead of once per sample.
+  // REQUIRES: out has room for s.size() poses.
+  void PosesAt(std::span<const double> s, Pose* out) const;
 
  private:
   Pose start_;

@@ -1,6 +1,8 @@
 #include "core/flight/piece_risk.h"
 
+#include <algorithm>
 #include <cmath>
+#include <span>
 
 namespace riskplan {
 
@@ -23,7 +25,17 @@ PieceRisk::PieceRisk(const TrajectoryPiece& piece, double step_m, const ModelPar
 
 void PieceRisk::AppendMidpoints(int64_t begin, int64_t end, std::vector<Pose>* out) const {
   RISKPLAN_DCHECK(0 <= begin && begin <= end && end <= parts_);
-  for (int64_t k = begin; k < end; ++k) out->push_back(Midpoint(k));
+  // Midpoint(k) for each k, the arcs in batches (a manoeuvre's turns are
+  // computed once per batch rather than once per midpoint).
+  constexpr int64_t kBatch = 256;
+  double arcs[kBatch];
+  for (int64_t first = begin; first < end; first += kBatch) {
+    const int64_t n = std::min(kBatch, end - first);
+    for (int64_t k = 0; k < n; ++k) arcs[k] = MidpointArc(first + k);
+    const size_t at = out->size();
+    out->resize(at + static_cast<size_t>(n));
+    piece_.PosesAt(std::span<const double>(arcs, static_cast<size_t>(n)), out->data() + at);
+  }
 }
 
 Pose PieceRisk::AdmissibilitySample(int64_t i, double* arc_m) const {

@@ -124,15 +124,21 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
     const size_t first_midpoint = cursor;
     for (int64_t i = 0; i < rule.admissibility_samples(); ++i) {
       double s = 0.0;
-      const bool is_midpoint = i >= 1 && i <= rule.parts();
-      // A midpoint is the very pose that was evaluated; the ends are computed.
-      const Pose q = is_midpoint ? midpoints[cursor] : rule.AdmissibilitySample(i, &s);
-      if (is_midpoint) {
-        s = rule.MidpointArc(i - 1);
-        rule.Add(risks[cursor++]);
-      }
       double limit = 0.0;
-      const ViolationKind kind = model.CheckConfiguration(q, &limit);
+      ViolationKind kind = ViolationKind::kNone;
+      Pose q;
+      if (i >= 1 && i <= rule.parts()) {
+        // A midpoint is the very pose that was evaluated: its M tells the
+        // window rule without locating it again.
+        q = midpoints[cursor];
+        s = rule.MidpointArc(i - 1);
+        rule.Add(risks[cursor]);
+        kind = model.CheckConfiguration(q, risks[cursor], &limit);
+        ++cursor;
+      } else {
+        q = rule.AdmissibilitySample(i, &s);
+        kind = model.CheckConfiguration(q, &limit);
+      }
       if (kind == ViolationKind::kNone) continue;
       out.pieces[p].admissible = false;
       out.admissible = false;

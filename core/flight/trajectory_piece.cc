@@ -35,4 +35,9 @@ Pose TrajectoryPiece::PoseAt(double s) const {
               heading_};
 }
 
+void TrajectoryPiece::PosesAt(std::span<const double> s, Pose* out) const {
+  if (!is_segment_) return manoeuvre_.PosesAt(s, out);
+  for (size_t n = 0; n < s.size(); ++n) out[n] = PoseAt(s[n]);
+}
+
 }  // namespace riskplan

@@ -3,6 +3,8 @@
 #ifndef RISKPLAN_CORE_FLIGHT_TRAJECTORY_PIECE_H_
 #define RISKPLAN_CORE_FLIGHT_TRAJECTORY_PIECE_H_
 
+#include <span>
+
 #include "core/base/check.h"
 #include "core/base/geometry.h"
 #include "core/flight/dubins.h"
@@ -22,6 +24,9 @@ class TrajectoryPiece {
   double Length() const { return length_m_; }
   // Pose after 3-D arc length s in [0, Length()] (clamped).
   Pose PoseAt(double s) const;
+  // out[n] = PoseAt(s[n]) for every n, bit for bit (a manoeuvre's turns
+  // computed once for all of them). REQUIRES: out has room for s.size().
+  void PosesAt(std::span<const double> s, Pose* out) const;
   Pose Start() const { return PoseAt(0.0); }
   Pose End() const { return PoseAt(length_m_); }
   // REQUIRES: !is_segment().

@@ -133,7 +133,8 @@ double RiskModel::SafeAltitude(int i, int j) const {
   return std::max(floor_alt, (*glide_)[map_->Index(i, j)]);
 }
 
-ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) const {
+ViolationKind RiskModel::CheckBeforeWindow(const Pose& q, double* limit_m,
+                                           double* height_m) const {
   if (limit_m != nullptr) *limit_m = std::numeric_limits<double>::quiet_NaN();
   int i = 0;
   int j = 0;
@@ -156,11 +157,27 @@ ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) cons
     if (limit_m != nullptr) *limit_m = ceiling;
     return ViolationKind::kAboveMaxAltitude;
   }
-  // Last, as it needs the height bin: the impact window inside the map.
-  if (!WindowInsideMap(SiteOf(*map_, *table_, q, q.z - terrain))) {
-    return ViolationKind::kImpactOutsideMap;
-  }
+  *height_m = q.z - terrain;
   return ViolationKind::kNone;
+}
+
+ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) const {
+  double h = 0.0;
+  const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h);
+  if (kind != ViolationKind::kNone) return kind;
+  // Last, as it needs the height bin: the impact window inside the map.
+  if (!WindowInsideMap(SiteOf(*map_, *table_, q, h))) return ViolationKind::kImpactOutsideMap;
+  return ViolationKind::kNone;
+}
+
+ViolationKind RiskModel::CheckConfiguration(const Pose& q, const ConfigurationRisk& m,
+                                            double* limit_m) const {
+  double h = 0.0;
+  const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h);
+  if (kind != ViolationKind::kNone) return kind;
+  // q is inside the map, finite and above the terrain: M(q) is undefined
+  // only for its window (Locate).
+  return m.defined ? ViolationKind::kNone : ViolationKind::kImpactOutsideMap;
 }
 
 namespace {

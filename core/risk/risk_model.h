@@ -145,6 +145,12 @@ class RiskModel {
   // order, the impact window last. Also reports the altitude limit that was
   // broken (NaN when the kind has none).
   ViolationKind CheckConfiguration(const Pose& q, double* limit_m = nullptr) const;
+  // The same answer for a q whose M(q), `m`, is already known (from Evaluate
+  // or any RiskEvaluator: `defined` is exact on every path), without locating
+  // q a second time: once the other rules hold, the window lies inside the
+  // map exactly when M(q) is defined.
+  ViolationKind CheckConfiguration(const Pose& q, const ConfigurationRisk& m,
+                                   double* limit_m = nullptr) const;
 
   // safe_alt(cell) with this model's glide layer and min_agl.
   // REQUIRES: map().Contains(i, j).
@@ -156,6 +162,9 @@ class RiskModel {
 
  private:
   RiskModel() = default;
+  // The rules of spec section 6 before the window rule; sets *height_m to
+  // q.z - terrain when they all hold.
+  ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m) const;
 
   std::shared_ptr<const RiskMap> map_;
   std::shared_ptr<const ImpactTable> table_;

@@ -235,7 +235,7 @@ TEST(HelpTest, GoogleBenchmarkPrograms) {
   GTEST_SKIP() << "the benchmarks are not built (RISKPLAN_BUILD_BENCH=OFF)";
 #endif
   for (const char* program : {"riskplan-bench-risk", "riskplan-bench-accel", "riskplan-bench-shim",
-                              "riskplan-bench-seeds"}) {
+                              "riskplan-bench-seeds", "riskplan-bench-evaluate"}) {
     CommandResult r = RunProgram(std::string(program) + " --help");
     EXPECT_EQ(r.exit_code, 0) << program << "\n" << r.output;
     EXPECT_THAT(r.output, HasSubstr("--benchmark_filter")) << program;

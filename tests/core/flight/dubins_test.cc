@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "core/base/geometry.h"
 
@@ -529,6 +531,41 @@ TEST(DubinsAirplanePathTest, RandomManoeuvres) {
       ASSERT_NEAR(p.z, start.z + dz * s / path.Length(), kTol) << what << " s=" << s;
       ASSERT_LE(Distance3(previous, p), 0.5 + kTol) << what << " s=" << s;
       previous = p;
+    }
+  }
+  EXPECT_GT(spirals, 30);
+}
+
+// PosesAt is PoseAt bit for bit, for every word, with and without spirals,
+// at arcs inside, at the ends of and outside [0, Length()] (and NaN).
+TEST(DubinsAirplanePathTest, PosesAtIsPoseAtBitForBit) {
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> xy(-400.0, 400.0);
+  std::uniform_real_distribution<double> heading(0.0, 2.0 * M_PI);
+  std::uniform_real_distribution<double> climb(-600.0, 600.0);
+  const auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  int spirals = 0;
+  for (int c = 0; c < 400; ++c) {
+    const Pose a{xy(rng), xy(rng), 300.0, heading(rng)};
+    const Pose b = c % 7 == 0 ? a : Pose{xy(rng), xy(rng), 300.0 + climb(rng), heading(rng)};
+    const DubinsAirplanePath path(a, b, 50.0, kGamma);
+    spirals += path.spiral_turns() > 0;
+    std::vector<double> arcs = {0.0, path.Length(), -1.0, path.Length() + 1.0,
+                                std::numeric_limits<double>::quiet_NaN()};
+    const std::array<double, 3>& seg = path.planar().segment_length_m;
+    const double k = path.HorizontalLength() > 0.0 ? path.Length() / path.HorizontalLength() : 1.0;
+    const double spiral = 2.0 * M_PI * 50.0 * path.spiral_turns();
+    // The segments' ends, where PoseAt's clamping decides.
+    arcs.push_back((spiral + seg[0]) * k);
+    arcs.push_back((spiral + seg[0] + seg[1]) * k);
+    for (int n = 0; n < 300; ++n) arcs.push_back((n + 0.5) * path.Length() / 300.0);
+    std::vector<Pose> out(arcs.size());
+    path.PosesAt(arcs, out.data());
+    for (size_t n = 0; n < arcs.size(); ++n) {
+      const Pose want = path.PoseAt(arcs[n]);
+      ASSERT_TRUE(same(want.x, out[n].x) && same(want.y, out[n].y) && same(want.z, out[n].z) &&
+                  same(want.theta, out[n].theta))
+          << "case " << c << " arc " << arcs[n];
     }
   }
   EXPECT_GT(spirals, 30);

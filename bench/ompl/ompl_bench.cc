@@ -1,5 +1,5 @@
 // riskplan-bench-ompl: RISK_RRT_STAR side by side with OMPL 1.5's RRT*,
-// Informed RRT* and BIT* on the same demo-city problems (issue 7, part 1).
+// Informed RRT*, BIT* and ABIT* on the same demo-city problems (issue 7, part 1).
 //
 // Every (planner, scenario, seed) runs in its own child process, one at a
 // time: OMPL's RNG takes its seed once per process, and a fresh process gives
@@ -44,8 +44,9 @@
 constexpr char kDefaultScenarios[] =
     "west-east,south-north,sw-ne,nw-se,wsw-ene,5km-a,5km-b,suburb-w,short-u-turn,edge-2";
 
-ABSL_FLAG(std::string, planners, "RISK_RRT_STAR,RRTstar,InformedRRTstar,BITstar",
-          "comma-separated planners: RISK_RRT_STAR and OMPL's RRTstar, InformedRRTstar, BITstar");
+ABSL_FLAG(std::string, planners, "RISK_RRT_STAR,RRTstar,InformedRRTstar,BITstar,ABITstar",
+          "comma-separated planners: RISK_RRT_STAR and OMPL's RRTstar, InformedRRTstar, BITstar, "
+          "ABITstar");
 ABSL_FLAG(std::string, scenarios, kDefaultScenarios, "comma-separated scenario names");
 ABSL_FLAG(int, seeds, 10, "seeds per scenario");
 ABSL_FLAG(int, first_seed, 1, "first seed (seeds first_seed, first_seed + 1, ...)");
@@ -67,9 +68,12 @@ ABSL_FLAG(std::string, rrt_nn, "grid", "RRT*/Informed RRT*: grid, sqrtapprox or 
 ABSL_FLAG(double, grid_cell_m, 200.0, "cell of the grid nearest-neighbour structure, m");
 ABSL_FLAG(bool, irrt_admissible_cost_to_come, false,
           "Informed RRT*: prune with motionCost(start, x) as cost-to-come (OMPL's default)");
-ABSL_FLAG(int, bit_samples, 100, "BIT*: samples per batch");
-ABSL_FLAG(double, bit_rewire_factor, 1.1, "BIT*: rewire factor");
-ABSL_FLAG(bool, bit_k_nearest, true, "BIT*: k-nearest (else r-disc) rule");
+ABSL_FLAG(int, bit_samples, 100, "BIT* and ABIT*: samples per batch");
+ABSL_FLAG(double, bit_rewire_factor, 1.1, "BIT* and ABIT*: rewire factor");
+ABSL_FLAG(bool, bit_k_nearest, true, "BIT* and ABIT*: k-nearest (else r-disc) rule");
+ABSL_FLAG(double, abit_initial_inflation, 1e6, "ABIT*: initial inflation factor");
+ABSL_FLAG(double, abit_inflation_scaling, 10, "ABIT*: inflation scaling parameter");
+ABSL_FLAG(double, abit_truncation_scaling, 5, "ABIT*: truncation scaling parameter");
 ABSL_FLAG(bool, self_check, false, "check the OMPL adapter against EvaluateTrajectory and exit");
 ABSL_FLAG(int, self_check_edges, 300, "random edges of the self-check");
 
@@ -219,6 +223,9 @@ int Main() {
   settings.bit_samples_per_batch = static_cast<unsigned>(absl::GetFlag(FLAGS_bit_samples));
   settings.bit_rewire_factor = absl::GetFlag(FLAGS_bit_rewire_factor);
   settings.bit_k_nearest = absl::GetFlag(FLAGS_bit_k_nearest);
+  settings.abit_initial_inflation = absl::GetFlag(FLAGS_abit_initial_inflation);
+  settings.abit_inflation_scaling = absl::GetFlag(FLAGS_abit_inflation_scaling);
+  settings.abit_truncation_scaling = absl::GetFlag(FLAGS_abit_truncation_scaling);
   const std::string label = absl::GetFlag(FLAGS_label);
   const std::string clock = absl::GetFlag(FLAGS_ours_clock);
   if (clock != "wall" && clock != "cpu") {
@@ -238,11 +245,14 @@ int Main() {
   std::printf(
       "# settings: rrt_range_m=%g rrt_rewire_factor=%g rrt_k_nearest=%d rrt_nn=%s "
       "grid_cell_m=%g irrt_admissible_cost_to_come=%d bit_samples=%u bit_rewire_factor=%g "
-      "bit_k_nearest=%d label=%s params=%s ours_clock=%s\n",
+      "bit_k_nearest=%d abit_initial_inflation=%g abit_inflation_scaling=%g "
+      "abit_truncation_scaling=%g label=%s params=%s ours_clock=%s\n",
       settings.rrt_range_m, settings.rrt_rewire_factor, settings.rrt_k_nearest ? 1 : 0,
       settings.rrt_nn.c_str(), settings.grid_cell_m, settings.irrt_admissible_cost_to_come ? 1 : 0,
       settings.bit_samples_per_batch, settings.bit_rewire_factor, settings.bit_k_nearest ? 1 : 0,
-      label.c_str(), absl::GetFlag(FLAGS_params).c_str(), clock.c_str());
+      settings.abit_initial_inflation, settings.abit_inflation_scaling,
+      settings.abit_truncation_scaling, label.c_str(), absl::GetFlag(FLAGS_params).c_str(),
+      clock.c_str());
 
   int failures = 0;
   for (const Scenario& scenario : scenarios) {
@@ -297,7 +307,7 @@ int main(int argc, char** argv) {
   riskplan::cmdline::ParseCommandLine(
       argc, argv,
       {.program = "riskplan-bench-ompl",
-       .usage = "RISK_RRT_STAR against OMPL's RRT*, Informed RRT* and BIT* on demo-city "
+       .usage = "RISK_RRT_STAR against OMPL's RRT*, Informed RRT*, BIT* and ABIT* on demo-city "
                 "(docs/benchmarks.md)."});
   return riskplan::bench::Main();
 }

@@ -16,6 +16,7 @@
 #include "ompl/datastructures/NearestNeighborsLinear.h"
 #include "ompl/datastructures/NearestNeighborsSqrtApprox.h"
 #include "ompl/geometric/PathGeometric.h"
+#include "ompl/geometric/planners/informedtrees/ABITstar.h"
 #include "ompl/geometric/planners/informedtrees/BITstar.h"
 #include "ompl/geometric/planners/rrt/InformedRRTstar.h"
 #include "ompl/geometric/planners/rrt/RRTstar.h"
@@ -55,7 +56,7 @@ absl::Status ConfigureRrtStar(og::RRTstar* planner, const OmplSettings& s, bool 
 }  // namespace
 
 bool IsOmplPlanner(const std::string& name) {
-  return name == "RRTstar" || name == "InformedRRTstar" || name == "BITstar";
+  return name == "RRTstar" || name == "InformedRRTstar" || name == "BITstar" || name == "ABITstar";
 }
 
 absl::StatusOr<RunRecord> RunOmplPlanner(const std::string& planner_name,
@@ -89,8 +90,20 @@ absl::StatusOr<RunRecord> RunOmplPlanner(const std::string& planner_name,
 
   ob::PlannerPtr planner;
   std::function<int64_t()> iterations;
-  if (planner_name == "BITstar") {
-    auto bit = std::make_shared<og::BITstar>(si);
+  if (planner_name == "BITstar" || planner_name == "ABITstar") {
+    std::shared_ptr<og::BITstar> bit;
+    if (planner_name == "ABITstar") {
+      // ABIT*: BIT* searching each batch first with an inflated heuristic and
+      // truncating the search. With h = 0 (RiskObjective) an inflated h is
+      // still 0, so only the truncation changes anything here.
+      auto abit = std::make_shared<og::ABITstar>(si);
+      abit->setInitialInflationFactor(settings.abit_initial_inflation);
+      abit->setInflationScalingParameter(settings.abit_inflation_scaling);
+      abit->setTruncationScalingParameter(settings.abit_truncation_scaling);
+      bit = abit;
+    } else {
+      bit = std::make_shared<og::BITstar>(si);
+    }
     bit->setProblemDefinition(pdef);
     bit->setSamplesPerBatch(settings.bit_samples_per_batch);
     bit->setRewireFactor(settings.bit_rewire_factor);

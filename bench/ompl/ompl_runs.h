@@ -41,9 +41,14 @@ struct OmplSettings {
   unsigned bit_samples_per_batch = 100;  // OMPL's default
   double bit_rewire_factor = 1.1;        // OMPL's default
   bool bit_k_nearest = true;             // OMPL's default
+  // ABIT* (a BIT* subclass): samples per batch, rewire factor and the
+  // k-nearest rule are BIT*'s settings above; these three are its own.
+  double abit_initial_inflation = 1e6;  // OMPL's default
+  double abit_inflation_scaling = 10;   // OMPL's default
+  double abit_truncation_scaling = 5;   // OMPL's default
 };
 
-// "RRTstar", "InformedRRTstar", "BITstar".
+// "RRTstar", "InformedRRTstar", "BITstar", "ABITstar".
 bool IsOmplPlanner(const std::string& name);
 
 // Plans start -> goal of `scenario` with `planner` for `budget_s` of wall

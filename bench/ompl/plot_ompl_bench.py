@@ -5,7 +5,9 @@
 
 Prints Markdown tables (per planner and budget: risk quartiles, share solved,
 time to first solution, iterations; per scenario: median risk at each budget;
-the time RISK_RRT_STAR needs to reach the best OMPL planner's 3-second median)
+the time RISK_RRT_STAR needs to reach the best OMPL planner's 3-second median,
+and whether the target is met: reached within --target_s, and the final median
+at least --target_lower lower)
 and, with --png, draws the median risk of every planner against time.
 
 Risk at time t of a run: the best risk it had reported by t (its anytime
@@ -111,6 +113,10 @@ def main():
     ap.add_argument("--png")
     ap.add_argument("--title", default="")
     ap.add_argument("--budgets", default="0.1,0.3,1,3")
+    ap.add_argument("--target_s", type=float, default=0.05,
+                    help="target: RISK_RRT_STAR reaches the best OMPL median within this time")
+    ap.add_argument("--target_lower", type=float, default=0.20,
+                    help="target: RISK_RRT_STAR's final median at least this share lower")
     args = ap.parse_args()
     budgets = [float(b) for b in args.budgets.split(",")]
     final = budgets[-1]
@@ -196,9 +202,11 @@ def main():
         print(f"\nTime {OURS} needs to reach the best OMPL planner's median risk at {final:g} s "
               "(its median-over-seeds curve; and the median over seeds of each run's time):\n")
         print(f"| scenario | best OMPL planner | its median @{final:g}s | {OURS} median curve "
-              f"reaches it at | median over seeds of the run's time | {OURS} median @{final:g}s |")
-        print("|---|---|---:|---:|---:|---:|")
+              f"reaches it at | median over seeds of the run's time | {OURS} median @{final:g}s "
+              f"| lower by | target (<= {args.target_s:g} s; >= {args.target_lower:.0%} lower) |")
+        print("|---|---|---:|---:|---:|---:|---:|---|")
         times = []
+        lowers = []
         for s in scenarios:
             best_p, target = None, INF
             for p in ompl:
@@ -218,11 +226,24 @@ def main():
                 hit = [e for e, risk, _ in r["imp"] if risk <= target]
                 per_run.append(hit[0] if hit else INF)
             times.append(t_curve)
+            ours_final = median([risk_at(r, final) for r in ours])
+            lower = 1.0 - ours_final / target if not math.isinf(target) else 1.0
+            lowers.append(lower)
+            met_t = t_curve <= args.target_s
+            met_l = lower >= args.target_lower
+            verdict = ("met" if met_t and met_l else
+                       "not met: " + ", ".join(x for x, bad in (("time", not met_t),
+                                                                 ("margin", not met_l)) if bad))
             print(f"| {s} | {best_p} | {fmt_risk(target)} | {fmt(t_curve)} s | "
-                  f"{fmt(median(per_run))} s | {fmt_risk(median([risk_at(r, final) for r in ours]))} |")
+                  f"{fmt(median(per_run))} s | {fmt_risk(ours_final)} | {lower:.0%} | {verdict} |")
         print(f"\nMedian over scenarios of the curve time: {fmt(median(times))} s; "
-              f"scenarios reached within 0.3 s: {sum(1 for t in times if t <= 0.3)}/{len(times)}; "
-              f"within {final:g} s: {sum(1 for t in times if t <= final)}/{len(times)}.")
+              f"scenarios reached within {args.target_s:g} s: "
+              f"{sum(1 for t in times if t <= args.target_s)}/{len(times)}; "
+              f"within 0.3 s: {sum(1 for t in times if t <= 0.3)}/{len(times)}; "
+              f"within {final:g} s: {sum(1 for t in times if t <= final)}/{len(times)}. "
+              f"{OURS}'s {final:g}-second median lower than the best OMPL planner's by "
+              f"{min(lowers):.0%} to {max(lowers):.0%}; at least {args.target_lower:.0%} on "
+              f"{sum(1 for x in lowers if x >= args.target_lower)}/{len(lowers)}.")
 
     # Cross-check: RISK_RRT_STAR's separate short-budget runs against its curve.
     if budget_runs:
@@ -246,7 +267,7 @@ def plot(png, title, planners, scenarios, runs, ref, runs_of, final):
 
     grid = [0.005 * (final / 0.005) ** (i / 199) for i in range(200)]
     colours = {OURS: "#d62728", "RRTstar": "#1f77b4", "InformedRRTstar": "#17becf",
-               "BITstar": "#2ca02c"}
+               "BITstar": "#2ca02c", "ABITstar": "#9467bd"}
     n = len(scenarios) + 1
     cols = 4
     rows = math.ceil(n / cols)

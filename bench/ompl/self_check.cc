@@ -160,9 +160,58 @@ bool RunSelfCheck(std::shared_ptr<const RiskModel> model, int edges) {
   }
   std::printf("self-check: states inside OMPL's bounds with their heading kept: %d/%zu\n",
               in_bounds, headings.size());
+  // Risk model version 2: a pose 20 m inside the map's edge, heading out of
+  // the map, has an impact window reaching past the map
+  // (IMPACT_OUTSIDE_MAP): the validity checker rejects it, and an edge from
+  // a flyable pose inland to it is rejected by the motion validator and
+  // costs infinity.
+  int border = 0;
+  int border_rejected = 0;
+  {
+    const RiskMap& bm = m.map();
+    const double x1 = bm.x0() + bm.width_m();
+    const double y1 = bm.y0() + bm.height_m();
+    for (int k = 1; k < 20; ++k) {
+      const double u = k / 20.0;
+      const double along_x = bm.x0() + u * bm.width_m();
+      const double along_y = bm.y0() + u * bm.height_m();
+      // West, east, south, north edges, heading out of the map.
+      const Pose edge_poses[] = {{bm.x0() + 20.0, along_y, 0.0, kPi},
+                                 {x1 - 20.0, along_y, 0.0, 0.0},
+                                 {along_x, bm.y0() + 20.0, 0.0, -kPi / 2},
+                                 {along_x, y1 - 20.0, 0.0, kPi / 2}};
+      for (const Pose& e : edge_poses) {
+        int i = 0;
+        int j = 0;
+        if (!bm.CellOf(e.x, e.y, &i, &j) || bm.nofly(i, j)) continue;
+        Pose p = e;
+        const double low = m.SafeAltitude(i, j);
+        const double high = bm.terrain(i, j) + m.params().max_agl_m;
+        if (!(low < high)) continue;
+        p.z = 0.5 * (low + high);
+        if (m.CheckConfiguration(p) != ViolationKind::kImpactOutsideMap) continue;
+        // A flyable pose 1 km inland, heading to the edge.
+        const double ix = std::clamp(p.x, bm.x0() + 1000.0, x1 - 1000.0);
+        const double iy = std::clamp(p.y, bm.y0() + 1000.0, y1 - 1000.0);
+        auto inland = FindFlyablePose(m, ix, iy, p.theta);
+        if (!inland) continue;
+        ++border;
+        DubinsAirplaneSpace::FromPose(p, a.get());
+        DubinsAirplaneSpace::FromPose(*inland, b.get());
+        if (!si->isValid(a.get()) && !si->checkMotion(b.get(), a.get()) &&
+            std::isinf(objective.motionCost(b.get(), a.get()).value())) {
+          ++border_rejected;
+        }
+      }
+    }
+  }
+  std::printf(
+      "self-check: IMPACT_OUTSIDE_MAP poses by the edges rejected (state, motion, cost = inf): "
+      "%d/%d\n",
+      border_rejected, border);
   ok = ok && validator_agrees == tried && exact == admissible && path_exact == paths &&
        worst_round_trip < 1e-12 && worst_interpolation_m < 1e-9 &&
-       in_bounds == static_cast<int>(headings.size());
+       in_bounds == static_cast<int>(headings.size()) && border > 0 && border_rejected == border;
 
   // 2. GridNearestNeighbors against NearestNeighborsLinear.
   const RiskMap& map = m.map();

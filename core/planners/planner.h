@@ -12,7 +12,6 @@
 #ifndef RISKPLAN_CORE_PLANNERS_PLANNER_H_
 #define RISKPLAN_CORE_PLANNERS_PLANNER_H_
 
-#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -23,6 +22,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/base/cancellation.h"
 #include "core/base/geometry.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
@@ -38,17 +38,6 @@ enum class PlannerAlgorithm {
 
 // "RISK_RRT_STAR", "RRT", "GENETIC", "HARMONIC".
 std::string_view PlannerAlgorithmName(PlannerAlgorithm algorithm);
-
-// Cooperative cancellation, shared between the caller and the planner.
-// Thread-safe. Planners check it at least every few milliseconds.
-class CancellationToken {
- public:
-  void Cancel() { cancelled_.store(true, std::memory_order_relaxed); }
-  bool IsCancelled() const { return cancelled_.load(std::memory_order_relaxed); }
-
- private:
-  std::atomic<bool> cancelled_{false};
-};
 
 struct PlanningProblem {
   std::shared_ptr<const RiskModel> model;  // map + parameters

@@ -18,9 +18,9 @@ struct RiskModelCache::Entry {
   size_t bytes = 0;  // what the model holds that the default model does not share
 };
 
-absl::StatusOr<std::unique_ptr<RiskModelCache>> RiskModelCache::Create(const MapRegistry& registry,
-                                                                       size_t max_overridden) {
-  std::unique_ptr<RiskModelCache> cache(new RiskModelCache(registry, max_overridden));
+absl::StatusOr<std::unique_ptr<RiskModelCache>> RiskModelCache::Create(
+    const MapRegistry& registry, size_t max_overridden, const ModelBuildLimits& limits) {
+  std::unique_ptr<RiskModelCache> cache(new RiskModelCache(registry, max_overridden, limits));
   // Built here, before the server listens: most requests use the defaults,
   // and they then never wait for a build or take the lock (defaults_ is never
   // written again); a map whose default model cannot be built stops start-up
@@ -28,7 +28,8 @@ absl::StatusOr<std::unique_ptr<RiskModelCache>> RiskModelCache::Create(const Map
   const ModelParams defaults;
   cache->default_fingerprint_ = Fingerprint(defaults);
   for (const std::shared_ptr<const RiskMap>& map : registry.maps()) {
-    absl::StatusOr<std::shared_ptr<const RiskModel>> model = RiskModel::Create(map, defaults);
+    absl::StatusOr<std::shared_ptr<const RiskModel>> model =
+        RiskModel::Create(map, defaults, nullptr, cache->limits_);
     if (!model.ok()) {
       return absl::Status(model.status().code(),
                           absl::StrFormat("map '%s': building the default risk model: %s",
@@ -112,7 +113,7 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskM
   if (map_ptr == nullptr) {
     entry->model = absl::NotFoundError(absl::StrFormat("map '%s' is not served", map.name()));
   } else {
-    entry->model = RiskModel::Create(map_ptr, params, table);
+    entry->model = RiskModel::Create(map_ptr, params, table, limits_);
     if (entry->model.ok()) {
       entry->bytes = (*entry->model)->MemoryBytes() - (table != nullptr ? table->MemoryBytes() : 0);
     }
@@ -123,8 +124,9 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskM
     absl::MutexLock lock(&mu_);
     entry->built.Notify();
     if (!entry->model.ok() || max_overridden_ == 0) {
-      // Failures are not cached: the parameters were validated, so a failure
-      // is unexpected and a retry should try again.
+      // Failures are not cached: a stopped build, or a table over the
+      // limit, which the next request with these parameters is told about
+      // the same way (and costs no more than a ballistic integration).
       entries_.erase(key);
     } else {
       lru_.push_front(key);

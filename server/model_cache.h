@@ -21,8 +21,10 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
+#include "core/base/cancellation.h"
 #include "core/base/model_params.h"
 #include "core/map/risk_map.h"
+#include "core/risk/impact_table.h"
 #include "core/risk/risk_model.h"
 #include "server/map_registry.h"
 
@@ -33,14 +35,23 @@ class RiskModelCache {
   // Builds the default model of every map in `registry` (the registry must
   // outlive the cache). `max_overridden` bounds the models kept for
   // non-default parameters (0: none are kept, each request builds its own).
-  static absl::StatusOr<std::unique_ptr<RiskModelCache>> Create(const MapRegistry& registry,
-                                                                size_t max_overridden);
+  // Every model is built within `limits` (its stop condition is replaced by
+  // the cache's own, see StopBuilds).
+  static absl::StatusOr<std::unique_ptr<RiskModelCache>> Create(
+      const MapRegistry& registry, size_t max_overridden, const ModelBuildLimits& limits = {});
 
   // The model of `map` (a map of the registry) with `params`. Builds it on
   // the calling thread when it is not cached: call this from a worker pool,
   // never from a gRPC thread. REQUIRES: ValidateModelParams(params).ok().
+  // A build beyond the limits fails with ImpactTable::Build's error, and
+  // one stopped by StopBuilds with Cancelled (neither is cached).
   absl::StatusOr<std::shared_ptr<const RiskModel>> Get(const RiskMap& map,
                                                        const ModelParams& params);
+
+  // Stops every build in progress and every later one (Cancelled): the
+  // server's drain, so that no thread is left building a model nobody will
+  // read. Thread-safe.
+  void StopBuilds() { stop_builds_.Cancel(); }
 
   // The model if it is ready now, else null. Never builds; cheap.
   std::shared_ptr<const RiskModel> Peek(const RiskMap& map, const ModelParams& params);
@@ -63,8 +74,10 @@ class RiskModelCache {
  private:
   struct Entry;
 
-  RiskModelCache(const MapRegistry& registry, size_t max_overridden)
-      : registry_(registry), max_overridden_(max_overridden) {}
+  RiskModelCache(const MapRegistry& registry, size_t max_overridden, const ModelBuildLimits& limits)
+      : registry_(registry), max_overridden_(max_overridden), limits_(limits) {
+    limits_.stop = StopCondition(&stop_builds_);
+  }
 
   // A string that is equal exactly when every parameter is equal, bit for bit.
   static std::string Fingerprint(const ModelParams& params);
@@ -73,6 +86,8 @@ class RiskModelCache {
 
   const MapRegistry& registry_;
   const size_t max_overridden_;
+  CancellationToken stop_builds_;
+  ModelBuildLimits limits_;  // stops on stop_builds_
   // Immutable after Create().
   std::map<std::string, std::shared_ptr<const RiskModel>, std::less<>> defaults_;
   std::string default_fingerprint_;

@@ -1,11 +1,13 @@
 #include "server/plan_call.h"
 
 #include <chrono>
+#include <exception>
 #include <utility>
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "core/base/check.h"
+#include "server/message_codec.h"
 #include "server/proto_convert.h"
 #include "server/rpc_log.h"
 #include "server/status_util.h"
@@ -121,7 +123,12 @@ void PlanCall::Run() {
   // another thread; the pool task holds one too, but Run does not rely on
   // how it is called.
   std::shared_ptr<PlanCall> keep = shared_from_this();
-  absl::StatusOr<PlanResult> result = Plan();
+  absl::StatusOr<PlanResult> result = absl::UnknownError("not planned");
+  try {
+    result = Plan();
+  } catch (const std::exception& e) {
+    result = StatusFromException(e, "PlanTrajectory");
+  }
   // The slot is free as soon as the planner is: the final message may still
   // be on its way to a slow client.
   env_.active->Release(this);
@@ -130,7 +137,12 @@ void PlanCall::Run() {
     FinishWith(ToGrpcStatus(result.status()));
     return;
   }
-  OfferFinal(*result);
+  try {
+    OfferFinal(*result);
+  } catch (const std::exception& e) {
+    // Building the final message (tree, display path) ran out of memory.
+    FinishWith(ToGrpcStatus(StatusFromException(e, "PlanTrajectory final message")));
+  }
 }
 
 absl::StatusOr<PlanResult> PlanCall::Plan() {
@@ -150,7 +162,14 @@ absl::StatusOr<PlanResult> PlanCall::Plan() {
   absl::StatusOr<std::shared_ptr<const RiskModel>> model =
       env_.models->Get(*spec_.map, spec_.params);
   if (env_.models->stats().builds != builds_before) env_.metrics->RecordModelBuild();
-  if (!model.ok()) return model.status();
+  // A build stopped by the drain ends the plan as the drain does (its final
+  // message says SHUTDOWN), not with an error.
+  if (!model.ok() && absl::IsCancelled(model.status()) && cancel_.IsCancelled()) {
+    PlanResult cancelled;
+    cancelled.reason = StopReason::kCancelled;
+    return cancelled;
+  }
+  if (!model.ok()) return InField("model_params", model.status());
 
   const PlanningProblem problem{*model, spec_.start, spec_.goal};
   if (!endpoints_checked_.load()) {
@@ -251,11 +270,20 @@ void PlanCall::Perform(const Step& step) {
     env_.timer->Schedule(*step.wake_at, [self = shared_from_this()] { self->OnTimer(); });
   }
   if (step.write.has_value()) {
-    StartWrite(&write_buffer_);
+    if (absl::Status s = SerializeWrite(); !s.ok()) {
+      // Cannot happen for a message under the send limit; the write is
+      // replaced by its failure so that the state still sees it end.
+      LogUpdateFailed("serialise", s);
+      OnWriteDone(false);
+      return;
+    }
+    StartWrite(&raw_write_);
   } else if (step.finish.has_value()) {
     Finish(*step.finish);
   }
 }
+
+absl::Status PlanCall::SerializeWrite() { return SerializeMessage(write_buffer_, &raw_write_); }
 
 void PlanCall::FinishWith(const grpc::Status& status) {
   Step step;

@@ -88,7 +88,9 @@ struct PlanCallEnv {
   OpenCalls* open_calls = nullptr;      // counts the call until its OnDone
 };
 
-class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
+// Writes each PlanUpdate serialised by the service itself (the method is
+// raw, see server/message_codec.h).
+class PlanCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
                        public std::enable_shared_from_this<PlanCall> {
  public:
   // A call for a validated request. Call Start() next.
@@ -103,7 +105,9 @@ class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
 
   // Plans on the calling (pool) thread, streams the results, and releases the
   // admission slot (and the running-plans gauge) before the final message is
-  // offered. REQUIRES: admitted, and PlanAdmitted() recorded.
+  // offered. An exception thrown while planning (std::bad_alloc) ends the
+  // call with StatusFromException's status instead of leaving the thread.
+  // REQUIRES: admitted, and PlanAdmitted() recorded.
   void Run();
 
   // Ends the call with `status` without planning (admission or scheduling
@@ -139,6 +143,10 @@ class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
   void TakeWriteLocked(Step* step) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   // Performs a Step the state returned: called without mu_ held.
   void Perform(const Step& step) ABSL_LOCKS_EXCLUDED(mu_);
+  // Serialises write_buffer_ into raw_write_, for the write a Step starts.
+  // Outside mu_: from the Step that starts a write until its OnWriteDone
+  // nothing else touches either buffer (one write in flight at a time).
+  absl::Status SerializeWrite() ABSL_NO_THREAD_SAFETY_ANALYSIS;
   // Logs an update that could not be built (a bug, see OnImprovement).
   void LogUpdateFailed(std::string_view which, const absl::Status& status) const;
 
@@ -158,9 +166,11 @@ class PlanCall final : public grpc::ServerWriteReactor<v1::PlanUpdate>,
 
   absl::Mutex mu_;
   State state_ ABSL_GUARDED_BY(mu_);
-  // The message in flight. gRPC reads it between StartWrite and OnWriteDone,
-  // outside mu_; it is only replaced when the state has no write in flight.
+  // The message in flight, and its serialised form, which gRPC reads
+  // between StartWrite and OnWriteDone, outside mu_. Both are only replaced
+  // when the state has no write in flight (see SerializeWrite).
   v1::PlanUpdate write_buffer_ ABSL_GUARDED_BY(mu_);
+  grpc::ByteBuffer raw_write_;
   uint64_t sent_ ABSL_GUARDED_BY(mu_) = 0;         // PlanUpdate.sequence of the last write
   int64_t improvements_ ABSL_GUARDED_BY(mu_) = 0;  // the planner's, sent or not
   std::string log_detail_ ABSL_GUARDED_BY(mu_);    // end reason and counts, for OnDone

@@ -1,6 +1,9 @@
 #include "server/planner_service.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
 #include <string>
 #include <utility>
 #include <vector>
@@ -9,6 +12,7 @@
 #include "absl/time/clock.h"
 #include "accel/kernel_evaluator.h"
 #include "core/flight/trajectory.h"
+#include "server/message_codec.h"
 #include "server/proto_convert.h"
 #include "server/rpc_log.h"
 #include "server/status_util.h"
@@ -19,35 +23,61 @@ namespace {
 const grpc::Status kDraining(grpc::StatusCode::UNAVAILABLE,
                              "riskplan-server is shutting down; retry on another replica");
 
-// The reactor of every unary RPC. Complete() logs the RPC and records its
+// The reactor of every unary RPC, holding its typed response until it is
+// serialised into gRPC's raw one. Complete() logs the RPC and records its
 // metrics before finishing it, so a client that has its answer also finds
 // the log line written. Owned by gRPC from the handler's return to OnDone,
 // where it deletes itself; OpenCalls counts it for as long (the drain waits
 // for that count, see open_calls.h).
+template <typename Response>
 class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
   UnaryCall(const char* method, grpc::CallbackServerContext* ctx, ServerMetrics* metrics,
-            OpenCalls* open_calls)
+            OpenCalls* open_calls, grpc::ByteBuffer* raw_response)
       : method_(method),
         started_(absl::Now()),
         ctx_(ctx),
         metrics_(metrics),
-        open_calls_(open_calls) {
+        open_calls_(open_calls),
+        raw_response_(raw_response) {
     open_calls_->Opened();
   }
 
-  // Ends the call. Call exactly once, from any thread.
-  void Complete(const grpc::Status& status, std::string map = "") {
-    const absl::Duration duration = absl::Now() - started_;
-    metrics_->RecordRpc(method_, status.error_code(), duration);
-    LogRpc({.method = method_,
-            .status = status,
-            .duration = duration,
-            .peer = ctx_->peer(),
-            .map = std::move(map),
-            .detail = ""});
+  // The response Complete(OK) sends. Written by one thread at a time (the
+  // handler, then the task it queues), until Complete.
+  Response* response() { return &response_; }
+  // Cancelled when the client cancels the call or its deadline passes.
+  const CancellationToken& cancelled() const { return cancelled_; }
+
+  // Ends the call, from any thread. Only the first call counts: Guarded
+  // may end a call whose work threw after it had ended it.
+  void Complete(grpc::Status status, std::string map = "") {
+    if (completed_.exchange(true)) return;
+    try {
+      if (status.ok()) {
+        if (absl::Status s = SerializeMessage(response_, raw_response_); !s.ok()) {
+          status = ToGrpcStatus(s);
+        }
+      }
+    } catch (const std::exception& e) {
+      status = ToGrpcStatus(StatusFromException(e, method_));
+    }
+    // The call ends even when it cannot be logged (out of memory).
+    try {
+      const absl::Duration duration = absl::Now() - started_;
+      metrics_->RecordRpc(method_, status.error_code(), duration);
+      LogRpc({.method = method_,
+              .status = status,
+              .duration = duration,
+              .peer = ctx_->peer(),
+              .map = std::move(map),
+              .detail = ""});
+    } catch (const std::exception&) {
+    }
     Finish(status);
   }
+
+  void OnCancel() override { cancelled_.Cancel(); }
 
   void OnDone() override {
     open_calls_->Done();
@@ -60,15 +90,33 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   grpc::CallbackServerContext* const ctx_;
   ServerMetrics* const metrics_;
   OpenCalls* const open_calls_;
+  grpc::ByteBuffer* const raw_response_;  // gRPC's, valid until OnDone
+  Response response_;
+  CancellationToken cancelled_;
+  std::atomic<bool> completed_{false};
 };
 
+// Runs `body` (a handler's or a task's work for `call`), ending the call with
+// StatusFromException if it throws: no exception leaves a request's thread.
+// (If the call was already ended, Complete ignores the second end.)
+template <typename Call, typename Body>
+void Guarded(Call* call, const char* what, const std::string& map, Body body) {
+  try {
+    body();
+  } catch (const std::exception& e) {
+    call->Complete(ToGrpcStatus(StatusFromException(e, what)), map);
+  }
+}
+
 // Risk of a validated trajectory (runs on the evaluation pool: building a
-// model and evaluating a long trajectory can take seconds).
+// model and evaluating a long trajectory can take seconds). Cancelled once
+// `stop` is reached (the call's cancellation, or the server's drain).
 absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel::RiskEngine* engine,
                       const RequestLimits& limits, const EvaluateSpec& spec,
-                      v1::EvaluateRiskResponse* response) {
+                      const StopCondition& stop, v1::EvaluateRiskResponse* response) {
+  if (stop.Reached()) return absl::CancelledError("the evaluation was stopped before it started");
   absl::StatusOr<std::shared_ptr<const RiskModel>> model = models.Get(*spec.map, spec.params);
-  if (!model.ok()) return model.status();
+  if (!model.ok()) return InField("model_params", model.status());
   const ModelParams& params = (*model)->params();
   absl::StatusOr<std::vector<TrajectoryPiece>> pieces =
       spec.polyline.empty() ? PiecesFromWaypoints(spec.waypoints, params, limits.max_waypoints)
@@ -76,7 +124,16 @@ absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel:
   if (!pieces.ok()) return pieces.status();
   int64_t samples = 0;
   double length_m = 0.0;
-  for (const TrajectoryPiece& piece : *pieces) {
+  for (size_t i = 0; i < pieces->size(); ++i) {
+    const TrajectoryPiece& piece = (*pieces)[i];
+    // Finite coordinates far apart overflow the geometry: such a piece has
+    // no length to report, let alone samples.
+    if (!std::isfinite(piece.Length())) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: the piece from point %d to point %d has length %g m; the points are too far apart "
+          "to be flown",
+          spec.polyline.empty() ? "waypoints.poses" : "polyline.points", i, i + 1, piece.Length()));
+    }
     // Saturates at kMaxPartCount, so no sum of counts can wrap past the limit.
     samples += std::min(PartCount(piece.Length(), params.sample_step_m), kMaxPartCount - samples);
     length_m += piece.Length();
@@ -90,8 +147,16 @@ absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel:
   std::unique_ptr<RiskEvaluator> evaluator = engine != nullptr ? engine->NewEvaluator() : nullptr;
   absl::StatusOr<TrajectoryEvaluation> evaluation = EvaluateTrajectory(
       **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples},
-      evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator());
+      evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator(), stop);
   if (!evaluation.ok()) return evaluation.status();
+  // Every reported number is finite, or the request is refused: the
+  // parameter ranges are meant to guarantee it, and this says so if not.
+  if (!std::isfinite(evaluation->risk) || !std::isfinite(evaluation->length_m)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "model_params: the trajectory's risk is %g and its length %g m with these parameters; "
+        "both must be finite",
+        evaluation->risk, evaluation->length_m));
+  }
   EvaluationToProto(*evaluation, spec.include_samples, response);
   if (spec.two_tier.has_value()) {
     // Bounded like the evaluation: the cells visited grow with the length,
@@ -128,12 +193,20 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
 // tasks use is still alive (planner_service.h).
 PlannerService::~PlannerService() = default;
 
-grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
-    grpc::CallbackServerContext* ctx, const v1::PlanRequest* request) {
+void PlannerService::StopEvaluations() {
+  stop_evaluations_.Cancel();
+  models_.StopBuilds();
+}
+
+grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanTrajectory(
+    grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* raw_request) {
   // Every check comes before admission, so a request that will fail never
-  // holds a slot: a draining server refuses first, then validation, the
-  // endpoints (when the model is ready), admission and the plan pool.
-  absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(*request, maps_, options_.limits);
+  // holds a slot: a draining server refuses first, then parsing, validation,
+  // the endpoints (when the model is ready), admission and the plan pool.
+  v1::PlanRequest request;
+  absl::Status parsed = ParseRequest(*raw_request, &request);
+  absl::StatusOr<PlanSpec> spec =
+      parsed.ok() ? ValidatePlanRequest(request, maps_, options_.limits) : parsed;
   // A call that fails before admission still goes through a PlanCall, so
   // that every PlanTrajectory is logged and counted the same way.
   PlanSpec call_spec;
@@ -179,103 +252,143 @@ grpc::ServerWriteReactor<v1::PlanUpdate>* PlannerService::PlanTrajectory(
 }
 
 grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerContext* ctx,
-                                                       const v1::EvaluateRiskRequest* request,
-                                                       v1::EvaluateRiskResponse* response) {
-  auto* call = new UnaryCall("EvaluateRisk", ctx, &metrics_, &open_calls_);
-  if (draining()) {
-    call->Complete(kDraining, request->map());
-    return call;
-  }
-  absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(*request, maps_, options_.limits);
-  if (!spec.ok()) {
-    call->Complete(ToGrpcStatus(spec.status()), request->map());
-    return call;
-  }
-  // `response` stays valid until the call is finished (gRPC owns it), and
-  // `this` until every queued task has run (the pools are destroyed first).
-  const bool queued = eval_pool_.TrySubmit([this, call, response, spec = *std::move(spec)] {
-    absl::Status status =
-        Evaluate(models_, *checkers_, options_.engine, options_.limits, spec, response);
-    call->Complete(ToGrpcStatus(status), spec.map->name());
+                                                       const grpc::ByteBuffer* raw_request,
+                                                       grpc::ByteBuffer* raw_response) {
+  auto* call = new UnaryCall<v1::EvaluateRiskResponse>("EvaluateRisk", ctx, &metrics_, &open_calls_,
+                                                       raw_response);
+  Guarded(call, "EvaluateRisk", "", [&] {
+    if (draining()) {
+      call->Complete(kDraining);
+      return;
+    }
+    v1::EvaluateRiskRequest request;
+    if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
+      call->Complete(ToGrpcStatus(s));
+      return;
+    }
+    absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(request, maps_, options_.limits);
+    if (!spec.ok()) {
+      call->Complete(ToGrpcStatus(spec.status()), request.map());
+      return;
+    }
+    // `call` (and its response) stay valid until the call is finished, and
+    // `this` until every queued task has run (the pools are destroyed first).
+    const std::string map = request.map();
+    const bool queued = eval_pool_.TrySubmit([this, call, spec = *std::move(spec)] {
+      Guarded(call, "EvaluateRisk", spec.map->name(), [&] {
+        const StopCondition stop(&call->cancelled(), &stop_evaluations_);
+        absl::Status status = Evaluate(models_, *checkers_, options_.engine, options_.limits, spec,
+                                       stop, call->response());
+        // Stopped: by the drain (the client may still be there to be told),
+        // or by the client itself (who no longer listens).
+        if (absl::IsCancelled(status) && stop_evaluations_.IsCancelled()) {
+          call->Complete(kDraining, spec.map->name());
+          return;
+        }
+        call->Complete(ToGrpcStatus(status), spec.map->name());
+      });
+    });
+    if (!queued) {
+      call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                  absl::StrFormat("riskplan-server has %d evaluations waiting "
+                                                  "(--max_queued_evals); retry later",
+                                                  options_.max_queued_evals)),
+                     map);
+    }
   });
-  if (!queued) {
-    call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                absl::StrFormat("riskplan-server has %d evaluations waiting "
-                                                "(--max_queued_evals); retry later",
-                                                options_.max_queued_evals)),
-                   request->map());
-  }
   return call;
 }
 
 grpc::ServerUnaryReactor* PlannerService::ListMaps(grpc::CallbackServerContext* ctx,
-                                                   const v1::ListMapsRequest* /*request*/,
-                                                   v1::ListMapsResponse* response) {
-  auto* call = new UnaryCall("ListMaps", ctx, &metrics_, &open_calls_);
-  if (draining()) {
-    call->Complete(kDraining);
-    return call;
-  }
-  *response = map_list_;
-  call->Complete(grpc::Status::OK);
+                                                   const grpc::ByteBuffer* raw_request,
+                                                   grpc::ByteBuffer* raw_response) {
+  auto* call =
+      new UnaryCall<v1::ListMapsResponse>("ListMaps", ctx, &metrics_, &open_calls_, raw_response);
+  Guarded(call, "ListMaps", "", [&] {
+    if (draining()) {
+      call->Complete(kDraining);
+      return;
+    }
+    v1::ListMapsRequest request;
+    if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
+      call->Complete(ToGrpcStatus(s));
+      return;
+    }
+    *call->response() = map_list_;
+    call->Complete(grpc::Status::OK);
+  });
   return call;
 }
 
 grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContext* ctx,
-                                                      const v1::GetMapLayerRequest* request,
-                                                      v1::GetMapLayerResponse* response) {
-  auto* call = new UnaryCall("GetMapLayer", ctx, &metrics_, &open_calls_);
-  if (draining()) {
-    call->Complete(kDraining, request->map());
-    return call;
-  }
-  absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(maps_, request->map());
-  if (!map.ok()) {
-    call->Complete(ToGrpcStatus(map.status()), request->map());
-    return call;
-  }
-  const v1::MapLayer layer = request->layer();
-  if (layer != v1::POPULATION_DENSITY && layer != v1::SHELTER && layer != v1::TERRAIN &&
-      layer != v1::NO_FLY) {
-    call->Complete(
-        grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                     absl::StrFormat("layer has value %d; it must be POPULATION_DENSITY (1), "
-                                     "SHELTER (2), TERRAIN (3) or NO_FLY (4)",
-                                     static_cast<int>(layer))),
-        request->map());
-    return call;
-  }
-  // Bounded so that the response stays at most 4096 x 4096 floats (64 MiB,
-  // the server's send limit); 512 by default, enough for a picture.
-  int max_side = request->max_side_cells();
-  if (max_side == 0) max_side = 512;
-  if (max_side < 1 || max_side > 4096) {
-    call->Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                                absl::StrFormat("max_side_cells has value %d; it must be in "
-                                                "[1, 4096] (0: 512)",
-                                                request->max_side_cells())),
-                   request->map());
-    return call;
-  }
-  const bool queued = eval_pool_.TrySubmit([call, response, map = *map, layer, max_side] {
-    *response = DownsampleLayer(*map, layer, max_side);
-    call->Complete(grpc::Status::OK, map->name());
+                                                      const grpc::ByteBuffer* raw_request,
+                                                      grpc::ByteBuffer* raw_response) {
+  auto* call = new UnaryCall<v1::GetMapLayerResponse>("GetMapLayer", ctx, &metrics_, &open_calls_,
+                                                      raw_response);
+  Guarded(call, "GetMapLayer", "", [&] {
+    if (draining()) {
+      call->Complete(kDraining);
+      return;
+    }
+    v1::GetMapLayerRequest request;
+    if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
+      call->Complete(ToGrpcStatus(s));
+      return;
+    }
+    absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(maps_, request.map());
+    if (!map.ok()) {
+      call->Complete(ToGrpcStatus(map.status()), request.map());
+      return;
+    }
+    const v1::MapLayer layer = request.layer();
+    if (layer != v1::POPULATION_DENSITY && layer != v1::SHELTER && layer != v1::TERRAIN &&
+        layer != v1::NO_FLY) {
+      call->Complete(
+          grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                       absl::StrFormat("layer has value %d; it must be POPULATION_DENSITY (1), "
+                                       "SHELTER (2), TERRAIN (3) or NO_FLY (4)",
+                                       static_cast<int>(layer))),
+          request.map());
+      return;
+    }
+    // Bounded so that the response stays at most 4096 x 4096 floats (64 MiB,
+    // the server's send limit); 512 by default, enough for a picture.
+    int max_side = request.max_side_cells();
+    if (max_side == 0) max_side = 512;
+    if (max_side < 1 || max_side > 4096) {
+      call->Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                  absl::StrFormat("max_side_cells has value %d; it must be in "
+                                                  "[1, 4096] (0: 512)",
+                                                  request.max_side_cells())),
+                     request.map());
+      return;
+    }
+    const bool queued = eval_pool_.TrySubmit([call, map = *map, layer, max_side] {
+      Guarded(call, "GetMapLayer", map->name(), [&] {
+        *call->response() = DownsampleLayer(*map, layer, max_side);
+        call->Complete(grpc::Status::OK, map->name());
+      });
+    });
+    if (!queued) {
+      call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                  "riskplan-server's evaluation queue is full; retry later"),
+                     request.map());
+    }
   });
-  if (!queued) {
-    call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                "riskplan-server's evaluation queue is full; retry later"),
-                   request->map());
-  }
   return call;
 }
 
 grpc::ServerUnaryReactor* PlannerService::Ping(grpc::CallbackServerContext* ctx,
-                                               const v1::PingRequest* /*request*/,
-                                               v1::PingResponse* /*response*/) {
+                                               const grpc::ByteBuffer* raw_request,
+                                               grpc::ByteBuffer* raw_response) {
   // Answered inline: there is nothing to compute, and a Ping that queued
   // behind evaluations would say nothing about the server's liveness.
-  auto* call = new UnaryCall("Ping", ctx, &metrics_, &open_calls_);
-  call->Complete(draining() ? kDraining : grpc::Status::OK);
+  auto* call = new UnaryCall<v1::PingResponse>("Ping", ctx, &metrics_, &open_calls_, raw_response);
+  Guarded(call, "Ping", "", [&] {
+    v1::PingRequest request;
+    absl::Status parsed = ParseRequest(*raw_request, &request);
+    call->Complete(draining() ? kDraining : ToGrpcStatus(parsed));
+  });
   return call;
 }
 

@@ -15,6 +15,7 @@
 #include <memory>
 
 #include "accel/risk_engine.h"
+#include "core/base/cancellation.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
 #include "server/feasibility_cache.h"
@@ -42,7 +43,14 @@ struct ServiceOptions {
   accel::RiskEngine* engine = nullptr;
 };
 
-class PlannerService final : public v1::Planner::CallbackService {
+// riskplan.v1.Planner with every method raw (server/message_codec.h says
+// why): the service parses each request and serialises each response itself.
+using RawPlannerService = v1::Planner::WithRawCallbackMethod_PlanTrajectory<
+    v1::Planner::WithRawCallbackMethod_EvaluateRisk<
+        v1::Planner::WithRawCallbackMethod_ListMaps<v1::Planner::WithRawCallbackMethod_GetMapLayer<
+            v1::Planner::WithRawCallbackMethod_Ping<v1::Planner::Service>>>>>;
+
+class PlannerService final : public RawPlannerService {
  public:
   // `maps`, `models` and `metrics` must outlive the service.
   PlannerService(const MapRegistry& maps, RiskModelCache& models, ServerMetrics& metrics,
@@ -51,23 +59,30 @@ class PlannerService final : public v1::Planner::CallbackService {
   // down (no handler may run any more).
   ~PlannerService() override;
 
-  grpc::ServerWriteReactor<v1::PlanUpdate>* PlanTrajectory(grpc::CallbackServerContext* ctx,
-                                                           const v1::PlanRequest* request) override;
+  // Each parses its request (INVALID_ARGUMENT when the bytes are not the
+  // method's request message), then serves it.
+  grpc::ServerWriteReactor<grpc::ByteBuffer>* PlanTrajectory(
+      grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* request) override;
   grpc::ServerUnaryReactor* EvaluateRisk(grpc::CallbackServerContext* ctx,
-                                         const v1::EvaluateRiskRequest* request,
-                                         v1::EvaluateRiskResponse* response) override;
+                                         const grpc::ByteBuffer* request,
+                                         grpc::ByteBuffer* response) override;
   grpc::ServerUnaryReactor* ListMaps(grpc::CallbackServerContext* ctx,
-                                     const v1::ListMapsRequest* request,
-                                     v1::ListMapsResponse* response) override;
+                                     const grpc::ByteBuffer* request,
+                                     grpc::ByteBuffer* response) override;
   grpc::ServerUnaryReactor* GetMapLayer(grpc::CallbackServerContext* ctx,
-                                        const v1::GetMapLayerRequest* request,
-                                        v1::GetMapLayerResponse* response) override;
-  grpc::ServerUnaryReactor* Ping(grpc::CallbackServerContext* ctx, const v1::PingRequest* request,
-                                 v1::PingResponse* response) override;
+                                        const grpc::ByteBuffer* request,
+                                        grpc::ByteBuffer* response) override;
+  grpc::ServerUnaryReactor* Ping(grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* request,
+                                 grpc::ByteBuffer* response) override;
 
   // From now on every new call gets UNAVAILABLE. Thread-safe.
   void StartDraining() { draining_.store(true); }
   bool draining() const { return draining_.load(); }
+  // Stops the evaluations queued and running (they end with UNAVAILABLE)
+  // and the model builds: the drain's last step before gRPC shuts down, so
+  // that no worker is left computing for a call that cannot be answered.
+  // Thread-safe.
+  void StopEvaluations();
 
   ActivePlans& active_plans() { return active_; }
   // Calls of this service gRPC has not finished with (plans, evaluations...).
@@ -83,6 +98,7 @@ class PlannerService final : public v1::Planner::CallbackService {
   const std::shared_ptr<FeasibilityCache> checkers_;
   v1::ListMapsResponse map_list_;  // built once
   std::atomic<bool> draining_{false};
+  CancellationToken stop_evaluations_;  // cancelled by StopEvaluations
   ActivePlans active_;
   OpenCalls open_calls_;
   // Declared last: destroyed first, so queued tasks run while everything they

@@ -14,13 +14,6 @@ namespace {
 
 using google::protobuf::FieldDescriptor;
 
-// Prefixes a status message with the request field it concerns.
-absl::Status InField(std::string_view field, const absl::Status& status) {
-  if (status.ok()) return status;
-  return absl::Status(status.code(),
-                      absl::StrFormat("%s: %s", std::string(field), status.message()));
-}
-
 absl::Status CheckFinite(double value, std::string_view field) {
   if (std::isfinite(value)) return absl::OkStatus();
   return absl::InvalidArgumentError(
@@ -28,6 +21,12 @@ absl::Status CheckFinite(double value, std::string_view field) {
 }
 
 }  // namespace
+
+absl::Status InField(std::string_view field, const absl::Status& status) {
+  if (status.ok()) return status;
+  return absl::Status(status.code(),
+                      absl::StrFormat("%s: %s", std::string(field), status.message()));
+}
 
 // By reflection: every field of ModelParameters is named after a ModelParam,
 // so a parameter added to both needs no code here. Only fields the request
@@ -57,6 +56,16 @@ absl::StatusOr<ModelParams> ModelParamsFromProto(const v1::ModelParameters& prot
   }
   if (absl::Status s = ValidateModelParams(params); !s.ok()) return InField("model_params", s);
   return params;
+}
+
+ModelBuildLimits BuildLimits(const RequestLimits& limits, StopCondition stop) {
+  return ModelBuildLimits{.max_table_bytes = limits.max_table_bytes,
+                          .max_table_bytes_source = "--max_table_bytes",
+                          .stop = stop};
+}
+
+absl::Status CheckModelWork(const ModelParams& params, const RequestLimits& limits) {
+  return InField("model_params", ImpactTable::CheckMinBytes(params, BuildLimits(limits)));
 }
 
 absl::StatusOr<Pose> PoseFromProto(const v1::Pose& pose, std::string_view field) {
@@ -185,11 +194,21 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
   if (!params.ok()) return params.status();
   spec.params = *params;
+  if (absl::Status s = CheckModelWork(spec.params, limits); !s.ok()) return s;
 
   if (absl::Status s = CheckPlannerParams(spec.algorithm, request.planner_params()); !s.ok()) {
     return s;
   }
   spec.options.params.insert(request.planner_params().begin(), request.planner_params().end());
+  // The planner checks the same bound again (CheckEdgeSamples); here it
+  // refuses the request before it is queued.
+  spec.options.max_edge_samples = limits.max_edge_samples;
+  if (absl::Status s =
+          CheckEdgeSampleBound(spec.algorithm, *spec.map, spec.params, spec.start, spec.goal,
+                               spec.options.params, limits.max_edge_samples, "--max_edge_samples");
+      !s.ok()) {
+    return InField("model_params", s);
+  }
 
   const int64_t interval_ms = request.min_update_interval_ms();
   if (interval_ms < 0 || interval_ms > limits.max_update_interval_ms) {
@@ -332,6 +351,7 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
   if (!params.ok()) return params.status();
   spec.params = *params;
+  if (absl::Status s = CheckModelWork(spec.params, limits); !s.ok()) return s;
   spec.include_samples = request.include_samples();
   // Checked even when disabled, so that a client learns of a bad option
   // before it turns the check on.

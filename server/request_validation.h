@@ -22,9 +22,10 @@
 #include "absl/time/time.h"
 #include "core/base/geometry.h"
 #include "core/base/model_params.h"
-#include "core/planners/planner.h"
 #include "core/map/risk_map.h"
+#include "core/planners/planner.h"
 #include "core/planners/two_tier_feasibility.h"
+#include "core/risk/impact_table.h"
 #include "riskplan/v1/planner.pb.h"
 #include "server/map_registry.h"
 
@@ -40,11 +41,28 @@ struct RequestLimits {
   int64_t max_eval_samples = 2000000;     // midpoint samples of one EvaluateRisk
   int64_t max_response_samples = 200000;  // samples returned with include_samples
   size_t max_obstacle_points = 10000;     // PlanRequest.obstacle_points (<= kMaxObstaclePoints)
+  int64_t max_edge_samples = kDefaultMaxEdgeSamples;  // samples of one edge of a plan
+  size_t max_table_bytes = kDefaultMaxTableBytes;     // impact table of a request's parameters
 };
+
+// The bounds of building a model for a request: --max_table_bytes, and
+// `stop` (the server's drain).
+ModelBuildLimits BuildLimits(const RequestLimits& limits, StopCondition stop = {});
+
+// `status` with its message prefixed by the request field it concerns,
+// "FIELD: MESSAGE" (OK stays OK).
+absl::Status InField(std::string_view field, const absl::Status& status);
 
 // Converts the overrides onto the defaults and validates the result
 // (ValidateModelParams); errors name "model_params.<field>".
 absl::StatusOr<ModelParams> ModelParamsFromProto(const v1::ModelParameters& proto);
+
+// The work a request's model parameters ask for, bounded before anything is
+// queued: an impact table that cannot fit in limits.max_table_bytes whatever
+// its kernels is INVALID_ARGUMENT naming the parameters, the bytes and the
+// limit. (The exact size is checked when the table is built, off the gRPC
+// thread.)
+absl::Status CheckModelWork(const ModelParams& params, const RequestLimits& limits);
 
 // Checks that the four numbers are finite; `field` names the pose in errors.
 absl::StatusOr<Pose> PoseFromProto(const v1::Pose& pose, std::string_view field);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <thread>
@@ -62,6 +63,12 @@ ABSL_FLAG(int64_t, max_eval_samples, 2000000,
           "Most samples (length / sample_step_m) of one EvaluateRisk trajectory");
 ABSL_FLAG(int64_t, max_response_samples, 200000,
           "Most samples an EvaluateRisk response returns with include_samples");
+ABSL_FLAG(int64_t, max_edge_samples, riskplan::kDefaultMaxEdgeSamples,
+          "Most samples one edge of a plan may need, projected from the request before it is "
+          "queued (map diagonal, turn radius, climbs, sample_step_m); more: INVALID_ARGUMENT");
+ABSL_FLAG(int64_t, max_table_bytes, int64_t{512} << 20,
+          "Largest impact table a request's model parameters may build, bytes (the default "
+          "parameters' is about 34 MB on a 5 m map); larger: INVALID_ARGUMENT");
 ABSL_FLAG(int, max_request_bytes, 4 << 20,
           "Largest request message, bytes; larger ones get RESOURCE_EXHAUSTED from gRPC");
 ABSL_FLAG(int, model_cache_size, 4,
@@ -182,6 +189,9 @@ ServiceOptions ServiceOptionsFromFlags() {
                static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_obstacle_points))));
   options.limits.max_eval_samples = absl::GetFlag(FLAGS_max_eval_samples);
   options.limits.max_response_samples = absl::GetFlag(FLAGS_max_response_samples);
+  options.limits.max_edge_samples = absl::GetFlag(FLAGS_max_edge_samples);
+  options.limits.max_table_bytes =
+      static_cast<size_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_max_table_bytes)));
   return options;
 }
 
@@ -215,6 +225,12 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
           absl::StrFormat("--%s must be >= 0", absl::GetFlagReflectionHandle(*flag).Name()));
     }
   }
+  if (options.limits.max_edge_samples < 2 || absl::GetFlag(FLAGS_max_table_bytes) < 1 ||
+      options.limits.max_eval_samples < 1 || options.limits.max_response_samples < 0) {
+    return absl::InvalidArgumentError(
+        "--max_edge_samples must be >= 2, --max_table_bytes and --max_eval_samples >= 1, "
+        "--max_response_samples >= 0");
+  }
   if (absl::GetFlag(FLAGS_feasibility_cache_size) < 1) {
     return absl::InvalidArgumentError("--feasibility_cache_size must be >= 1");
   }
@@ -244,7 +260,7 @@ struct LoadedMaps {
   std::unique_ptr<RiskModelCache> models;  // reads `registry`: declared after it
 };
 
-absl::StatusOr<LoadedMaps> LoadMaps() {
+absl::StatusOr<LoadedMaps> LoadMaps(const RequestLimits& limits) {
   const absl::Time load_start = absl::Now();
   const std::string maps_dir = absl::GetFlag(FLAGS_maps);
   absl::StatusOr<std::unique_ptr<MapRegistry>> registry =
@@ -253,7 +269,7 @@ absl::StatusOr<LoadedMaps> LoadMaps() {
           : MapRegistry::LoadDirectory(maps_dir);
   if (!registry.ok()) return registry.status();
   absl::StatusOr<std::unique_ptr<RiskModelCache>> models = RiskModelCache::Create(
-      **registry, static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)));
+      **registry, static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)), BuildLimits(limits));
   if (!models.ok()) return models.status();
   LogEvent("maps_loaded", absl::StrFormat("maps=[%s] bytes=%d seconds=%.2f",
                                           (*registry)->NameList(), (*registry)->MemoryBytes(),
@@ -374,11 +390,26 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, grpc::S
   ActivePlans& plans = service.active_plans();
   LogEvent("draining", absl::StrFormat("signal=%d running_plans=%d grace_ms=%d", signal_number,
                                        plans.running(), grace_ms));
+  // A last resort, in case some work ignores its stop (a bug): the process
+  // ends two seconds after the grace period whatever is still running, so
+  // that a stuck thread cannot hold a terminating pod. Exit code 1 says the
+  // drain did not complete.
+  std::thread([deadline = drain_start + grace + absl::Seconds(2)] {
+    absl::SleepFor(deadline - absl::Now());
+    LogEvent("drain_timeout", "work still running after the grace period; exiting");
+    std::_Exit(1);
+  }).detach();
   if (!plans.WaitUntilIdle(drain_start + grace - stop_margin)) {
     LogEvent("stopping_plans", absl::StrFormat("running_plans=%d", plans.running()));
     plans.StopAll();
-    plans.WaitUntilIdle(drain_start + grace);
   }
+  // Evaluations (and model builds) get as long as plans, then are stopped:
+  // they answer UNAVAILABLE at once, and no worker is left computing for a
+  // call that gRPC's shutdown would cancel anyway.
+  if (!service.open_calls().WaitUntilNone(drain_start + grace - stop_margin)) {
+    service.StopEvaluations();
+  }
+  plans.WaitUntilIdle(drain_start + grace);
   // Final messages still in flight and evaluations get what is left of the
   // grace period; once none is open, gRPC is shut down at once (calls still
   // open after the grace period are cancelled). Waiting on gRPC's Shutdown
@@ -402,7 +433,7 @@ int Main() {
   SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
   const sigset_t stop_signals = BlockStopSignals();
 
-  absl::StatusOr<LoadedMaps> maps = LoadMaps();
+  absl::StatusOr<LoadedMaps> maps = LoadMaps(config->options.limits);
   if (!maps.ok()) return Fail(1, absl::StrFormat("cannot start: %s", maps.status().message()));
   absl::StatusOr<std::unique_ptr<accel::RiskEngine>> engine = MakeEngine(config->cpu_kernel);
   if (!engine.ok()) {

@@ -1,6 +1,9 @@
 #include "server/status_util.h"
 
+#include <new>
 #include <string>
+
+#include "absl/strings/str_format.h"
 
 namespace riskplan::server {
 
@@ -12,6 +15,16 @@ grpc::Status ToGrpcStatus(const absl::Status& status) {
                                          ? static_cast<grpc::StatusCode>(code)
                                          : grpc::StatusCode::UNKNOWN;
   return grpc::Status(grpc_code, std::string(status.message()));
+}
+
+absl::Status StatusFromException(const std::exception& exception, std::string_view what) {
+  if (dynamic_cast<const std::bad_alloc*>(&exception) != nullptr) {
+    return absl::ResourceExhaustedError(absl::StrFormat(
+        "%s: riskplan-server ran out of memory (%s); retry later or on another replica",
+        std::string(what), exception.what()));
+  }
+  return absl::InternalError(
+      absl::StrFormat("%s: unexpected exception: %s", std::string(what), exception.what()));
 }
 
 // The names of google.rpc.Code, which the log and the metric labels share.

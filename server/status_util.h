@@ -6,6 +6,7 @@
 #ifndef RISKPLAN_SERVER_STATUS_UTIL_H_
 #define RISKPLAN_SERVER_STATUS_UTIL_H_
 
+#include <exception>
 #include <string_view>
 
 #include "absl/status/status.h"
@@ -16,6 +17,14 @@ namespace riskplan::server {
 // Same code (the numeric values of absl::StatusCode and grpc::StatusCode are
 // those of google.rpc.Code), same message. Unknown codes become UNKNOWN.
 grpc::Status ToGrpcStatus(const absl::Status& status);
+
+// The status of a request whose work threw `exception` (`what` says which
+// work, e.g. "EvaluateRisk"): RESOURCE_EXHAUSTED for std::bad_alloc (the
+// server ran out of memory; another replica, or the same one later, may
+// not), INTERNAL naming the exception otherwise. No exception leaves a
+// request's thread: the pools and handlers catch them and end the call with
+// this status.
+absl::Status StatusFromException(const std::exception& exception, std::string_view what);
 
 // The canonical upper-case name of a gRPC status code, e.g. "RESOURCE_EXHAUSTED"
 // (for logs and metric labels).

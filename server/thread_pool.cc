@@ -1,6 +1,9 @@
 #include "server/thread_pool.h"
 
+#include <exception>
 #include <utility>
+
+#include "server/rpc_log.h"
 
 namespace riskplan::server {
 
@@ -49,8 +52,16 @@ void ThreadPool::WorkerLoop() {
       queue_.pop_front();
     }
     // Run without the lock: tasks take seconds, and other workers and
-    // TrySubmit must go on meanwhile.
-    task();
+    // TrySubmit must go on meanwhile. Tasks end their own calls on an
+    // exception (StatusFromException); one that still escapes is logged
+    // rather than allowed to terminate the server.
+    try {
+      task();
+    } catch (const std::exception& e) {
+      LogEvent("task_exception", e.what());
+    } catch (...) {
+      LogEvent("task_exception", "an exception that is not a std::exception");
+    }
   }
 }
 

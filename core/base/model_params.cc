@@ -1,5 +1,6 @@
 #include "core/base/model_params.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "absl/strings/str_format.h"
@@ -7,60 +8,86 @@
 namespace riskplan {
 namespace {
 
-// Accepts [lo, hi] (both inclusive) and finite values only.
-absl::Status CheckRange(const char* name, double value, double lo, double hi) {
-  if (!std::isfinite(value) || value < lo || value > hi) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "parameter '%s' has value %g; it must be finite and in [%g, %g]", name, value, lo, hi));
-  }
-  return absl::OkStatus();
-}
-
-// Accepts (lo, hi]: strictly positive quantities.
-absl::Status CheckPositive(const char* name, double value, double hi) {
-  if (!std::isfinite(value) || value <= 0.0 || value > hi) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "parameter '%s' has value %g; it must be finite and in (0, %g]", name, value, hi));
-  }
-  return absl::OkStatus();
-}
-
 struct FieldRef {
-  std::string_view name;
   double ModelParams::*real = nullptr;
   int ModelParams::*integer = nullptr;
+  ModelParamRange range;
 };
 
-// One table for SetModelParam, GetModelParam and ModelParamNames, so that a new
-// field needs one line here.
+FieldRef Real(double ModelParams::*field, std::string_view name, double min_value, double max_value,
+              std::string_view why) {
+  return FieldRef{field, nullptr, ModelParamRange{name, min_value, max_value, false, why}};
+}
+
+FieldRef Whole(int ModelParams::*field, std::string_view name, double min_value, double max_value,
+               std::string_view why) {
+  return FieldRef{nullptr, field, ModelParamRange{name, min_value, max_value, true, why}};
+}
+
+// One table for SetModelParam, GetModelParam, ModelParamNames and the ranges
+// ValidateModelParams checks, so that a new field needs one entry here.
+// Every bound is closed, so the table prints as [min, max] everywhere.
 const std::vector<FieldRef>& Fields() {
   static const auto* fields = new std::vector<FieldRef>{
-      {"mass_kg", &ModelParams::mass_kg},
-      {"drag_coefficient", &ModelParams::drag_coefficient},
-      {"frontal_area_m2", &ModelParams::frontal_area_m2},
-      {"airspeed_mps", &ModelParams::airspeed_mps},
-      {"uav_radius_m", &ModelParams::uav_radius_m},
-      {"turn_radius_m", &ModelParams::turn_radius_m},
-      {"max_climb_rad", &ModelParams::max_climb_rad},
-      {"failure_rate_per_s", &ModelParams::failure_rate_per_s},
-      {"gravity_mps2", &ModelParams::gravity_mps2},
-      {"air_density_kgpm3", &ModelParams::air_density_kgpm3},
-      {"person_radius_m", &ModelParams::person_radius_m},
-      {"person_height_m", &ModelParams::person_height_m},
-      {"alpha_j", &ModelParams::alpha_j},
-      {"beta_j", &ModelParams::beta_j},
-      {"sigma_pos_m", &ModelParams::sigma_pos_m},
-      {"sigma_speed_mps", &ModelParams::sigma_speed_mps},
-      {"sigma_wind_mps", &ModelParams::sigma_wind_mps},
-      {"heading_bins", nullptr, &ModelParams::heading_bins},
-      {"height_bin_m", &ModelParams::height_bin_m},
-      {"table_max_height_m", &ModelParams::table_max_height_m},
-      {"max_half_width", nullptr, &ModelParams::max_half_width},
-      {"sample_step_m", &ModelParams::sample_step_m},
-      {"min_agl_m", &ModelParams::min_agl_m},
-      {"max_agl_m", &ModelParams::max_agl_m},
-      {"glide_ratio", &ModelParams::glide_ratio},
-      {"glide_clearance_m", &ModelParams::glide_clearance_m},
+      Real(&ModelParams::mass_kg, "mass_kg", 0.01, 1000.0,
+           "from a 10 g micro drone to a tonne; the mass divides the drag of the ballistic fall"),
+      Real(&ModelParams::drag_coefficient, "drag_coefficient", 0.0, 10.0,
+           "0 is a fall in vacuum; a flat plate across the flow is about 2"),
+      Real(&ModelParams::frontal_area_m2, "frontal_area_m2", 0.0, 100.0,
+           "0 is a fall without drag"),
+      Real(&ModelParams::airspeed_mps, "airspeed_mps", 1.0, 200.0,
+           "a fixed wing flies above its stall speed, at least 1 m/s even indoors; the risk per "
+           "metre is lambda / v"),
+      Real(&ModelParams::uav_radius_m, "uav_radius_m", 0.0, 50.0, "a point to a 100 m wingspan"),
+      Real(&ModelParams::turn_radius_m, "turn_radius_m", 1.0, 10000.0,
+           "no fixed wing turns tighter than 1 m at flying speed; a climb's spiral makes "
+           "abs(dz) / (2 pi R tan(max_climb_rad)) turns"),
+      Real(&ModelParams::max_climb_rad, "max_climb_rad", 0.01, 1.4,
+           "a 1 % gradient (0.57 degrees) is below any aircraft's certified climb; a climb of dz "
+           "needs abs(dz) / tan(max_climb_rad) of horizontal flight; 1.4 rad is 80 degrees"),
+      Real(&ModelParams::failure_rate_per_s, "failure_rate_per_s", 0.0, 1.0,
+           "0 never fails; 1 fails every second"),
+      Real(&ModelParams::gravity_mps2, "gravity_mps2", 0.1, 30.0,
+           "from a small moon (Ceres 0.28) to Jupiter (24.8); a fall lasts at least "
+           "sqrt(2 h / g)"),
+      Real(&ModelParams::air_density_kgpm3, "air_density_kgpm3", 0.0, 10.0,
+           "0 is vacuum; Titan's surface air is 5.4"),
+      Real(&ModelParams::person_radius_m, "person_radius_m", 0.0, 10.0,
+           "exposed-area model of a person"),
+      Real(&ModelParams::person_height_m, "person_height_m", 0.0, 10.0,
+           "exposed-area model of a person"),
+      Real(&ModelParams::alpha_j, "alpha_j", 1.0, 1e12,
+           "impact energy at which p_cas is 1/2 with shelter 6; must exceed beta_j"),
+      Real(&ModelParams::beta_j, "beta_j", 1.0, 1e12,
+           "energy below which an impact never kills (the literature uses 34 to 100 J); below 1 J "
+           "sqrt(alpha / beta) and (beta / E)^(3 / S) leave the range of a double"),
+      Real(&ModelParams::sigma_pos_m, "sigma_pos_m", 0.01, 1000.0,
+           "RTK positioning reaches about 1 cm; its inverse square weighs the impact kernel, so 0 "
+           "would divide by zero"),
+      Real(&ModelParams::sigma_speed_mps, "sigma_speed_mps", 0.0, 100.0,
+           "spread of the speed at failure"),
+      Real(&ModelParams::sigma_wind_mps, "sigma_wind_mps", 0.0, 100.0, "gusts up to a hurricane's"),
+      Whole(&ModelParams::heading_bins, "heading_bins", 1.0, 3600.0,
+            "down to a tenth of a degree; the table's size is also bounded (--max_table_bytes)"),
+      Real(&ModelParams::height_bin_m, "height_bin_m", 0.1, 1000.0,
+           "finer than 10 cm is below any terrain model's accuracy"),
+      Real(&ModelParams::table_max_height_m, "table_max_height_m", 0.1, 5000.0,
+           "a small UAV flies below 5 km above the ground; a multiple of height_bin_m"),
+      Whole(&ModelParams::max_half_width, "max_half_width", 0.0, 63.0,
+            "kernels of at most 127 x 127 cells, the maps' padding (RiskMap::kPad)"),
+      Real(&ModelParams::sample_step_m, "sample_step_m", 0.1, 1000.0,
+           "M is constant over a map cell and a height bin, so steps under 10 cm add cost, not "
+           "accuracy; the samples of a trajectory and of a planner's edge are also bounded "
+           "(--max_eval_samples, --max_edge_samples)"),
+      Real(&ModelParams::min_agl_m, "min_agl_m", 0.0, 10000.0,
+           "bottom of the flight band above the terrain"),
+      Real(&ModelParams::max_agl_m, "max_agl_m", 1.0, 10000.0,
+           "top of the flight band, above min_agl_m"),
+      Real(
+          &ModelParams::glide_ratio, "glide_ratio", 1.0, 1000.0,
+          "below 1 (steeper than 45 degrees) is a fall, not a glide; the best sailplanes reach 70"),
+      Real(&ModelParams::glide_clearance_m, "glide_clearance_m", 0.0, 1000.0,
+           "terrain clearance of an emergency glide"),
   };
   return *fields;
 }
@@ -69,7 +96,7 @@ const std::vector<FieldRef>& Fields() {
 
 absl::Status SetModelParam(ModelParams* params, std::string_view name, double value) {
   for (const FieldRef& f : Fields()) {
-    if (f.name != name) continue;
+    if (f.range.name != name) continue;
     if (f.real != nullptr) {
       params->*f.real = value;
       return absl::OkStatus();
@@ -87,7 +114,7 @@ absl::Status SetModelParam(ModelParams* params, std::string_view name, double va
 
 absl::StatusOr<double> GetModelParam(const ModelParams& params, std::string_view name) {
   for (const FieldRef& f : Fields()) {
-    if (f.name != name) continue;
+    if (f.range.name != name) continue;
     return f.real != nullptr ? params.*f.real : static_cast<double>(params.*f.integer);
   }
   return absl::NotFoundError(absl::StrFormat("unknown model parameter '%s'", std::string(name)));
@@ -96,7 +123,7 @@ absl::StatusOr<double> GetModelParam(const ModelParams& params, std::string_view
 const std::vector<std::string_view>& ModelParamNames() {
   static const auto* names = [] {
     auto* v = new std::vector<std::string_view>;
-    for (const FieldRef& f : Fields()) v->push_back(f.name);
+    for (const FieldRef& f : Fields()) v->push_back(f.range.name);
     return v;
   }();
   return *names;
@@ -106,45 +133,50 @@ int ModelParams::HeightBins() const {
   return static_cast<int>(std::lround(table_max_height_m / height_bin_m));
 }
 
-absl::Status ValidateModelParams(const ModelParams& p) {
-  // The upper limits are generous physical bounds for a small fixed-wing UAV;
-  // they exist so that a typo cannot make the impact table or a kernel huge.
-  const absl::Status checks[] = {
-      CheckPositive("mass_kg", p.mass_kg, 1000.0),
-      CheckRange("drag_coefficient", p.drag_coefficient, 0.0, 10.0),
-      CheckRange("frontal_area_m2", p.frontal_area_m2, 0.0, 100.0),
-      CheckPositive("airspeed_mps", p.airspeed_mps, 200.0),
-      CheckRange("uav_radius_m", p.uav_radius_m, 0.0, 50.0),
-      CheckPositive("turn_radius_m", p.turn_radius_m, 10000.0),
-      CheckPositive("max_climb_rad", p.max_climb_rad, 1.4),
-      CheckRange("failure_rate_per_s", p.failure_rate_per_s, 0.0, 1.0),
-      CheckPositive("gravity_mps2", p.gravity_mps2, 100.0),
-      CheckRange("air_density_kgpm3", p.air_density_kgpm3, 0.0, 10.0),
-      CheckRange("person_radius_m", p.person_radius_m, 0.0, 10.0),
-      CheckRange("person_height_m", p.person_height_m, 0.0, 10.0),
-      CheckPositive("alpha_j", p.alpha_j, 1e12),
-      CheckPositive("beta_j", p.beta_j, 1e12),
-      CheckRange("sigma_pos_m", p.sigma_pos_m, 0.0, 1000.0),
-      CheckRange("sigma_speed_mps", p.sigma_speed_mps, 0.0, 100.0),
-      CheckRange("sigma_wind_mps", p.sigma_wind_mps, 0.0, 100.0),
-      CheckRange("heading_bins", p.heading_bins, 1, 3600),
-      CheckPositive("height_bin_m", p.height_bin_m, 1000.0),
-      CheckPositive("table_max_height_m", p.table_max_height_m, 5000.0),
-      CheckRange("max_half_width", p.max_half_width, 0, 63),
-      CheckPositive("sample_step_m", p.sample_step_m, 1000.0),
-      CheckRange("min_agl_m", p.min_agl_m, 0.0, 10000.0),
-      CheckPositive("max_agl_m", p.max_agl_m, 10000.0),
-      CheckPositive("glide_ratio", p.glide_ratio, 1000.0),
-      CheckRange("glide_clearance_m", p.glide_clearance_m, 0.0, 1000.0),
+const std::vector<ModelParamRange>& ModelParamRanges() {
+  static const auto* ranges = [] {
+    auto* v = new std::vector<ModelParamRange>;
+    for (const FieldRef& f : Fields()) v->push_back(f.range);
+    return v;
+  }();
+  return *ranges;
+}
+
+const std::vector<std::string_view>& ModelParamRules() {
+  static const auto* rules = new std::vector<std::string_view>{
+      "alpha_j > beta_j",
+      "table_max_height_m is a multiple of height_bin_m, with 1 to 10000 height bins",
+      "max_agl_m > min_agl_m",
+      "a ballistic fall from table_max_height_m lasts at most 10000 s: max(h / v_t, "
+      "sqrt(2 h / g)) <= 10000 s, with v_t = sqrt(2 mass_kg gravity_mps2 / "
+      "(air_density_kgpm3 drag_coefficient frontal_area_m2)), the terminal velocity",
+      "the drag's time constant 1 / (k max(airspeed_mps, v_t)), with k = air_density_kgpm3 "
+      "drag_coefficient frontal_area_m2 / (2 mass_kg), is at least the ballistic "
+      "integration's fixed step of 0.01 s",
   };
-  for (const absl::Status& s : checks) {
-    if (!s.ok()) return s;
-  }
-  // Gaussian dispersion needs a non-degenerate covariance.
-  if (p.sigma_pos_m <= 0.0 && p.sigma_wind_mps <= 0.0) {
-    return absl::InvalidArgumentError(
-        "parameters 'sigma_pos_m' and 'sigma_wind_mps' are both 0; the impact dispersion "
-        "across the heading would be degenerate");
+  return *rules;
+}
+
+double FallTimeLowerBound(double height_m, const ModelParams& p) {
+  if (!(height_m > 0.0)) return 0.0;
+  const double free_fall_s = std::sqrt(2.0 * height_m / p.gravity_mps2);
+  const double drag = p.air_density_kgpm3 * p.drag_coefficient * p.frontal_area_m2;
+  if (!(drag > 0.0)) return free_fall_s;
+  // The downward speed never exceeds v_t: drag grows with the whole speed,
+  // so it brakes the fall at least as hard as in a vertical drop.
+  const double terminal_mps = std::sqrt(2.0 * p.mass_kg * p.gravity_mps2 / drag);
+  return std::max(free_fall_s, height_m / terminal_mps);
+}
+
+absl::Status ValidateModelParams(const ModelParams& p) {
+  for (const FieldRef& f : Fields()) {
+    const double value = f.real != nullptr ? p.*f.real : static_cast<double>(p.*f.integer);
+    const ModelParamRange& r = f.range;
+    if (!std::isfinite(value) || value < r.min_value || value > r.max_value) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("parameter '%s' has value %g; it must be finite and in [%g, %g]",
+                          std::string(r.name), value, r.min_value, r.max_value));
+    }
   }
   if (p.alpha_j <= p.beta_j) {
     return absl::InvalidArgumentError(absl::StrFormat(
@@ -161,6 +193,39 @@ absl::Status ValidateModelParams(const ModelParams& p) {
     return absl::InvalidArgumentError(
         absl::StrFormat("parameter 'max_agl_m' (%g) must be greater than 'min_agl_m' (%g)",
                         p.max_agl_m, p.min_agl_m));
+  }
+  // Each parameter in range can still make the fall last days (a light,
+  // draggy body in thick air): refused here, before the impact table
+  // integrates anything.
+  if (const double t = FallTimeLowerBound(p.table_max_height_m, p); !(t <= kMaxFallTimeS)) {
+    const double drag = p.air_density_kgpm3 * p.drag_coefficient * p.frontal_area_m2;
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "parameters 'mass_kg' (%g), 'drag_coefficient' (%g), 'frontal_area_m2' (%g), "
+        "'air_density_kgpm3' (%g) and 'gravity_mps2' (%g) give a terminal velocity of %.3g m/s: "
+        "a fall from 'table_max_height_m' (%g m) lasts at least %.3g s; at most %g s of fall is "
+        "simulated",
+        p.mass_kg, p.drag_coefficient, p.frontal_area_m2, p.air_density_kgpm3, p.gravity_mps2,
+        std::sqrt(2.0 * p.mass_kg * p.gravity_mps2 / drag), p.table_max_height_m, t,
+        kMaxFallTimeS));
+  }
+  // The spec integrates with RK4 at a fixed 0.01 s. Drag that brakes the
+  // body faster than that (a light body with a large area) makes the
+  // integration unstable: garbage, or NaN, instead of a fall. Realistic
+  // aircraft are two orders of magnitude away (default: 0.002).
+  const double drag_per_mass =
+      0.5 * p.air_density_kgpm3 * p.drag_coefficient * p.frontal_area_m2 / p.mass_kg;
+  if (drag_per_mass > 0.0) {
+    const double terminal_mps = std::sqrt(p.gravity_mps2 / drag_per_mass);
+    const double rate = drag_per_mass * std::max(p.airspeed_mps, terminal_mps);
+    if (rate * kBallisticStepS > 1.0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "parameters 'mass_kg' (%g), 'drag_coefficient' (%g), 'frontal_area_m2' (%g), "
+          "'air_density_kgpm3' (%g) and 'airspeed_mps' (%g) brake the fall with a time "
+          "constant of %.3g s; the ballistic integration's fixed step of %g s cannot follow "
+          "one under it",
+          p.mass_kg, p.drag_coefficient, p.frontal_area_m2, p.air_density_kgpm3, p.airspeed_mps,
+          1.0 / rate, kBallisticStepS));
+    }
   }
   return absl::OkStatus();
 }

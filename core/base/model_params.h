@@ -60,9 +60,45 @@ struct ModelParams {
   int HeightBins() const;
 };
 
-// Returns OK when every field is finite and inside the range riskplan accepts,
-// else InvalidArgument naming the first offending field and its value.
+// The range riskplan accepts for one parameter, [min_value, max_value]
+// (both inclusive), and why. The bounds are physical (what a small
+// fixed-wing UAV, a person or a planet can be) and keep every quantity the
+// model computes finite and every loop it runs bounded: docs/api.md prints
+// this table, and a test checks that it agrees with the code.
+struct ModelParamRange {
+  std::string_view name;
+  double min_value = 0.0;
+  double max_value = 0.0;
+  bool integer = false;  // whole numbers only
+  std::string_view why;
+};
+
+// Every parameter's range, in declaration order.
+const std::vector<ModelParamRange>& ModelParamRanges();
+
+// The rules between parameters that ValidateModelParams checks after the
+// ranges, one sentence each (docs/api.md lists them).
+const std::vector<std::string_view>& ModelParamRules();
+
+// Returns OK when every field is finite and inside its range
+// (ModelParamRanges) and the parameters together obey ModelParamRules,
+// else InvalidArgument naming the first offending field (or fields), its
+// value and the limit, e.g. "parameter 'beta_j' has value 5e-324; it must be
+// finite and in [1, 1e+12]".
 absl::Status ValidateModelParams(const ModelParams& params);
+
+// The fixed step of the ballistic integration (spec section 1), s.
+inline constexpr double kBallisticStepS = 0.01;
+// Longest fall the impact table simulates, s (kMaxBallisticSteps steps of
+// kBallisticStepS).
+inline constexpr double kMaxFallTimeS = 10000.0;
+
+// A lower bound of the time of a ballistic fall from `height_m` (spec
+// section 1): max(h / v_t, sqrt(2 h / g)), with the terminal velocity
+// v_t = sqrt(2 m g / (rho_air c_d A_f)) (infinite without drag). Never more
+// than the simulated fall time, so a parameter set whose bound exceeds
+// kMaxFallTimeS is refused before anything is integrated.
+double FallTimeLowerBound(double height_m, const ModelParams& params);
 
 // Sets the field called `name` (the field names above, e.g. "mass_kg") to
 // `value`. Integer fields take integral values only. Returns InvalidArgument for

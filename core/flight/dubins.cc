@@ -306,8 +306,11 @@ DubinsAirplanePath::DubinsAirplanePath(const Pose& start, const Pose& goal, doub
   // spiralling.
   const double slack = kClimbSlackRelative * std::max(1.0, abs_dz);
   if (abs_dz > planar_length * tan_gamma + slack) {
+    // Counted in double: a steep climb over a small radius can ask for more
+    // turns than an int holds (converting those would be undefined), and the
+    // length that results is then too long for any sample bound to accept.
     const double turns = (abs_dz / tan_gamma - planar_length) / (kTwoPi * radius);
-    spiral_turns_ = std::max(1, static_cast<int>(std::ceil(turns)));
+    spiral_turns_ = std::max(1.0, std::ceil(turns));
   }
   horizontal_length_m_ = planar_length + kTwoPi * radius * spiral_turns_;
   length_m_ = std::hypot(horizontal_length_m_, dz);

@@ -72,7 +72,8 @@ class DubinsAirplanePath {
   const Pose& start() const { return start_; }
   const Pose& goal() const { return goal_; }
   const DubinsPath2D& planar() const { return planar_; }
-  int spiral_turns() const { return spiral_turns_; }
+  // k, a whole number (a double: it may exceed any integer type).
+  double spiral_turns() const { return spiral_turns_; }
 
   // Horizontal length including the spiral: L_h + 2*pi*R*k.
   double HorizontalLength() const { return horizontal_length_m_; }
@@ -95,7 +96,7 @@ class DubinsAirplanePath {
   Pose goal_;
   DubinsPath2D planar_;
   double radius_ = 1.0;
-  int spiral_turns_ = 0;
+  double spiral_turns_ = 0.0;
   double horizontal_length_m_ = 0.0;
   double length_m_ = 0.0;
 };

@@ -8,6 +8,9 @@ namespace riskplan {
 
 int64_t PartCount(double length_m, double step_m) {
   RISKPLAN_DCHECK(step_m > 0.0);
+  // A length that cannot be measured (NaN: coordinates so far apart that the
+  // geometry overflowed) cannot be sampled either: over any bound.
+  if (std::isnan(length_m)) return kMaxPartCount;
   if (!(length_m > 0.0)) return 0;
   const double parts = std::ceil(length_m / step_m);
   // Converting a double at or past 2^63 to int64 is undefined: saturate first.

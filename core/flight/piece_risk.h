@@ -35,10 +35,10 @@
 
 namespace riskplan {
 
-// K = ceil(length_m / step_m): 0 for a piece of length 0 (or NaN), and
-// counted in 64 bits. A count that does not fit (length_m / step_m >= 2^62,
-// or infinite) saturates at kMaxPartCount, so a caller that bounds the number
-// of samples before generating them sees a count over any bound it can set.
+// K = ceil(length_m / step_m): 0 for a piece of length 0, and counted in 64
+// bits. A count that does not fit (length_m / step_m >= 2^62, infinite or
+// NaN) saturates at kMaxPartCount, so a caller that bounds the number of
+// samples before generating them sees a count over any bound it can set.
 // REQUIRES: step_m > 0.
 inline constexpr int64_t kMaxPartCount = int64_t{1} << 62;
 int64_t PartCount(double length_m, double step_m);

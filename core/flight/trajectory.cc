@@ -1,5 +1,6 @@
 #include "core/flight/trajectory.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -80,10 +81,6 @@ std::string Violation::ToString() const {
     case ViolationKind::kAboveMaxAltitude:
       return where + absl::StrFormat(": altitude %.1f m > ceiling %.1f m (terrain + max_agl)",
                                      pose.z, limit_m);
-    case ViolationKind::kImpactOutsideMap:
-      return where +
-             ": the impact window of a fall from here reaches past the map's edge, where the "
-             "ground is unknown";
     default:
       return where;
   }
@@ -92,72 +89,106 @@ std::string Violation::ToString() const {
 absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
                                                         std::span<const TrajectoryPiece> pieces,
                                                         const EvaluationOptions& options,
-                                                        RiskEvaluator* evaluator) {
+                                                        RiskEvaluator* evaluator,
+                                                        const StopCondition& stop) {
   const ModelParams& params = model.params();
   TrajectoryEvaluation out;
   out.pieces.resize(pieces.size());
+  DirectRiskEvaluator direct;
+  RiskEvaluator* eval = evaluator != nullptr ? evaluator : &direct;
 
-  // Midpoints of every piece, in order, in one batch.
   std::vector<PieceRisk> rules;
   rules.reserve(pieces.size());
-  std::vector<Pose> midpoints;
+  double length_m = 0.0;
   for (size_t p = 0; p < pieces.size(); ++p) {
     const PieceRisk& rule = rules.emplace_back(pieces[p], params.sample_step_m, params);
     out.pieces[p].length_m = pieces[p].Length();
     out.pieces[p].parts = rule.parts();
-    rule.AppendMidpoints(0, rule.parts(), &midpoints);
+    length_m += pieces[p].Length();
   }
 
-  std::vector<ConfigurationRisk> risks(midpoints.size());
-  DirectRiskEvaluator direct;
-  RiskEvaluator* eval = evaluator != nullptr ? evaluator : &direct;
-  if (absl::Status s = eval->EvaluateBatch(model, midpoints, risks); !s.ok()) return s;
+  // Pieces are walked in order, each one's admissibility samples in order of
+  // arc length (start, midpoints, end) and its midpoints' M summed in the
+  // same order, whatever the batches. `checking` is the piece being walked;
+  // `checked` its admissibility samples done so far.
+  size_t checking = 0;
+  int64_t checked = 0;
+  double piece_start_m = 0.0;  // arc length at the start of piece `checking`
+  // `m`, when given, is q's M as evaluated: for a midpoint it tells the
+  // window rule without locating q again.
+  auto check = [&](size_t p, const Pose& q, double s, const ConfigurationRisk* m = nullptr) {
+    double limit = 0.0;
+    const ViolationKind kind =
+        m != nullptr ? model.CheckConfiguration(q, *m, &limit) : model.CheckConfiguration(q, &limit);
+    if (kind == ViolationKind::kNone) return;
+    out.pieces[p].admissible = false;
+    out.admissible = false;
+    if (!out.first_violation.has_value()) {
+      out.first_violation = Violation{kind, q, piece_start_m + s, static_cast<int>(p), limit};
+    }
+  };
+  // Checks the end of piece `checking` (and its start, if it had no
+  // midpoint), adds its risk, and moves on to the next piece.
+  auto finish_piece = [&]() {
+    const PieceRisk& rule = rules[checking];
+    if (checked == 0) check(checking, rule.AdmissibilitySample(0), 0.0);
+    double s = 0.0;
+    const Pose end = rule.AdmissibilitySample(rule.admissibility_samples() - 1, &s);
+    check(checking, end, s);
+    out.pieces[checking].risk = rule.Risk();
+    out.risk += out.pieces[checking].risk;
+    piece_start_m += pieces[checking].Length();
+    ++checking;
+    checked = 0;
+  };
 
-  // Risk and admissibility, piece by piece: the admissibility samples in
-  // order of arc length (start, midpoints, end), the midpoints' M summed in
-  // the same order.
-  size_t cursor = 0;
-  double start_s = 0.0;
-  for (size_t p = 0; p < pieces.size(); ++p) {
-    PieceRisk& rule = rules[p];
-    const int piece = static_cast<int>(p);
-    const size_t first_midpoint = cursor;
-    for (int64_t i = 0; i < rule.admissibility_samples(); ++i) {
-      double s = 0.0;
-      double limit = 0.0;
-      ViolationKind kind = ViolationKind::kNone;
-      Pose q;
-      if (i >= 1 && i <= rule.parts()) {
-        // A midpoint is the very pose that was evaluated: its M tells the
-        // window rule without locating it again.
-        q = midpoints[cursor];
-        s = rule.MidpointArc(i - 1);
-        rule.Add(risks[cursor]);
-        kind = model.CheckConfiguration(q, risks[cursor], &limit);
-        ++cursor;
-      } else {
-        q = rule.AdmissibilitySample(i, &s);
-        kind = model.CheckConfiguration(q, &limit);
-      }
-      if (kind == ViolationKind::kNone) continue;
-      out.pieces[p].admissible = false;
-      out.admissible = false;
-      if (!out.first_violation.has_value()) {
-        out.first_violation = Violation{kind, q, start_s + s, piece, limit};
+  // Midpoints in batches: piece `producing`, from midpoint `next`.
+  size_t producing = 0;
+  int64_t next = 0;
+  std::vector<Pose> batch;
+  std::vector<int32_t> batch_piece;  // the piece of each midpoint of the batch
+  std::vector<ConfigurationRisk> risks;
+  while (true) {
+    batch.clear();
+    batch_piece.clear();
+    while (producing < pieces.size() && batch.size() < kEvaluationBatch) {
+      const PieceRisk& rule = rules[producing];
+      const int64_t end = std::min<int64_t>(
+          rule.parts(), next + static_cast<int64_t>(kEvaluationBatch - batch.size()));
+      rule.AppendMidpoints(next, end, &batch);
+      batch_piece.resize(batch.size(), static_cast<int32_t>(producing));
+      next = end;
+      if (next == rule.parts()) {
+        ++producing;
+        next = 0;
       }
     }
-    out.pieces[p].risk = rule.Risk();
-    out.risk += out.pieces[p].risk;
-    if (options.keep_samples) {
-      for (size_t k = first_midpoint; k < cursor; ++k) {
-        out.samples.push_back(SampleEvaluation{
-            midpoints[k], start_s + rule.MidpointArc(static_cast<int64_t>(k - first_midpoint)),
-            piece, risks[k]});
+    if (batch.empty()) break;
+    if (stop.Reached()) return absl::CancelledError("evaluation stopped");
+    risks.resize(batch.size());
+    if (absl::Status s = eval->EvaluateBatch(model, batch, risks); !s.ok()) return s;
+    for (size_t k = 0; k < batch.size(); ++k) {
+      const size_t p = static_cast<size_t>(batch_piece[k]);
+      while (checking < p) finish_piece();  // pieces before p are complete
+      PieceRisk& rule = rules[p];
+      if (checked == 0) {
+        check(p, rule.AdmissibilitySample(0), 0.0);
+        checked = 1;
+      }
+      // A midpoint is the very pose that was evaluated.
+      const int64_t i = rule.added();
+      const double s = rule.MidpointArc(i);
+      rule.Add(risks[k]);
+      check(p, batch[k], s, &risks[k]);
+      ++checked;
+      if (options.keep_samples) {
+        out.samples.push_back(
+            SampleEvaluation{batch[k], piece_start_m + s, static_cast<int>(p), risks[k]});
       }
     }
-    start_s += pieces[p].Length();
   }
-  out.length_m = start_s;
+  while (checking < pieces.size()) finish_piece();
+  out.length_m = length_m;
   return out;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/base/cancellation.h"
 #include "core/base/geometry.h"
 #include "core/flight/piece_risk.h"
 #include "core/flight/trajectory_piece.h"
@@ -73,13 +74,21 @@ struct EvaluationOptions {
   bool keep_samples = false;
 };
 
+// Midpoints per risk batch of EvaluateTrajectory: a trajectory of more
+// samples is evaluated in several batches (same results, bounded memory).
+inline constexpr size_t kEvaluationBatch = size_t{1} << 16;
+
 // Evaluates the risk, length and admissibility of `pieces`. The configuration
-// risks are computed in one batch through `evaluator` (DirectRiskEvaluator when
-// null). Fails only when the evaluator does.
+// risks are computed through `evaluator` (DirectRiskEvaluator when null) in
+// batches of up to kEvaluationBatch midpoints, so that the memory it uses
+// does not grow with the trajectory (unless samples are kept). `stop` is
+// polled between batches. Fails only when the evaluator does, or with
+// Cancelled once `stop` is reached.
 absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
                                                         std::span<const TrajectoryPiece> pieces,
                                                         const EvaluationOptions& options = {},
-                                                        RiskEvaluator* evaluator = nullptr);
+                                                        RiskEvaluator* evaluator = nullptr,
+                                                        const StopCondition& stop = {});
 
 }  // namespace riskplan
 

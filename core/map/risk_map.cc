@@ -234,6 +234,10 @@ absl::StatusOr<std::shared_ptr<const RiskMap>> RiskMap::Create(MapHeader header,
   std::shared_ptr<RiskMap> map(new RiskMap());
   map->glide_altitude_ = ComputeGlideAltitude(nx, ny, header.res, layers.terrain, layers.nofly,
                                               layers.landing_sites, glide_ratio, glide_clearance_m);
+  const auto [terrain_min, terrain_max] =
+      std::minmax_element(layers.terrain.begin(), layers.terrain.end());
+  map->terrain_min_m_ = *terrain_min;
+  map->terrain_max_m_ = *terrain_max;
   map->padded_density_ = PadLayer(layers.density, nx, ny, 0.0f);
   map->padded_shelter_ = PadLayer(layers.shelter, nx, ny, 10.0f);
   map->glide_ratio_ = glide_ratio;
@@ -280,6 +284,17 @@ std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
                                          const std::vector<uint8_t>& nofly,
                                          const std::vector<LandingSite>& sites, double glide_ratio,
                                          double clearance_m) {
+  // Never stopped, so never empty.
+  return *ComputeGlideAltitude(nx, ny, res, terrain, nofly, sites, glide_ratio, clearance_m,
+                               StopCondition());
+}
+
+absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double res,
+                                                         const std::vector<float>& terrain,
+                                                         const std::vector<uint8_t>& nofly,
+                                                         const std::vector<LandingSite>& sites,
+                                                         double glide_ratio, double clearance_m,
+                                                         const StopCondition& stop) {
   RISKPLAN_DCHECK(terrain.size() == static_cast<size_t>(nx) * static_cast<size_t>(ny));
   RISKPLAN_DCHECK(nofly.size() == terrain.size());
   RISKPLAN_DCHECK(glide_ratio > 0.0);
@@ -318,7 +333,11 @@ std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
   constexpr int kDi[8] = {1, -1, 0, 0, 1, 1, -1, -1};
   constexpr int kDj[8] = {0, 0, 1, -1, 1, -1, 1, -1};
 
-  while (!heap.empty()) {
+  for (uint64_t settled = 0; !heap.empty(); ++settled) {
+    // A few milliseconds between polls: 2^16 relaxations.
+    if ((settled & 0xffff) == 0xffff && stop.Reached()) {
+      return absl::CancelledError("glide layer: stopped");
+    }
     const GlideHeap::Entry top = heap.Top();
     // Stale entries (a cell lowered after it was pushed) are skipped by value
     // rather than with a settled flag per cell.

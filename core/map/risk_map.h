@@ -20,6 +20,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/base/cancellation.h"
 #include "core/base/check.h"
 
 namespace riskplan {
@@ -135,6 +136,9 @@ class RiskMap {
     return layers_.nofly[Index(i, j)] != 0;
   }
   const MapLayers& layers() const { return layers_; }
+  // The lowest and highest terrain of the map, m AMSL (computed once).
+  double terrain_min_m() const { return terrain_min_m_; }
+  double terrain_max_m() const { return terrain_max_m_; }
   const std::vector<LandingSite>& landing_sites() const { return layers_.landing_sites; }
 
   // Density and shelter with a border of kPad cells on every side (density 0,
@@ -175,6 +179,8 @@ class RiskMap {
   std::vector<float> padded_density_;
   std::vector<float> padded_shelter_;
   std::vector<double> glide_altitude_;
+  double terrain_min_m_ = 0.0;
+  double terrain_max_m_ = 0.0;
   double glide_ratio_ = 10.0;
   double glide_clearance_m_ = 10.0;
 };
@@ -198,6 +204,15 @@ std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
                                          const std::vector<uint8_t>& nofly,
                                          const std::vector<LandingSite>& sites, double glide_ratio,
                                          double clearance_m);
+// The same, polling `stop` every few milliseconds: Cancelled once it is
+// reached (a request's glide parameters make a layer of their own, and a
+// server that drains stops building it).
+absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double res,
+                                                         const std::vector<float>& terrain,
+                                                         const std::vector<uint8_t>& nofly,
+                                                         const std::vector<LandingSite>& sites,
+                                                         double glide_ratio, double clearance_m,
+                                                         const StopCondition& stop);
 
 }  // namespace riskplan
 

@@ -89,6 +89,7 @@ class Run {
         clearance_m_(params.Get("clearance_m")),
         evaluator_(evaluator),
         limits_(options.budget, cancel),
+        stop_(limits_.Stop()),
         on_improvement_(on_improvement),
         rng_(options.seed),
         feasibility_(model_, TwoTierOptions{CollisionRule::kFlightBand,
@@ -105,10 +106,21 @@ class Run {
   Chromosome RandomChromosome();
   std::vector<Pose> Decode(const Chromosome& c) const;
   PieceMemo& Piece(const Pose& a, const Pose& b);
-  // Fitness of every chromosome of `pool` from index `first`.
+  // Fitness of every chromosome of `pool` from index `first`. RunStopped()
+  // when the budget ends or the token is cancelled meanwhile.
   absl::Status Evaluate(std::vector<Chromosome>* pool, size_t first);
+  // Evaluates the samples in batch_ and completes the risk of every piece in
+  // `pending` (in the order of their samples), then empties both.
+  absl::Status FlushBatch(std::vector<std::pair<PieceMemo*, PieceRisk>>* pending);
   void Mutate(int kind, Chromosome* c);
   absl::Status MaybeReport();
+  // The generations, until the budget ends (sets result->reason when the
+  // token is cancelled); RunStopped() when it ends inside one.
+  absl::Status Generations(PlanResult* result);
+
+  // Samples of the fitness's risk evaluated in one batch, at most (plus one
+  // piece's).
+  static constexpr size_t kMaxBatch = size_t{1} << 16;
 
   const PlanningProblem& problem_;
   const RiskModel& model_;
@@ -122,6 +134,7 @@ class Run {
   const double clearance_m_;
   RiskEvaluator* evaluator_;
   RunLimits limits_;
+  const StopCondition stop_;  // limits_'s, polled inside a generation
   const ImprovementCallback& on_improvement_;
   Rng rng_;
   const TwoTierFeasibility feasibility_;
@@ -202,6 +215,23 @@ PieceMemo& Run::Piece(const Pose& a, const Pose& b) {
   return m;
 }
 
+absl::Status Run::FlushBatch(std::vector<std::pair<PieceMemo*, PieceRisk>>* pending) {
+  risks_.resize(batch_.size());
+  if (!batch_.empty()) {
+    if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_, risks_); !s.ok()) return s;
+  }
+  size_t cursor = 0;
+  for (auto& [m, rule] : *pending) {
+    while (!rule.complete()) rule.Add(risks_[cursor++]);
+    m->risk = rule.Risk();
+    m->pending = false;
+    m->has_risk = true;
+  }
+  pending->clear();
+  batch_.clear();
+  return absl::OkStatus();
+}
+
 absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
   const ModelParams& mp = model_.params();
   // Bounded memory; cleared only here, so references stay valid below.
@@ -211,7 +241,14 @@ absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
   // the order of their samples in batch_.
   std::vector<std::pair<PieceMemo*, PieceRisk>> pending;
   std::vector<std::pair<size_t, std::vector<PieceMemo*>>> feasible;
+  // A memo abandoned half-way by a stopped run must not keep its pending
+  // mark (the run ends, but the memo table is the run's).
+  auto stopped = [&]() {
+    for (auto& [m, rule] : pending) m->pending = false;
+    return RunStopped();
+  };
   for (size_t c = first; c < pool->size(); ++c) {
+    if (stop_.Reached()) return stopped();
     Chromosome& ch = (*pool)[c];
     const std::vector<Pose> poses = Decode(ch);
     std::vector<Point3> polyline;
@@ -223,6 +260,8 @@ absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
     if (ch.fitness.collision_cells > 0) continue;
     std::vector<PieceMemo*> memos;
     for (size_t k = 0; k + 1 < poses.size(); ++k) {
+      // Checking a piece is up to --max_edge_samples configurations.
+      if (k > 0 && stop_.Reached()) return stopped();
       PieceMemo& m = Piece(poses[k], poses[k + 1]);
       ch.fitness.violations += m.violations;
       memos.push_back(&m);
@@ -235,23 +274,22 @@ absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
       PieceRisk rule(
           TrajectoryPiece::Manoeuvre(poses[k], poses[k + 1], mp.turn_radius_m, mp.max_climb_rad),
           risk_step_m_, mp);
+      // A batch is evaluated once it holds kMaxBatch samples (it holds
+      // every piece's whole samples, so it may hold one piece more): the
+      // same risks, in bounded memory, however many long pieces a
+      // generation has.
+      if (batch_.size() >= kMaxBatch) {
+        if (stop_.Reached()) return stopped();
+        if (absl::Status s = FlushBatch(&pending); !s.ok()) return s;
+      }
       rule.AppendMidpoints(0, rule.parts(), &batch_);
       m.pending = true;
       pending.emplace_back(&m, std::move(rule));
     }
     feasible.push_back({c, std::move(memos)});
   }
-  risks_.resize(batch_.size());
-  if (!batch_.empty()) {
-    if (absl::Status s = evaluator_->EvaluateBatch(model_, batch_, risks_); !s.ok()) return s;
-  }
-  size_t cursor = 0;
-  for (auto& [m, rule] : pending) {
-    while (!rule.complete()) rule.Add(risks_[cursor++]);
-    m->risk = rule.Risk();
-    m->pending = false;
-    m->has_risk = true;
-  }
+  if (stop_.Reached()) return stopped();
+  if (absl::Status s = FlushBatch(&pending); !s.ok()) return s;
   for (auto& [c, memos] : feasible) {
     double risk = 0.0;
     double length = 0.0;
@@ -299,7 +337,7 @@ absl::Status Run::MaybeReport() {
   if (!best.fitness.Feasible()) return absl::OkStatus();
   if (best_fitness_.has_value() && !(best.fitness < *best_fitness_)) return absl::OkStatus();
   best_fitness_ = best.fitness;
-  auto improvement = EvaluateWaypoints(model_, Decode(best), evaluator_);
+  auto improvement = EvaluateWaypoints(model_, Decode(best), evaluator_, stop_);
   if (!improvement.ok()) return improvement.status();
   // The fitness's exact stage checks the very samples EvaluateTrajectory does.
   if (!improvement->has_value()) return absl::OkStatus();
@@ -337,6 +375,23 @@ absl::StatusOr<PlanResult> Run::Execute() {
 
   PlanResult result;
   result.reason = StopReason::kBudgetExhausted;
+  absl::Status step = Generations(&result);
+  if (!step.ok()) {
+    if (!IsRunStopped(step)) return step;
+    if (limits_.Cancelled()) result.reason = StopReason::kCancelled;
+  }
+  if (!best_.has_value() && result.reason != StopReason::kCancelled) {
+    result.reason = StopReason::kNoSolution;
+  }
+  result.best = best_;
+  result.iterations = generations_;
+  result.tree_size = evaluated_;
+  result.elapsed_s = limits_.Elapsed();
+  result.configurations_evaluated = evaluator_->evaluated();
+  return result;
+}
+
+absl::Status Run::Generations(PlanResult* result) {
   for (size_t c = 0; c < population_; ++c) parents_.push_back(RandomChromosome());
   if (absl::Status st = Evaluate(&parents_, 0); !st.ok()) return st;
   std::stable_sort(parents_.begin(), parents_.end(),
@@ -347,7 +402,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
   std::vector<Chromosome> pool;
   while (true) {
     if (limits_.Cancelled()) {
-      result.reason = StopReason::kCancelled;
+      result->reason = StopReason::kCancelled;
       break;
     }
     if (limits_.OutOfIterations(generations_) || limits_.OutOfTime()) break;
@@ -393,15 +448,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
     }
     if (absl::Status st = MaybeReport(); !st.ok()) return st;
   }
-  if (!best_.has_value() && result.reason != StopReason::kCancelled) {
-    result.reason = StopReason::kNoSolution;
-  }
-  result.best = best_;
-  result.iterations = generations_;
-  result.tree_size = evaluated_;
-  result.elapsed_s = limits_.Elapsed();
-  result.configurations_evaluated = evaluator_->evaluated();
-  return result;
+  return absl::OkStatus();
 }
 
 }  // namespace

@@ -177,7 +177,9 @@ absl::Status Run::Report(const std::vector<GridCell>& cells) {
       realizer.Realize(problem_.start, problem_.goal, path);
   reported_in_env_ = true;
   if (!waypoints.has_value()) return absl::OkStatus();
-  auto improvement = EvaluateWaypoints(model_, std::move(*waypoints), evaluator_);
+  // The token only: the last descent is reported when the time is up.
+  auto improvement =
+      EvaluateWaypoints(model_, std::move(*waypoints), evaluator_, limits_.CancelStop());
   if (!improvement.ok()) return improvement.status();
   if (!improvement->has_value()) return absl::OkStatus();
   PlanImprovement& found = **improvement;
@@ -236,7 +238,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
     if (limits_.OutOfIterations(sweeps_) || limits_.OutOfTime()) {
       if (!reported_in_env_) {
         if (auto cells = potential_.Descend(start_cell_); cells.has_value()) {
-          if (absl::Status s = Report(*cells); !s.ok()) return s;
+          if (absl::Status s = Report(*cells); !s.ok() && !IsRunStopped(s)) return s;
         }
       }
       break;
@@ -249,7 +251,11 @@ absl::StatusOr<PlanResult> Run::Execute() {
     if (!converged) continue;
     std::optional<std::vector<GridCell>> cells = potential_.Descend(start_cell_);
     if (cells.has_value()) {
-      if (absl::Status s = Report(*cells); !s.ok()) return s;
+      if (absl::Status s = Report(*cells); !s.ok()) {
+        if (!IsRunStopped(s)) return s;
+        result.reason = StopReason::kCancelled;  // only the token stops a report
+        break;
+      }
       settled = true;
     } else if (potential_.Value(start_cell_.i, start_cell_.j) == 0.0 ||
                tolerance <= kFinestTolerance) {

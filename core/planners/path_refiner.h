@@ -30,9 +30,11 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/base/cancellation.h"
 #include "core/base/geometry.h"
 #include "core/base/random.h"
 #include "core/flight/trajectory.h"
+#include "core/planners/planner_support.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
 
@@ -53,18 +55,21 @@ class PathRefiner {
 
   // `scale_m`: the largest standard deviation of a new waypoint's horizontal
   // offset, m. `chunk`: midpoints generated, checked and evaluated at a time.
+  // `stop`: polled between chunks (TryEdit then fails with RunStopped()).
   // `evaluator` and `model` must outlive the refiner.
-  PathRefiner(const RiskModel& model, RiskEvaluator* evaluator, double scale_m, int64_t chunk)
+  PathRefiner(const RiskModel& model, RiskEvaluator* evaluator, double scale_m, int64_t chunk,
+              StopCondition stop = {})
       : model_(model),
         evaluator_(evaluator),
         scale_m_(scale_m),
-        chunk_(std::max<int64_t>(1, chunk)) {}
+        chunk_(std::max<int64_t>(1, chunk)),
+        stop_(stop) {}
 
   // Draws one edit of the trajectory `waypoints` (start ... goal, at least 2)
   // whose piece i (waypoints[i] -> waypoints[i + 1]) has the exact risk
   // piece_risks[i], and evaluates it. Returns true and sets *edit when it
   // lowers the risk of the pieces it replaces; false when it does not (or is
-  // not admissible). Errors only from the evaluator.
+  // not admissible). Errors from the evaluator, and RunStopped().
   absl::StatusOr<bool> TryEdit(std::span<const Pose> waypoints, std::span<const double> piece_risks,
                                Rng& rng, Edit* edit) {
     const size_t pieces = piece_risks.size();
@@ -153,6 +158,7 @@ class PathRefiner {
     const ModelParams& mp = model_.params();
     PieceRisk rule(piece, mp.sample_step_m, mp);
     while (!rule.complete()) {
+      if (stop_.Reached()) return RunStopped();
       const int64_t done = rule.added();
       const int64_t end = rule.ChunkEnd(chunk_);
       poses_.clear();
@@ -175,6 +181,7 @@ class PathRefiner {
   RiskEvaluator* evaluator_;
   const double scale_m_;
   const int64_t chunk_;
+  const StopCondition stop_;
   TrajectoryPiece pieces_[2];
   std::vector<Pose> poses_;
   std::vector<ConfigurationRisk> risks_;

@@ -1,8 +1,10 @@
 #include "core/planners/planner.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "absl/strings/str_format.h"
+#include "core/flight/piece_risk.h"
 #include "core/flight/trajectory.h"
 #include "core/planners/genetic_planner.h"
 #include "core/planners/harmonic_planner.h"
@@ -148,6 +150,58 @@ absl::Status CheckRequestObstacles(PlannerAlgorithm algorithm, const PlanOptions
     }
   }
   return absl::OkStatus();
+}
+
+EdgeSampleBound ProjectEdgeSamples(PlannerAlgorithm algorithm, const RiskMap& map,
+                                   const ModelParams& params, const Pose& start, const Pose& goal,
+                                   const std::map<std::string, double>& planner_params) {
+  EdgeSampleBound b;
+  double z_low = std::min({map.terrain_min_m(), start.z, goal.z});
+  double z_high = std::max({map.terrain_max_m() + params.max_agl_m, start.z, goal.z});
+  b.step_m = params.sample_step_m;
+  for (const PlannerParamInfo& info : PlannerParams(algorithm)) {
+    auto given = planner_params.find(info.name);
+    const double value = given != planner_params.end() ? given->second : info.default_value;
+    // 0 means "no fixed altitude" for both.
+    if ((info.name == "flight_altitude_m" || info.name == "fixed_altitude_m") && value > 0.0) {
+      z_low = std::min(z_low, value);
+      z_high = std::max(z_high, value);
+    }
+    if (info.name == "risk_step_m" && value > 0.0) b.step_m = std::min(b.step_m, value);
+  }
+  const double r = params.turn_radius_m;
+  b.map_diagonal_m = std::hypot(map.width_m(), map.height_m());
+  b.climb_m = z_high - z_low;
+  const double planar_m = b.map_diagonal_m + (2.0 + 4.0 * kPi) * r;
+  const double spiral_m = b.climb_m / std::tan(params.max_climb_rad) + kTwoPi * r;
+  b.length_m = std::hypot(std::max(planar_m, spiral_m), b.climb_m);
+  const int64_t parts = PartCount(b.length_m, b.step_m);
+  b.samples = parts >= kMaxPartCount - 2 ? kMaxPartCount : parts + 2;
+  return b;
+}
+
+absl::Status CheckEdgeSampleBound(PlannerAlgorithm algorithm, const RiskMap& map,
+                                  const ModelParams& params, const Pose& start, const Pose& goal,
+                                  const std::map<std::string, double>& planner_params,
+                                  int64_t max_edge_samples, std::string_view limit_source) {
+  const EdgeSampleBound b = ProjectEdgeSamples(algorithm, map, params, start, goal, planner_params);
+  if (b.samples <= max_edge_samples) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "an edge of a %s plan on map '%s' may need %d samples: up to %.1f m long (the map's "
+      "diagonal %.1f m, turn_radius_m %g, climbs of up to %.1f m at max_climb_rad %g) sampled "
+      "every %g m (sample_step_m%s); the limit is %d samples per edge%s",
+      PlannerAlgorithmName(algorithm), map.name(), b.samples, b.length_m, b.map_diagonal_m,
+      params.turn_radius_m, b.climb_m, params.max_climb_rad, b.step_m,
+      algorithm == PlannerAlgorithm::kGenetic ? " or risk_step_m" : "", max_edge_samples,
+      limit_source.empty() ? std::string() : absl::StrFormat(" (%s)", std::string(limit_source))));
+}
+
+absl::Status CheckEdgeSamples(PlannerAlgorithm algorithm, const PlanningProblem& problem,
+                              const PlanOptions& options) {
+  if (problem.model == nullptr) return absl::InvalidArgumentError("planning problem has no model");
+  return CheckEdgeSampleBound(algorithm, problem.model->map(), problem.model->params(),
+                              problem.start, problem.goal, options.params,
+                              options.max_edge_samples);
 }
 
 }  // namespace riskplan

@@ -12,7 +12,6 @@
 #ifndef RISKPLAN_CORE_PLANNERS_PLANNER_H_
 #define RISKPLAN_CORE_PLANNERS_PLANNER_H_
 
-#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -23,6 +22,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/base/cancellation.h"
 #include "core/base/geometry.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
@@ -38,17 +38,6 @@ enum class PlannerAlgorithm {
 
 // "RISK_RRT_STAR", "RRT", "GENETIC", "HARMONIC".
 std::string_view PlannerAlgorithmName(PlannerAlgorithm algorithm);
-
-// Cooperative cancellation, shared between the caller and the planner.
-// Thread-safe. Planners check it at least every few milliseconds.
-class CancellationToken {
- public:
-  void Cancel() { cancelled_.store(true, std::memory_order_relaxed); }
-  bool IsCancelled() const { return cancelled_.load(std::memory_order_relaxed); }
-
- private:
-  std::atomic<bool> cancelled_{false};
-};
 
 struct PlanningProblem {
   std::shared_ptr<const RiskModel> model;  // map + parameters
@@ -85,6 +74,9 @@ struct DynamicObstacle {
 inline constexpr size_t kMaxObstaclePoints = 100000;
 inline constexpr size_t kMaxDynamicObstacles = 1000;
 
+// Default of PlanOptions::max_edge_samples.
+inline constexpr int64_t kDefaultMaxEdgeSamples = 1000000;
+
 struct PlanOptions {
   PlannerBudget budget;
   uint64_t seed = 1;
@@ -100,6 +92,9 @@ struct PlanOptions {
   std::vector<Point2> obstacle_points;
   // Areas closed while the plan runs: HARMONIC only (see DynamicObstacle).
   std::vector<DynamicObstacle> dynamic_obstacles;
+  // Most samples any piece a planner flies may need (CheckEdgeSamples): the
+  // work of one edge, bounded before the plan starts.
+  int64_t max_edge_samples = kDefaultMaxEdgeSamples;
 };
 
 enum class StopReason {
@@ -188,6 +183,44 @@ absl::Status CheckEndpoints(const PlanningProblem& problem);
 // RISK_RRT_STAR refuses a request that carries obstacles rather than ignoring
 // them); callers may call it earlier to fail before any work.
 absl::Status CheckRequestObstacles(PlannerAlgorithm algorithm, const PlanOptions& options);
+
+// The longest piece a planner can fly on `map` and the samples it needs, an
+// upper bound computed from the request alone. Every pose a planner flies
+// through lies on the map (x, y) and between the lowest terrain and the
+// highest ceiling (terrain + max_agl_m), or at an altitude the request names
+// (start, goal, the planner parameters flight_altitude_m and
+// fixed_altitude_m). Between two such poses the planar Dubins path is at
+// most D + (2 + 4 pi) R (D the map's diagonal: an LSL path always exists),
+// and a climb of dz flies at most |dz| / tan(max_climb_rad) + 2 pi R
+// horizontally (spec section 5), so a piece is at most
+// hypot(max(D + (2 + 4 pi) R, dz_max / tan(max_climb_rad) + 2 pi R), dz_max)
+// long. Its samples: PartCount of that at the finest step the planner uses
+// (sample_step_m, or GENETIC's risk_step_m if finer), plus its two ends.
+struct EdgeSampleBound {
+  double map_diagonal_m = 0.0;
+  double climb_m = 0.0;   // dz_max
+  double length_m = 0.0;  // the longest piece
+  double step_m = 0.0;    // the finest sampling step
+  int64_t samples = 0;    // saturating (PartCount)
+};
+EdgeSampleBound ProjectEdgeSamples(PlannerAlgorithm algorithm, const RiskMap& map,
+                                   const ModelParams& params, const Pose& start, const Pose& goal,
+                                   const std::map<std::string, double>& planner_params);
+
+// InvalidArgument when ProjectEdgeSamples exceeds `max_edge_samples`,
+// naming the parameters that make the edges long or finely sampled, the
+// projected samples and the limit (and `limit_source`, e.g. a server flag,
+// when not empty).
+absl::Status CheckEdgeSampleBound(PlannerAlgorithm algorithm, const RiskMap& map,
+                                  const ModelParams& params, const Pose& start, const Pose& goal,
+                                  const std::map<std::string, double>& planner_params,
+                                  int64_t max_edge_samples, std::string_view limit_source = "");
+
+// CheckEdgeSampleBound for a problem and options.max_edge_samples. Every
+// planner's Plan() calls it before planning, so no loop over an edge's
+// samples can run longer than that.
+absl::Status CheckEdgeSamples(PlannerAlgorithm algorithm, const PlanningProblem& problem,
+                              const PlanOptions& options);
 
 }  // namespace riskplan
 

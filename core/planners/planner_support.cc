@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "absl/strings/cord.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "core/base/check.h"
@@ -51,6 +52,24 @@ absl::Status CheckBudget(const PlannerBudget& b) {
   return absl::OkStatus();
 }
 
+namespace {
+
+// Marks the status of a stopped run apart from any error an evaluator could
+// return with the same code.
+constexpr char kRunStoppedPayload[] = "riskplan/run-stopped";
+
+}  // namespace
+
+absl::Status RunStopped() {
+  absl::Status status = absl::CancelledError("the run's budget ended or it was cancelled");
+  status.SetPayload(kRunStoppedPayload, absl::Cord("1"));
+  return status;
+}
+
+bool IsRunStopped(const absl::Status& status) {
+  return status.GetPayload(kRunStoppedPayload).has_value();
+}
+
 bool CellBand(const RiskModel& model, int i, int j, double* low_m, double* high_m) {
   const RiskMap& map = model.map();
   if (!map.Contains(i, j) || map.nofly(i, j)) return false;
@@ -89,10 +108,13 @@ std::vector<uint8_t> FlyableCells(const RiskModel& model, double flight_altitude
 
 absl::StatusOr<std::optional<PlanImprovement>> EvaluateWaypoints(const RiskModel& model,
                                                                  std::vector<Pose> waypoints,
-                                                                 RiskEvaluator* evaluator) {
+                                                                 RiskEvaluator* evaluator,
+                                                                 const StopCondition& stop) {
   auto pieces = PiecesFromWaypoints(waypoints, model.params());
   if (!pieces.ok()) return pieces.status();
-  auto eval = EvaluateTrajectory(model, *pieces, {}, evaluator);
+  auto eval = EvaluateTrajectory(model, *pieces, {}, evaluator, stop);
+  // EvaluateTrajectory fails with Cancelled only when `stop` is reached.
+  if (!eval.ok() && stop.Reached()) return RunStopped();
   if (!eval.ok()) return eval.status();
   if (!eval->admissible) return std::optional<PlanImprovement>();
   PlanImprovement out;
@@ -125,6 +147,7 @@ absl::StatusOr<PlannerParamValues> PrepareSeedPlan(PlannerAlgorithm algorithm,
   if (absl::Status s = CheckRequestObstacles(algorithm, options); !s.ok()) return s;
   auto params = PlannerParamValues::Parse(PlannerAlgorithmName(algorithm), info, options.params);
   if (!params.ok()) return params.status();
+  if (absl::Status s = CheckEdgeSamples(algorithm, problem, options); !s.ok()) return s;
   const double clearance = params->Get("clearance_m");
   for (auto [pose, which] : {std::pair{&problem.start, "start"}, {&problem.goal, "goal"}}) {
     if (absl::Status s = CheckPoseClearance(*pose, which, options.obstacle_points, clearance);

@@ -46,6 +46,21 @@ class RunLimits {
   RunLimits(const PlannerBudget& budget, const CancellationToken& cancel)
       : budget_(budget), cancel_(cancel), start_(std::chrono::steady_clock::now()) {}
 
+  // The token and the time budget as the StopCondition that long loops poll
+  // inside an iteration (never reached by an iteration budget alone, so a
+  // run bounded by iterations stays reproducible).
+  StopCondition Stop() const {
+    std::optional<std::chrono::steady_clock::time_point> deadline;
+    if (budget_.max_time_s > 0.0) {
+      deadline = start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(budget_.max_time_s));
+    }
+    return StopCondition(&cancel_, nullptr, deadline);
+  }
+  // The token alone, for work that must still finish once the time is up
+  // (HARMONIC's report of its last descent).
+  StopCondition CancelStop() const { return StopCondition(&cancel_); }
+
   double Elapsed() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
@@ -63,6 +78,14 @@ class RunLimits {
   const std::chrono::steady_clock::time_point start_;
 };
 
+// What a planner's long loop returns when the run's StopCondition is reached
+// in the middle of an iteration: the run then ends as it would have at the
+// next check of its budget (the iteration is dropped, the best trajectory so
+// far stands), with StopReason kCancelled when the token was cancelled and
+// kBudgetExhausted (or kNoSolution) when the time ran out.
+absl::Status RunStopped();
+bool IsRunStopped(const absl::Status& status);
+
 // The admissible altitudes of cell (i, j) under spec section 6:
 // [SafeAltitude, terrain + max_agl]. False for a no-fly cell, a cell outside
 // the map, and a cell whose band is empty.
@@ -76,10 +99,12 @@ std::vector<uint8_t> FlyableCells(const RiskModel& model, double flight_altitude
 
 // The exact report of waypoints joined by Dubins-airplane manoeuvres:
 // EvaluateTrajectory's risk and length through `evaluator`. nullopt when the
-// trajectory is not admissible. Fails only when the evaluator does.
+// trajectory is not admissible. Fails when the evaluator does, or with
+// RunStopped() once `stop` is reached.
 absl::StatusOr<std::optional<PlanImprovement>> EvaluateWaypoints(const RiskModel& model,
                                                                  std::vector<Pose> waypoints,
-                                                                 RiskEvaluator* evaluator);
+                                                                 RiskEvaluator* evaluator,
+                                                                 const StopCondition& stop = {});
 
 // InvalidArgument when `pose` ("start" or "goal") lies within `clearance_m`
 // (horizontally) of one of `points`, naming the point; else OK.
@@ -89,8 +114,9 @@ absl::Status CheckPoseClearance(const Pose& pose, const char* which,
 // The checks a seed planner (RRT, GENETIC, HARMONIC) makes before it plans, in
 // this order: start and goal (CheckEndpoints), the budget, the request's
 // obstacles (CheckRequestObstacles), its parameters (parsed against `info`),
-// and the clearance of start and goal from the request's obstacle points by
-// its "clearance_m" parameter. Returns the parsed parameters.
+// the samples of its edges (CheckEdgeSamples) and the clearance of start and
+// goal from the request's obstacle points by its "clearance_m" parameter.
+// Returns the parsed parameters.
 absl::StatusOr<PlannerParamValues> PrepareSeedPlan(PlannerAlgorithm algorithm,
                                                    const std::vector<PlannerParamInfo>& info,
                                                    const PlanningProblem& problem,

@@ -55,9 +55,9 @@ const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
        "Euclidean candidates ranked by Dubins length to find the nearest node"},
       {"max_nodes", 200000, 10, 300000,
        "largest tree (about 130 bytes a node); the run ends when it is reached"},
-      {"batch_chunk", 16, 0, 100000,
+      {"batch_chunk", 16, 0, 4096,
        "midpoints per candidate edge in one risk batch; a losing edge is dropped between "
-       "batches (0: whole edges, one batch per step)"},
+       "batches (0: whole edges, one batch per step, up to 4096 midpoints of an edge each)"},
       {"refine_edits", 8, 0, 100,
        "local edits of the best trajectory tried per tree iteration once a solution exists "
        "(fractions accumulate; 0: off)"},
@@ -85,6 +85,10 @@ absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
   if (absl::Status s = CheckBudget(options.budget); !s.ok()) return s;
   auto params = rrt_star::Params::Parse(options.params);
   if (!params.ok()) return params.status();
+  if (absl::Status s = CheckEdgeSamples(PlannerAlgorithm::kRiskRrtStar, problem, options);
+      !s.ok()) {
+    return s;
+  }
   // Without an evaluator of the caller's: direct evaluation, or on request an
   // exact cache of kernel sites. (On demo-city about 40 % of the requests of a
   // run repeat a site, but a table large enough to hold them misses the CPU

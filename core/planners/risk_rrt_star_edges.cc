@@ -56,6 +56,9 @@ absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool sha
   for (const CandidateEdge& e : *edges) best = std::min(best, e.limit);
   if (winner != nullptr) *winner = -1;
   while (true) {
+    // Long edges (a fine sample_step_m) make many batches: the budget is
+    // honoured between them, not only between iterations.
+    if (stop_.Reached()) return RunStopped();
     // One risk batch: the next chunk of every live, unfinished edge, generated
     // and checked now (an inadmissible midpoint drops the edge).
     batch_poses_.clear();

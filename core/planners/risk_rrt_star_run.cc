@@ -212,10 +212,12 @@ absl::StatusOr<PlanResult> Run::Execute() {
   grid_.Insert(kStart, problem_.start.x, problem_.start.y);
   const ModelParams& mp = model_.params();
 
-  if (absl::Status s = Guide(); !s.ok()) return s;
   PlanResult result;
   result.reason = StopReason::kBudgetExhausted;
-  while (true) {
+  // A step stopped by the budget or the token inside its loops (RunStopped)
+  // ends the run as the checks at the top of the loop would have.
+  absl::Status step = Guide();
+  while (step.ok()) {
     if (cancel_.IsCancelled()) {
       result.reason = StopReason::kCancelled;
       break;
@@ -242,9 +244,13 @@ absl::StatusOr<PlanResult> Run::Execute() {
       if (!Admissible(q_new)) continue;
       status = Extend(q_new);
     }
-    if (!status.ok()) return status;
-    if (absl::Status s = MaybeReport(); !s.ok()) return s;
-    if (absl::Status s = Refine(); !s.ok()) return s;
+    if (status.ok()) status = MaybeReport();
+    if (status.ok()) status = Refine();
+    step = status;
+  }
+  if (!step.ok()) {
+    if (!IsRunStopped(step)) return step;
+    if (cancel_.IsCancelled()) result.reason = StopReason::kCancelled;
   }
   if (!best_.has_value() && result.reason != StopReason::kCancelled) {
     result.reason = StopReason::kNoSolution;

@@ -51,8 +51,11 @@ struct Params {
   static absl::StatusOr<Params> Parse(const std::map<std::string, double>& given);
 
   // Midpoints of one candidate edge per risk batch: batch_chunk, or with 0
-  // as many as any edge has.
-  int64_t MidpointsPerBatch() const { return batch_chunk > 0 ? batch_chunk : kMaxPartCount; }
+  // kMaxBatchChunk, which holds every midpoint of any edge but the longest
+  // (so that a batch of k_near edges stays a few tens of MB however long
+  // they are; the outcome does not depend on the chunking).
+  static constexpr int64_t kMaxBatchChunk = 4096;
+  int64_t MidpointsPerBatch() const { return batch_chunk > 0 ? batch_chunk : kMaxBatchChunk; }
 };
 
 struct Node {
@@ -98,9 +101,10 @@ class Run {
         cancel_(cancel),
         on_improvement_(on_improvement),
         limits_(options.budget, cancel),
+        stop_(limits_.Stop()),
         rng_(options.seed),
         refine_rng_(options.seed ^ 0x5265666e65526e67ULL),
-        refiner_(model_, evaluator, params.refine_scale_m, params.MidpointsPerBatch()),
+        refiner_(model_, evaluator, params.refine_scale_m, params.MidpointsPerBatch(), stop_),
         grid_(model_.map().x0(), model_.map().y0(), model_.map().width_m(), model_.map().height_m(),
               std::max(50.0, params.near_radius_m / 2.0)) {}
 
@@ -131,7 +135,8 @@ class Run {
   // edges' limit), and *winner is the index of the edge that set it (-1: none).
   // An edge that completes is admissible and has exactly the risk a full
   // evaluation of admissible edges alone would give it, so the outcome does
-  // not depend on when an inadmissible edge is found out.
+  // not depend on when an inadmissible edge is found out. RunStopped() when
+  // the run's budget ends or its token is cancelled between two batches.
   absl::Status EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
                                   int32_t* winner);
   void SetParent(int32_t child, int32_t parent, double edge_risk);
@@ -164,6 +169,7 @@ class Run {
   const CancellationToken& cancel_;
   const ImprovementCallback& on_improvement_;
   RunLimits limits_;  // the budget's clock starts when the run is made
+  const StopCondition stop_;  // limits_'s, polled between risk batches
   Rng rng_;
   Rng refine_rng_;  // the refiner's own stream: the tree's samples do not depend on it
   PathRefiner refiner_;

@@ -92,7 +92,7 @@ absl::Status Run::TryConnection(int32_t vertex, bool* reported) {
   std::optional<std::vector<Pose>> waypoints =
       realizer_->Realize(problem_.start, problem_.goal, branch);
   if (!waypoints.has_value()) return absl::OkStatus();
-  auto improvement = EvaluateWaypoints(model_, std::move(*waypoints), evaluator_);
+  auto improvement = EvaluateWaypoints(model_, std::move(*waypoints), evaluator_, limits_.Stop());
   if (!improvement.ok()) return improvement.status();
   if (!improvement->has_value()) return absl::OkStatus();  // the realizer's check passed it
   PlanImprovement& found = **improvement;
@@ -126,14 +126,19 @@ absl::StatusOr<PlanResult> Run::Execute() {
   grid_.Insert(0, start.x, start.y);
   PlanResult result;
   result.reason = StopReason::kBudgetExhausted;
+  // Set when the budget or the token stopped a connection's evaluation.
+  bool stopped = false;
   // The start itself may connect.
   if (Distance(start, goal) <= step_m_ &&
       EdgeClear(start, goal, std::min(start_map_clearance_m_, goal_map_clearance_m_))) {
     bool reported = false;
-    if (absl::Status s = TryConnection(0, &reported); !s.ok()) return s;
+    if (absl::Status s = TryConnection(0, &reported); !s.ok()) {
+      if (!IsRunStopped(s)) return s;
+      stopped = true;
+    }
     if (reported && !keep_growing_) result.reason = StopReason::kConverged;
   }
-  while (result.reason != StopReason::kConverged) {
+  while (!stopped && result.reason != StopReason::kConverged) {
     if (limits_.Cancelled()) {
       result.reason = StopReason::kCancelled;
       break;
@@ -165,10 +170,14 @@ absl::StatusOr<PlanResult> Run::Execute() {
     grid_.Insert(id, to.x, to.y);
     if (Distance(to, goal) <= step_m_ && EdgeClear(to, goal, goal_map_clearance_m_)) {
       bool reported = false;
-      if (absl::Status s = TryConnection(id, &reported); !s.ok()) return s;
+      if (absl::Status s = TryConnection(id, &reported); !s.ok()) {
+        if (!IsRunStopped(s)) return s;
+        stopped = true;
+      }
       if (reported && !keep_growing_) result.reason = StopReason::kConverged;
     }
   }
+  if (stopped && limits_.Cancelled()) result.reason = StopReason::kCancelled;
   if (!best_.has_value() && result.reason != StopReason::kCancelled) {
     result.reason = StopReason::kNoSolution;
   }

@@ -1,6 +1,7 @@
 #include "core/risk/impact_table.h"
 
 #include <cmath>
+#include <string>
 
 #include "absl/strings/str_format.h"
 #include "core/base/geometry.h"
@@ -21,26 +22,31 @@ double ExposedArea(double impact_angle_rad, const ModelParams& p) {
   return 2.0 * r * p.person_height_m / std::tan(impact_angle_rad) + kPi * r * r;
 }
 
-absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(const ModelParams& params,
-                                                                      double res_m) {
-  if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
+namespace {
+
+absl::Status CheckResolution(double res_m) {
   if (!std::isfinite(res_m) || res_m <= 0.0) {
     return absl::InvalidArgumentError(
         absl::StrFormat("impact table: cell size %g m must be finite and > 0", res_m));
   }
-  auto table = std::shared_ptr<ImpactTable>(new ImpactTable());
-  table->params_ = params;
-  table->res_m_ = res_m;
-  table->heading_bins_ = params.heading_bins;
+  return absl::OkStatus();
+}
 
+// Everything of the height bins but the kernels' weights: the falls (one
+// integration for all of them), dispersions, half-widths and exposed areas.
+absl::StatusOr<std::vector<HeightBin>> MakeHeightBins(const ModelParams& params, double res_m,
+                                                      const StopCondition& stop) {
   const int n_bins = params.HeightBins();
-  const int n_head = params.heading_bins;
-  table->bins_.resize(n_bins);
-  size_t total_weights = 0;
+  std::vector<double> heights(n_bins);
+  for (int b = 1; b <= n_bins; ++b) heights[b - 1] = b * params.height_bin_m;
+  absl::StatusOr<std::vector<BallisticImpact>> falls =
+      SimulateBallisticFalls(heights, params, stop);
+  if (!falls.ok()) return falls.status();
+  std::vector<HeightBin> bins(n_bins);
   for (int b = 1; b <= n_bins; ++b) {
-    HeightBin& hb = table->bins_[b - 1];
-    hb.height_m = b * params.height_bin_m;
-    hb.fall = SimulateBallisticFall(hb.height_m, params);
+    HeightBin& hb = bins[b - 1];
+    hb.height_m = heights[b - 1];
+    hb.fall = (*falls)[b - 1];
     const double t = hb.fall.fall_time_s;
     const double sp = params.sigma_pos_m;
     const double ss = t * params.sigma_speed_mps;
@@ -50,15 +56,113 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(const Mode
     const double reach = 3.0 * std::max(hb.sigma_along_m, hb.sigma_across_m) / res_m;
     hb.half_width = static_cast<int>(std::min<double>(std::ceil(reach), params.max_half_width));
     hb.exposed_area_m2 = ExposedArea(hb.fall.angle_rad, params);
-    ImpactKernel shape;
-    shape.half_width = hb.half_width;
-    total_weights += static_cast<size_t>(shape.Side()) * shape.Stride() * n_head;
+    // Every number a risk is made of must be finite: parameters at the edge
+    // of their ranges are refused here rather than answered with NaN.
+    if (!std::isfinite(hb.fall.energy_j) || !std::isfinite(hb.fall.distance_m) ||
+        !std::isfinite(hb.exposed_area_m2) || !(hb.sigma_across_m > 0.0) ||
+        !std::isfinite(hb.sigma_along_m)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "impact table: at height %g m the parameters give impact energy %g J, distance %g m, "
+          "exposed area %g m^2 and dispersion %g x %g m; each must be finite",
+          hb.height_m, hb.fall.energy_j, hb.fall.distance_m, hb.exposed_area_m2, hb.sigma_along_m,
+          hb.sigma_across_m));
+    }
+  }
+  return bins;
+}
+
+// Weights of one heading's kernel at a half-width: Side() x Stride().
+int64_t KernelWeights(int half_width) {
+  ImpactKernel shape;
+  shape.half_width = half_width;
+  return static_cast<int64_t>(shape.Side()) * shape.Stride();
+}
+
+// MemoryBytes() of a table with these bins, counted in double so that no
+// parameter set can overflow it.
+double TableBytes(const std::vector<HeightBin>& bins, int heading_bins, size_t table_object) {
+  double weights = 0.0;
+  for (const HeightBin& hb : bins) {
+    weights += static_cast<double>(KernelWeights(hb.half_width)) * heading_bins;
+  }
+  return static_cast<double>(table_object) + static_cast<double>(bins.size()) * sizeof(HeightBin) +
+         static_cast<double>(bins.size()) * heading_bins * sizeof(ImpactKernel) +
+         weights * sizeof(double);
+}
+
+absl::Status CheckTableBytes(double bytes, bool at_least, const ModelParams& params,
+                             const ModelBuildLimits& limits) {
+  if (bytes <= static_cast<double>(limits.max_table_bytes)) return absl::OkStatus();
+  const int hw = params.max_half_width;
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "the impact table of 'heading_bins' %d x %d height bins ('table_max_height_m' %g / "
+      "'height_bin_m' %g), kernels of up to %d x %d weights ('max_half_width' %d), needs %s%.0f "
+      "bytes; the limit is %d bytes%s",
+      params.heading_bins, params.HeightBins(), params.table_max_height_m, params.height_bin_m,
+      2 * hw + 1, KernelWeights(hw) / (2 * hw + 1), hw, at_least ? "at least " : "", bytes,
+      limits.max_table_bytes,
+      limits.max_table_bytes_source.empty()
+          ? std::string()
+          : absl::StrFormat(" (%s)", std::string(limits.max_table_bytes_source))));
+}
+
+}  // namespace
+
+double ImpactTable::MinBytes(const ModelParams& params) {
+  // TableBytes with a half-width of 0 for every bin: one row of
+  // kKernelLanes weights per kernel.
+  const double bins = params.HeightBins();
+  const double kernels = bins * params.heading_bins;
+  return static_cast<double>(sizeof(ImpactTable)) + bins * sizeof(HeightBin) +
+         kernels * sizeof(ImpactKernel) + kernels * KernelWeights(0) * sizeof(double);
+}
+
+absl::Status ImpactTable::CheckMinBytes(const ModelParams& params, const ModelBuildLimits& limits) {
+  return CheckTableBytes(MinBytes(params), /*at_least=*/true, params, limits);
+}
+
+absl::StatusOr<double> ImpactTable::ProjectedBytes(const ModelParams& params, double res_m,
+                                                   const StopCondition& stop) {
+  if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
+  if (absl::Status s = CheckResolution(res_m); !s.ok()) return s;
+  absl::StatusOr<std::vector<HeightBin>> bins = MakeHeightBins(params, res_m, stop);
+  if (!bins.ok()) return bins.status();
+  return TableBytes(*bins, params.heading_bins, sizeof(ImpactTable));
+}
+
+absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(
+    const ModelParams& params, double res_m, const ModelBuildLimits& limits) {
+  if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
+  if (absl::Status s = CheckResolution(res_m); !s.ok()) return s;
+  // Sizes first, cheapest bound first: nothing is integrated for a table
+  // that cannot fit whatever its kernels, nothing allocated for one that
+  // does not fit once they are known.
+  if (absl::Status s = CheckMinBytes(params, limits); !s.ok()) return s;
+  absl::StatusOr<std::vector<HeightBin>> bins = MakeHeightBins(params, res_m, limits.stop);
+  if (!bins.ok()) return bins.status();
+  if (absl::Status s = CheckTableBytes(TableBytes(*bins, params.heading_bins, sizeof(ImpactTable)),
+                                       /*at_least=*/false, params, limits);
+      !s.ok()) {
+    return s;
+  }
+
+  auto table = std::shared_ptr<ImpactTable>(new ImpactTable());
+  table->params_ = params;
+  table->res_m_ = res_m;
+  table->heading_bins_ = params.heading_bins;
+  table->bins_ = *std::move(bins);
+  const int n_bins = params.HeightBins();
+  const int n_head = params.heading_bins;
+  size_t total_weights = 0;
+  for (const HeightBin& hb : table->bins_) {
+    total_weights += static_cast<size_t>(KernelWeights(hb.half_width)) * n_head;
   }
 
   table->weights_.resize(total_weights);
   table->kernels_.resize(static_cast<size_t>(n_bins) * n_head);
   size_t cursor = 0;
   for (int b = 1; b <= n_bins; ++b) {
+    if (limits.stop.Reached()) return absl::CancelledError("impact table: stopped");
     const HeightBin& hb = table->bins_[b - 1];
     const int hw = hb.half_width;
     ImpactKernel shape;
@@ -85,6 +189,14 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(const Mode
           w[(v + hw) * stride + (u + hw)] = value;
           sum += value;
         }
+      }
+      // The centre weight is exp(0) = 1, so the sum is at least 1 unless a
+      // dispersion is so small that its inverse square overflowed.
+      if (!(sum >= 1.0) || !std::isfinite(sum)) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "impact table: the kernel at height %g m, heading bin %d sums to %g; the dispersion "
+            "(%g x %g m) is too small for cells of %g m",
+            hb.height_m, k, sum, hb.sigma_along_m, hb.sigma_across_m, res_m));
       }
       // Padding entries stay exactly 0 (the vector is value-initialised).
       for (int i = 0; i < side * stride; ++i) w[i] /= sum;

@@ -12,9 +12,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string_view>
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/base/cancellation.h"
 #include "core/base/check.h"
 #include "core/base/model_params.h"
 #include "core/risk/ballistic.h"
@@ -47,12 +49,43 @@ struct ImpactKernel {
   int Side() const { return 2 * half_width + 1; }
 };
 
+// What building a risk model (its impact table, and a glide layer of its
+// own) may use: a bound on the table's bytes, checked before anything is
+// allocated, and a stop condition polled by the long loops (the ballistic
+// integration, the kernels, the glide layer).
+inline constexpr size_t kDefaultMaxTableBytes = size_t{512} << 20;
+struct ModelBuildLimits {
+  size_t max_table_bytes = kDefaultMaxTableBytes;
+  // Appended to the message of a table refused for its size, e.g.
+  // "--max_table_bytes": where the limit comes from.
+  std::string_view max_table_bytes_source;
+  StopCondition stop;
+};
+
 class ImpactTable {
  public:
   // Builds the table for `params` (which must pass ValidateModelParams) and
-  // cells of side `res_m`.
-  static absl::StatusOr<std::shared_ptr<const ImpactTable>> Build(const ModelParams& params,
-                                                                  double res_m);
+  // cells of side `res_m`. Its bytes (MemoryBytes) are computed first, and a
+  // table of more than limits.max_table_bytes is refused before anything is
+  // allocated: InvalidArgument naming the parameters that size it, the bytes
+  // and the limit. Also InvalidArgument (naming the parameters) when the
+  // ballistic fall does not end within kMaxFallTimeS or a number of the table
+  // would not be finite; Cancelled when limits.stop is reached.
+  static absl::StatusOr<std::shared_ptr<const ImpactTable>> Build(
+      const ModelParams& params, double res_m, const ModelBuildLimits& limits = {});
+
+  // The bytes Build would allocate (exactly MemoryBytes() of the table),
+  // computed from the parameters and one ballistic integration, without
+  // building the kernels. Errors as Build's.
+  static absl::StatusOr<double> ProjectedBytes(const ModelParams& params, double res_m,
+                                               const StopCondition& stop = {});
+  // A lower bound of ProjectedBytes that needs no integration (every kernel
+  // is at least one row of kKernelLanes weights), cheap enough to refuse a
+  // huge table on a request's own thread. REQUIRES: ValidateModelParams.
+  static double MinBytes(const ModelParams& params);
+  // InvalidArgument (Build's message) when MinBytes(params) exceeds
+  // limits.max_table_bytes. REQUIRES: ValidateModelParams.
+  static absl::Status CheckMinBytes(const ModelParams& params, const ModelBuildLimits& limits);
 
   const ModelParams& params() const { return params_; }
   double res_m() const { return res_m_; }

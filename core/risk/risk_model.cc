@@ -87,7 +87,7 @@ std::string_view ViolationKindName(ViolationKind kind) {
 
 absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
     std::shared_ptr<const RiskMap> map, const ModelParams& params,
-    std::shared_ptr<const ImpactTable> table) {
+    std::shared_ptr<const ImpactTable> table, const ModelBuildLimits& limits) {
   if (map == nullptr) return absl::InvalidArgumentError("risk model: no map");
   if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
   if (params.max_half_width > RiskMap::kPad) {
@@ -102,7 +102,7 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
   }
   if (table == nullptr) {
     absl::StatusOr<std::shared_ptr<const ImpactTable>> built =
-        ImpactTable::Build(params, map->res());
+        ImpactTable::Build(params, map->res(), limits);
     if (!built.ok()) return built.status();
     table = *std::move(built);
   }
@@ -115,9 +115,11 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
     model->glide_ = &model->map_->glide_altitude();
   } else {
     const RiskMap& m = *model->map_;
-    model->own_glide_ = std::make_shared<const std::vector<double>>(
-        ComputeGlideAltitude(m.nx(), m.ny(), m.res(), m.layers().terrain, m.layers().nofly,
-                             m.landing_sites(), params.glide_ratio, params.glide_clearance_m));
+    absl::StatusOr<std::vector<double>> glide = ComputeGlideAltitude(
+        m.nx(), m.ny(), m.res(), m.layers().terrain, m.layers().nofly, m.landing_sites(),
+        params.glide_ratio, params.glide_clearance_m, limits.stop);
+    if (!glide.ok()) return glide.status();
+    model->own_glide_ = std::make_shared<const std::vector<double>>(*std::move(glide));
     model->glide_ = model->own_glide_.get();
   }
   const ImpactTable& t = *model->table_;

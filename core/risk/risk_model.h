@@ -96,10 +96,11 @@ class RiskModel {
   // Builds the model. `table` may be passed to share an already built table;
   // it must match params and the map's cell size. The glide layer of the map is
   // reused when the glide parameters match, else computed (about a second on a
-  // 1600 x 1600 map).
+  // 1600 x 1600 map). `limits` bound the table built and stop the build
+  // (ImpactTable::Build's errors, and Cancelled).
   static absl::StatusOr<std::shared_ptr<const RiskModel>> Create(
       std::shared_ptr<const RiskMap> map, const ModelParams& params,
-      std::shared_ptr<const ImpactTable> table = nullptr);
+      std::shared_ptr<const ImpactTable> table = nullptr, const ModelBuildLimits& limits = {});
 
   const RiskMap& map() const { return *map_; }
   const std::shared_ptr<const RiskMap>& map_ptr() const { return map_; }

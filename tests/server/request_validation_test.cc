@@ -363,5 +363,135 @@ TEST(ModelParametersTest, EveryFieldReachesModelParams) {
   EXPECT_EQ(params->airspeed_mps, ModelParams{}.airspeed_mps);  // unset keeps its default
 }
 
+// --max_table_bytes on the gRPC thread: the table's lower bound (one row of
+// weights per kernel) at, just under and just over the limit.
+TEST_F(RequestValidationTest, ImpactTableBytesAtUnderAndOverTheLimit) {
+  v1::PlanRequest r = GoodPlan();
+  r.mutable_model_params()->set_heading_bins(3600);
+  ModelParams p;
+  p.heading_bins = 3600;
+  const double min_bytes = ImpactTable::MinBytes(p);
+  limits_.max_table_bytes = static_cast<size_t>(min_bytes);
+  EXPECT_TRUE(ValidatePlanRequest(r, *registry_, limits_).ok());
+  limits_.max_table_bytes = static_cast<size_t>(min_bytes) + 1;
+  EXPECT_TRUE(ValidatePlanRequest(r, *registry_, limits_).ok());
+  limits_.max_table_bytes = static_cast<size_t>(min_bytes) - 1;
+  const std::string message = absl::StrFormat(
+      "model_params: the impact table of 'heading_bins' 3600 x 60 height bins "
+      "('table_max_height_m' 300 / 'height_bin_m' 5), kernels of up to 63 x 64 weights "
+      "('max_half_width' 31), needs at least %.0f bytes; the limit is %d bytes "
+      "(--max_table_bytes)",
+      min_bytes, limits_.max_table_bytes);
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument, message);
+  v1::EvaluateRiskRequest e = GoodEval();
+  e.mutable_model_params()->set_heading_bins(3600);
+  ExpectEvalError(e, absl::StatusCode::kInvalidArgument, message);
+}
+
+// The issue's terabyte table: every value in range, refused before queueing.
+TEST_F(RequestValidationTest, ATerabyteImpactTableIsRefused) {
+  v1::EvaluateRiskRequest e = GoodEval();
+  e.mutable_model_params()->set_heading_bins(3600);
+  e.mutable_model_params()->set_height_bin_m(0.5);
+  e.mutable_model_params()->set_table_max_height_m(5000);
+  ModelParams p;
+  p.heading_bins = 3600;
+  p.height_bin_m = 0.5;
+  p.table_max_height_m = 5000;
+  ExpectEvalError(
+      e, absl::StatusCode::kInvalidArgument,
+      absl::StrFormat("model_params: the impact table of 'heading_bins' 3600 x 10000 height bins "
+                      "('table_max_height_m' 5000 / 'height_bin_m' 0.5), kernels of up to 63 x "
+                      "64 weights ('max_half_width' 31), needs at least %.0f bytes; the limit is "
+                      "536870912 bytes (--max_table_bytes)",
+                      ImpactTable::MinBytes(p)));
+  EXPECT_GT(ImpactTable::MinBytes(p), 3e9);
+}
+
+// --max_edge_samples: the projection for this map (2 km square, flat at
+// 100 m, ceiling 250 m) is 714 samples per edge at the default 5 m.
+TEST_F(RequestValidationTest, EdgeSamplesAtUnderAndOverTheLimit) {
+  const v1::PlanRequest r = GoodPlan();
+  limits_.max_edge_samples = 714;
+  absl::StatusOr<PlanSpec> spec = ValidatePlanRequest(r, *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->options.max_edge_samples, 714);  // the planner checks it again
+  limits_.max_edge_samples = 715;
+  EXPECT_TRUE(ValidatePlanRequest(r, *registry_, limits_).ok());
+  limits_.max_edge_samples = 713;
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "model_params: an edge of a RISK_RRT_STAR plan on map 'test-city' may need 714 "
+                  "samples: up to 3559.9 m long (the map's diagonal 2828.4 m, turn_radius_m 50, "
+                  "climbs of up to 150.0 m at max_climb_rad 0.15) sampled every 5 m "
+                  "(sample_step_m); the limit is 713 samples per edge (--max_edge_samples)");
+  // A finer step, a smaller climb angle or GENETIC's risk step make more.
+  limits_.max_edge_samples = kDefaultMaxEdgeSamples;
+  v1::PlanRequest fine = GoodPlan();
+  fine.mutable_model_params()->set_sample_step_m(0.1);
+  fine.mutable_model_params()->set_max_climb_rad(0.01);
+  fine.mutable_model_params()->set_turn_radius_m(10000);
+  ExpectPlanError(fine, absl::StatusCode::kInvalidArgument, "may need 1484925 samples");
+  v1::PlanRequest genetic = GoodPlan();
+  genetic.set_algorithm(v1::GENETIC);
+  (*genetic.mutable_planner_params())["risk_step_m"] = 1.0;
+  limits_.max_edge_samples = 3000;
+  ExpectPlanError(genetic, absl::StatusCode::kInvalidArgument,
+                  "sampled every 1 m (sample_step_m or risk_step_m); the limit is 3000");
+}
+
+// The issue's adversarial values, every one inside the old documented
+// ranges, each refused naming the field, its value and the range.
+TEST_F(RequestValidationTest, TheIssuesModelParametersAreRefused) {
+  struct Case {
+    void (*set)(v1::ModelParameters*);
+    const char* message;
+  };
+  const Case cases[] = {
+      {[](v1::ModelParameters* m) { m->set_sample_step_m(1e-7); },
+       "model_params: parameter 'sample_step_m' has value 1e-07; it must be finite and in "
+       "[0.1, 1000]"},
+      {[](v1::ModelParameters* m) { m->set_sample_step_m(5e-6); },
+       "model_params: parameter 'sample_step_m' has value 5e-06"},
+      {[](v1::ModelParameters* m) { m->set_turn_radius_m(1e-9); },
+       "model_params: parameter 'turn_radius_m' has value 1e-09; it must be finite and in "
+       "[1, 10000]"},
+      {[](v1::ModelParameters* m) { m->set_turn_radius_m(2.2e-308); },
+       "model_params: parameter 'turn_radius_m' has value 2.2e-308"},
+      {[](v1::ModelParameters* m) { m->set_gravity_mps2(1e-300); },
+       "model_params: parameter 'gravity_mps2' has value 1e-300; it must be finite and in "
+       "[0.1, 30]"},
+      {[](v1::ModelParameters* m) { m->set_mass_kg(1e-300); },
+       "model_params: parameter 'mass_kg' has value 1e-300; it must be finite and in "
+       "[0.01, 1000]"},
+      {[](v1::ModelParameters* m) { m->set_beta_j(5e-324); },
+       "model_params: parameter 'beta_j' has value 4.94066e-324; it must be finite and in "
+       "[1, 1e+12]"},
+      {[](v1::ModelParameters* m) { m->set_max_climb_rad(1e-12); },
+       "model_params: parameter 'max_climb_rad' has value 1e-12; it must be finite and in "
+       "[0.01, 1.4]"},
+  };
+  for (const Case& c : cases) {
+    v1::PlanRequest plan = GoodPlan();
+    c.set(plan.mutable_model_params());
+    ExpectPlanError(plan, absl::StatusCode::kInvalidArgument, c.message);
+    v1::EvaluateRiskRequest eval = GoodEval();
+    c.set(eval.mutable_model_params());
+    ExpectEvalError(eval, absl::StatusCode::kInvalidArgument, c.message);
+  }
+}
+
+// Saturating sums (planner_service's Evaluate adds PartCount per piece):
+// the counts of the issue's polylines, each far over the limit, never wrap.
+TEST(SampleCountTest, TheIssuesPolylinesAreOverTheLimitNotNegative) {
+  RequestLimits limits;
+  const absl::Status one = CheckSampleCount(kMaxPartCount, 1e19, 5.0, false, limits);
+  EXPECT_EQ(one.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(one.message()), HasSubstr("the limit is 2000000"));
+  EXPECT_TRUE(CheckSampleCount(limits.max_eval_samples, 1e7, 5.0, false, limits).ok());
+  EXPECT_FALSE(CheckSampleCount(limits.max_eval_samples + 1, 1e7, 5.0, false, limits).ok());
+  EXPECT_TRUE(CheckSampleCount(limits.max_response_samples, 1e6, 5.0, true, limits).ok());
+  EXPECT_FALSE(CheckSampleCount(limits.max_response_samples + 1, 1e6, 5.0, true, limits).ok());
+}
+
 }  // namespace
 }  // namespace riskplan::server

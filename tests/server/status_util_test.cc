@@ -1,5 +1,8 @@
 #include "server/status_util.h"
 
+#include <new>
+#include <stdexcept>
+
 #include "gtest/gtest.h"
 
 namespace riskplan::server {
@@ -41,6 +44,19 @@ TEST(StatusUtilTest, CodeNames) {
   EXPECT_EQ(GrpcCodeName(grpc::StatusCode::RESOURCE_EXHAUSTED), "RESOURCE_EXHAUSTED");
   EXPECT_EQ(GrpcCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");
   EXPECT_EQ(GrpcCodeName(grpc::StatusCode::UNAVAILABLE), "UNAVAILABLE");
+}
+
+// No exception leaves a request's thread: an allocation failure becomes
+// RESOURCE_EXHAUSTED (the server ran out of memory), anything else INTERNAL.
+TEST(StatusUtilTest, ExceptionsBecomeStatuses) {
+  const absl::Status oom = StatusFromException(std::bad_alloc(), "EvaluateRisk");
+  EXPECT_EQ(oom.code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_EQ(oom.message(),
+            "EvaluateRisk: riskplan-server ran out of memory (std::bad_alloc); retry later or on "
+            "another replica");
+  const absl::Status other = StatusFromException(std::runtime_error("boom"), "PlanTrajectory");
+  EXPECT_EQ(other.code(), absl::StatusCode::kInternal);
+  EXPECT_EQ(other.message(), "PlanTrajectory: unexpected exception: boom");
 }
 
 }  // namespace

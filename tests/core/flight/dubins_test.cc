@@ -571,5 +571,26 @@ TEST(DubinsAirplanePathTest, PosesAtIsPoseAtBitForBit) {
   EXPECT_GT(spirals, 30);
 }
 
+// The climb: 100 m over 300 m (0.32 rad) against a 0.15 rad limit,
+// with a turning radius of 1e-9 m. The spiral then needs about 5.8e10 turns;
+// counted in an int they wrapped to 1, and the climb was flown at 0.32 rad.
+// (ValidateModelParams now refuses such a radius; the geometry must still not
+// lie for it.)
+TEST(DubinsAirplanePathTest, SpiralTurnsBeyondAnIntAreCountedNotWrapped) {
+  const Pose start{1000.0, 1000.0, 200.0, 0.0};
+  const Pose goal{1300.0, 1000.0, 300.0, 0.0};
+  const DubinsAirplanePath tiny(start, goal, 1e-9, kGamma);
+  EXPECT_GT(tiny.spiral_turns(), 5e10);
+  EXPECT_EQ(tiny.spiral_turns(), std::floor(tiny.spiral_turns()));
+  EXPECT_LE(tiny.ClimbAngle(), kGamma + 1e-9);
+  EXPECT_GT(tiny.Length(), 100.0 / std::sin(kGamma) - 1.0);
+  // A climb no aircraft flies: finite, and long beyond any sample bound.
+  const Pose high{1300.0, 1000.0, 1e300, 0.0};
+  const DubinsAirplanePath huge(start, high, 1.0, 0.01);
+  EXPECT_GT(huge.spiral_turns(), 1e300);
+  EXPECT_TRUE(std::isfinite(huge.Length()));
+  EXPECT_LE(huge.ClimbAngle(), 0.01 + 1e-9);
+}
+
 }  // namespace
 }  // namespace riskplan

@@ -1,7 +1,9 @@
 #include "core/flight/trajectory.h"
 
 #include <cmath>
+#include <vector>
 
+#include "core/map/demo_city.h"
 #include "gtest/gtest.h"
 #include "tests/core/test_maps.h"
 
@@ -141,6 +143,81 @@ TEST_F(TrajectoryTest, BadInputIsRefusedWithIndexAndValue) {
   auto many = PiecesFromPolyline(std::vector<Point3>(11), 10);
   ASSERT_FALSE(many.ok());
   EXPECT_NE(many.status().message().find("at most 10"), std::string::npos);
+}
+
+// A trajectory of more than kEvaluationBatch midpoints is evaluated in
+// several batches: the risks, the first violation and the samples are those
+// of the piece-risk rule applied midpoint by midpoint, as one batch gave them.
+TEST(EvaluateTrajectoryBatchesTest, ManyBatchesGiveWhatTheRuleGivesBitForBit) {
+  auto map = MakeDemoCity();
+  ASSERT_TRUE(map.ok()) << map.status();
+  ModelParams params;
+  params.sample_step_m = 0.1;
+  auto model = RiskModel::Create(*map, params);
+  ASSERT_TRUE(model.ok()) << model.status();
+  // Over a dense centre, a repeated point (a piece of length 0), then into
+  // the ground and out of the map: violations after the first batch.
+  auto pieces = PiecesFromPolyline(std::vector<Point3>{{1200, 1500, 250},
+                                                       {6800, 6500, 260},
+                                                       {6800, 6500, 260},
+                                                       {7000, 6000, 250},
+                                                       {7200, 6000, 20},
+                                                       {9000, 6000, 250}});
+  ASSERT_TRUE(pieces.ok());
+  auto eval = EvaluateTrajectory(**model, *pieces, {.keep_samples = true});
+  ASSERT_TRUE(eval.ok()) << eval.status();
+  int64_t total = 0;
+  for (const PieceEvaluation& p : eval->pieces) total += p.parts;
+  ASSERT_GT(total, static_cast<int64_t>(kEvaluationBatch));
+
+  // The rule, midpoint by midpoint.
+  double risk = 0.0;
+  double start_s = 0.0;
+  std::optional<Violation> first;
+  size_t sample = 0;
+  for (size_t p = 0; p < pieces->size(); ++p) {
+    PieceRisk rule((*pieces)[p], params.sample_step_m, params);
+    bool admissible = true;
+    for (int64_t i = 0; i < rule.admissibility_samples(); ++i) {
+      double s = 0.0;
+      const Pose q = rule.AdmissibilitySample(i, &s);
+      if (i >= 1 && i <= rule.parts()) {
+        const ConfigurationRisk m = (*model)->Evaluate(q);
+        rule.Add(m);
+        ASSERT_LT(sample, eval->samples.size());
+        const SampleEvaluation& got = eval->samples[sample++];
+        ASSERT_EQ(got.pose.x, q.x);
+        ASSERT_EQ(got.arc_length_m, start_s + s);
+        ASSERT_EQ(got.risk.risk, m.risk);
+        ASSERT_EQ(got.piece, static_cast<int>(p));
+      }
+      double limit = 0.0;
+      const ViolationKind kind = (*model)->CheckConfiguration(q, &limit);
+      if (kind == ViolationKind::kNone) continue;
+      admissible = false;
+      if (!first.has_value()) first = Violation{kind, q, start_s + s, static_cast<int>(p), limit};
+    }
+    EXPECT_EQ(eval->pieces[p].risk, rule.Risk()) << p;
+    EXPECT_EQ(eval->pieces[p].admissible, admissible) << p;
+    risk += rule.Risk();
+    start_s += (*pieces)[p].Length();
+  }
+  EXPECT_EQ(sample, eval->samples.size());
+  EXPECT_EQ(eval->risk, risk);
+  EXPECT_EQ(eval->length_m, start_s);
+  ASSERT_TRUE(first.has_value());
+  ASSERT_TRUE(eval->first_violation.has_value());
+  EXPECT_EQ(eval->first_violation->kind, first->kind);
+  EXPECT_EQ(eval->first_violation->arc_length_m, first->arc_length_m);
+  EXPECT_EQ(eval->first_violation->piece, first->piece);
+  EXPECT_FALSE(eval->admissible);
+
+  // Stopped between batches.
+  CancellationToken token;
+  token.Cancel();
+  EXPECT_EQ(
+      EvaluateTrajectory(**model, *pieces, {}, nullptr, StopCondition(&token)).status().code(),
+      absl::StatusCode::kCancelled);
 }
 
 }  // namespace

@@ -399,5 +399,39 @@ TEST(RiskMapTest, GlideOnAFullSizeGridIsFast) {
   EXPECT_LT(seconds, 10.0);
 }
 
+// A glide layer for a request's glide parameters is stopped by the server's
+// drain rather than computed to the end.
+TEST(RiskMapTest, GlideLayerStopsWhenAsked) {
+  const int n = 400;  // more relaxations than one poll's worth
+  std::vector<float> terrain(static_cast<size_t>(n) * n, 100.0f);
+  std::vector<uint8_t> nofly(terrain.size(), 0);
+  const std::vector<LandingSite> sites = {{"s", 200, 200}};
+  CancellationToken token;
+  EXPECT_TRUE(
+      ComputeGlideAltitude(n, n, 5.0, terrain, nofly, sites, 10.0, 10.0, StopCondition(&token))
+          .ok());
+  token.Cancel();
+  absl::StatusOr<std::vector<double>> stopped =
+      ComputeGlideAltitude(n, n, 5.0, terrain, nofly, sites, 10.0, 10.0, StopCondition(&token));
+  EXPECT_EQ(stopped.status().code(), absl::StatusCode::kCancelled);
+}
+
+TEST(RiskMapTest, TerrainExtremesAreKept) {
+  MapHeader header;
+  header.name = "slope";
+  header.res = 5.0;
+  header.nx = 3;
+  header.ny = 2;
+  MapLayers layers;
+  layers.density.assign(6, 0.0f);
+  layers.shelter.assign(6, 1.0f);
+  layers.terrain = {10.0f, -4.5f, 30.0f, 7.0f, 120.25f, 0.0f};
+  layers.nofly.assign(6, 0);
+  auto map = RiskMap::Create(header, layers);
+  ASSERT_TRUE(map.ok()) << map.status();
+  EXPECT_EQ((*map)->terrain_min_m(), -4.5);
+  EXPECT_EQ((*map)->terrain_max_m(), 120.25);
+}
+
 }  // namespace
 }  // namespace riskplan

@@ -1,7 +1,10 @@
 #include "core/risk/ballistic.h"
 
 #include <cmath>
+#include <string>
+#include <vector>
 
+#include "gmock/gmock.h"
 #include "gtest/gtest.h"
 
 namespace riskplan {
@@ -59,6 +62,62 @@ TEST(BallisticFallTest, MonotoneInHeight) {
     EXPECT_GT(fall.angle_rad, previous.angle_rad);
     previous = fall;
   }
+}
+
+// The impact table integrates once for all its height bins: each height's
+// impact must be bit for bit that of its own integration.
+TEST(BallisticFallsTest, OneIntegrationGivesEveryHeightItsOwnFallBitForBit) {
+  for (const double drag : {0.8, 0.0}) {
+    ModelParams p;
+    p.drag_coefficient = drag;
+    std::vector<double> heights;
+    for (int b = 1; b <= 60; ++b) heights.push_back(b * 5.0);
+    heights.push_back(300.0);  // a repeated height
+    absl::StatusOr<std::vector<BallisticImpact>> falls = SimulateBallisticFalls(heights, p);
+    ASSERT_TRUE(falls.ok()) << falls.status();
+    ASSERT_EQ(falls->size(), heights.size());
+    for (size_t i = 0; i < heights.size(); ++i) {
+      const BallisticImpact one = SimulateBallisticFall(heights[i], p);
+      const BallisticImpact& all = (*falls)[i];
+      EXPECT_EQ(all.fall_time_s, one.fall_time_s) << heights[i];
+      EXPECT_EQ(all.distance_m, one.distance_m) << heights[i];
+      EXPECT_EQ(all.v_horizontal_mps, one.v_horizontal_mps) << heights[i];
+      EXPECT_EQ(all.v_vertical_mps, one.v_vertical_mps) << heights[i];
+      EXPECT_EQ(all.energy_j, one.energy_j) << heights[i];
+      EXPECT_EQ(all.angle_rad, one.angle_rad) << heights[i];
+    }
+  }
+}
+
+// A fall the cap cannot hold (ValidateModelParams lets such a set through
+// only at the edge of its fall-time rule) is an error naming the parameters,
+// not a table of zeros.
+TEST(BallisticFallsTest, AFallLongerThanTheCapIsRefused) {
+  ModelParams p;
+  p.gravity_mps2 = 0.1;
+  p.airspeed_mps = 1.0;
+  p.air_density_kgpm3 = 10.0;
+  p.drag_coefficient = 2.0;
+  p.frontal_area_m2 = 1.0;
+  p.mass_kg = 0.2;  // terminal velocity 4.5 cm/s: about 11 000 s from 500 m
+  const std::vector<double> heights = {1.0, 500.0};
+  absl::StatusOr<std::vector<BallisticImpact>> falls = SimulateBallisticFalls(heights, p);
+  ASSERT_FALSE(falls.ok());
+  EXPECT_EQ(falls.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(falls.status().message()),
+              ::testing::HasSubstr("a ballistic fall from 500 m has not reached the ground "
+                                   "after 10000 s; at most 10000 s of fall is simulated"));
+  EXPECT_THAT(std::string(falls.status().message()), ::testing::HasSubstr("'mass_kg' (0.2)"));
+}
+
+TEST(BallisticFallsTest, StopsWhenAsked) {
+  ModelParams p;
+  CancellationToken token;
+  token.Cancel();
+  const std::vector<double> heights = {5000.0};
+  absl::StatusOr<std::vector<BallisticImpact>> falls =
+      SimulateBallisticFalls(heights, p, StopCondition(&token));
+  EXPECT_EQ(falls.status().code(), absl::StatusCode::kCancelled);
 }
 
 }  // namespace

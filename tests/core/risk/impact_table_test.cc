@@ -1,8 +1,11 @@
 #include "core/risk/impact_table.h"
 
 #include <cmath>
+#include <string>
 
+#include "absl/strings/str_format.h"
 #include "core/base/geometry.h"
+#include "gmock/gmock.h"
 #include "gtest/gtest.h"
 
 namespace riskplan {
@@ -134,6 +137,77 @@ TEST(ImpactTableTest, RejectsBadParameters) {
   EXPECT_FALSE(ImpactTable::Build(p, 5.0).ok());
   EXPECT_FALSE(ImpactTable::Build(ModelParams{}, 0.0).ok());
   EXPECT_FALSE(ImpactTable::Build(ModelParams{}, std::nan("")).ok());
+}
+
+// The bytes a table will hold are known before it is built, exactly.
+TEST(ImpactTableLimitsTest, ProjectedBytesAreTheTablesMemory) {
+  for (const double res : {5.0, 1.0, 20.0}) {
+    ModelParams p;
+    p.heading_bins = 36;
+    absl::StatusOr<double> projected = ImpactTable::ProjectedBytes(p, res);
+    ASSERT_TRUE(projected.ok()) << projected.status();
+    auto table = ImpactTable::Build(p, res);
+    ASSERT_TRUE(table.ok()) << table.status();
+    EXPECT_EQ(*projected, static_cast<double>((*table)->MemoryBytes())) << res;
+    EXPECT_LE(ImpactTable::MinBytes(p), *projected) << res;
+  }
+}
+
+// --max_table_bytes at, just under and just over the table's size.
+TEST(ImpactTableLimitsTest, TheByteLimitAtUnderAndOver) {
+  ModelParams p;
+  const double bytes = *ImpactTable::ProjectedBytes(p, 5.0);
+  const size_t exact = static_cast<size_t>(bytes);
+  ModelBuildLimits limits;
+  limits.max_table_bytes_source = "--max_table_bytes";
+  limits.max_table_bytes = exact;
+  EXPECT_TRUE(ImpactTable::Build(p, 5.0, limits).ok());
+  limits.max_table_bytes = exact + 1;
+  EXPECT_TRUE(ImpactTable::Build(p, 5.0, limits).ok());
+  limits.max_table_bytes = exact - 1;
+  auto over = ImpactTable::Build(p, 5.0, limits);
+  ASSERT_FALSE(over.ok());
+  EXPECT_EQ(over.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(over.status().message(),
+            absl::StrFormat("the impact table of 'heading_bins' 72 x 60 height bins "
+                            "('table_max_height_m' 300 / 'height_bin_m' 5), kernels of up to 63 x "
+                            "64 weights ('max_half_width' 31), needs %.0f bytes; the limit is %d "
+                            "bytes (--max_table_bytes)",
+                            bytes, exact - 1));
+}
+
+// The terabyte: every value inside its range, together about a
+// terabyte. Refused from the parameters alone, before any integration or
+// allocation (the lower bound already exceeds the limit).
+TEST(ImpactTableLimitsTest, ATerabyteTableIsRefusedBeforeAnythingIsBuilt) {
+  ModelParams p;
+  p.heading_bins = 3600;
+  p.height_bin_m = 0.5;
+  p.table_max_height_m = 5000.0;
+  ASSERT_TRUE(ValidateModelParams(p).ok());
+  EXPECT_GT(ImpactTable::MinBytes(p), 2e9);
+  const absl::Status min = ImpactTable::CheckMinBytes(p, {});
+  EXPECT_EQ(min.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(
+      std::string(min.message()),
+      ::testing::HasSubstr(absl::StrFormat(
+          "needs at least %.0f bytes; the limit is 536870912 bytes", ImpactTable::MinBytes(p))));
+  auto table = ImpactTable::Build(p, 5.0);
+  ASSERT_FALSE(table.ok());
+  EXPECT_EQ(table.status(), min);
+  // The exact size, for the record: over a terabyte at 1 m cells.
+  absl::StatusOr<double> bytes = ImpactTable::ProjectedBytes(p, 1.0);
+  ASSERT_TRUE(bytes.ok());
+  EXPECT_GT(*bytes, 1e12);
+}
+
+TEST(ImpactTableLimitsTest, StopsWhenAsked) {
+  CancellationToken token;
+  token.Cancel();
+  ModelBuildLimits limits;
+  limits.stop = StopCondition(&token);
+  auto table = ImpactTable::Build(ModelParams{}, 5.0, limits);
+  EXPECT_EQ(table.status().code(), absl::StatusCode::kCancelled);
 }
 
 }  // namespace

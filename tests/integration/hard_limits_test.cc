@@ -387,13 +387,15 @@ TEST_F(HardLimitsTest, AFloodBesideAGoodPlanLeavesItBitIdentical) {
   EXPECT_EQ(flooded.iterations, alone.iterations);
 }
 
-// A polyline of about 1.9 million samples inside the small city at
-// sample_step_m 0.1 (seconds of work), under --max_eval_samples.
+// About 56 million samples (4,000 legs of 1.4 km every 0.1 m): tens of seconds
+// of work each, so that eight of them on one worker outlast a 3 s grace period
+// on any machine by a wide margin (the server is started with a sample limit
+// that admits them).
 v1::EvaluateRiskRequest HeavyEval() {
   std::string points;
-  for (int i = 0; i < 136; ++i) {
+  for (int i = 0; i < 4000; ++i) {
     absl::StrAppendFormat(&points, "%s%d,%d,250", i == 0 ? "" : ";", i % 2 == 0 ? 300 : 1700,
-                          400 + 5 * i);
+                          400 + 5 * (i % 200));
   }
   return Eval(points, "sample_step_m=0.1");
 }
@@ -403,7 +405,8 @@ v1::EvaluateRiskRequest HeavyEval() {
 // the server exits 0 within its grace period (its last-resort exit after the
 // grace period would be code 1).
 TEST(HardLimitsShutdownTest, DrainEndsLongWorkInFlight) {
-  auto started = ServerProcess::Start({"--grace_period_ms=3000", "--eval_threads=1"});
+  auto started = ServerProcess::Start(
+      {"--grace_period_ms=3000", "--eval_threads=1", "--max_eval_samples=100000000"});
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
   const std::string address = server->address();
@@ -464,8 +467,8 @@ TEST(HardLimitsShutdownTest, DrainEndsLongWorkInFlight) {
         << client::StatusCodeName(s.error_code()) << ": " << s.error_message();
     if (s.error_code() == grpc::StatusCode::UNAVAILABLE) ++stopped;
   }
-  // Eight evaluations of a second or more each on one worker cannot all be
-  // done within the grace period: the drain stopped some.
+  // Eight evaluations of tens of seconds each on one worker cannot all be
+  // done within the 3 s grace period: the drain stopped some.
   EXPECT_GE(stopped, 1);
 }
 

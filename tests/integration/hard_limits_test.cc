@@ -24,6 +24,7 @@
 #include "gtest/gtest.h"
 #include "tests/integration/requests.h"
 #include "tests/integration/server_process.h"
+#include "tests/integration/shared_server_test.h"
 
 namespace riskplan::testing {
 namespace {
@@ -172,28 +173,12 @@ std::string Mismatch(const grpc::Status& status, const Expected& expected) {
   return "";
 }
 
-class HardLimitsTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    auto server = ServerProcess::Start(
-        {absl::StrFormat("--max_edge_samples=%d", kMaxEdgeSamples), "--plan_threads=2"});
-    ASSERT_TRUE(server.ok()) << server.status();
-    server_ = server->release();
+class HardLimitsTest : public SharedServerTest<HardLimitsTest> {
+ public:
+  static std::vector<std::string> ServerFlags() {
+    return {absl::StrFormat("--max_edge_samples=%d", kMaxEdgeSamples), "--plan_threads=2"};
   }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-  void SetUp() override {
-    ASSERT_NE(server_, nullptr);
-    client_ = std::make_unique<client::RiskplanClient>(server_->address());
-  }
-
-  static ServerProcess* server_;
-  std::unique_ptr<client::RiskplanClient> client_;
 };
-
-ServerProcess* HardLimitsTest::server_ = nullptr;
 
 TEST_F(HardLimitsTest, EveryAdversarialEvaluationGetsItsCodeAndAMessageWithTheLimit) {
   for (const AdversarialEval& c : AdversarialEvals()) {

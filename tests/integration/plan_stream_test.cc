@@ -6,31 +6,15 @@
 #include "gtest/gtest.h"
 #include "tests/integration/requests.h"
 #include "tests/integration/server_process.h"
+#include "tests/integration/shared_server_test.h"
 
 namespace riskplan::testing {
 namespace {
 
-class PlanStreamTest : public ::testing::Test {
+class PlanStreamTest : public SharedServerTest<PlanStreamTest> {
  protected:
-  static void SetUpTestSuite() {
-    auto server = ServerProcess::Start();
-    ASSERT_TRUE(server.ok()) << server.status();
-    server_ = server->release();
-  }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-  void SetUp() override {
-    ASSERT_NE(server_, nullptr);
-    client_ = std::make_unique<client::RiskplanClient>(server_->address());
-  }
 
-  static ServerProcess* server_;
-  std::unique_ptr<client::RiskplanClient> client_;
 };
-
-ServerProcess* PlanStreamTest::server_ = nullptr;
 
 TEST_F(PlanStreamTest, StreamsImprovementsThenOneFinalMessage) {
   PlanOutcome plan = RunPlan(*client_, SmallCityPlan(800));

@@ -5,27 +5,15 @@
 #include "gtest/gtest.h"
 #include "tests/integration/requests.h"
 #include "tests/integration/server_process.h"
+#include "tests/integration/shared_server_test.h"
 
 namespace riskplan::testing {
 namespace {
 
 using ::testing::HasSubstr;
 
-class TwoTierTest : public ::testing::Test {
+class TwoTierTest : public SharedServerTest<TwoTierTest> {
  protected:
-  static void SetUpTestSuite() {
-    auto server = ServerProcess::Start();
-    ASSERT_TRUE(server.ok()) << server.status();
-    server_ = server->release();
-  }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-  void SetUp() override {
-    ASSERT_NE(server_, nullptr);
-    client_ = std::make_unique<client::RiskplanClient>(server_->address());
-  }
 
   // A polyline on the small demo-city with the two-tier check enabled.
   static v1::EvaluateRiskRequest Request(const std::string& points) {
@@ -43,11 +31,7 @@ class TwoTierTest : public ::testing::Test {
     return response;
   }
 
-  static ServerProcess* server_;
-  std::unique_ptr<client::RiskplanClient> client_;
 };
-
-ServerProcess* TwoTierTest::server_ = nullptr;
 
 // Four pieces at 250 m, then (optionally) a dive into the terrain.
 constexpr char kHigh[] = "300,375,250; 600,500,250; 900,700,250; 1200,900,250";

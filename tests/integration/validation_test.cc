@@ -9,6 +9,7 @@
 #include "gtest/gtest.h"
 #include "tests/integration/requests.h"
 #include "tests/integration/server_process.h"
+#include "tests/integration/shared_server_test.h"
 
 namespace riskplan::testing {
 namespace {
@@ -17,21 +18,11 @@ using ::testing::HasSubstr;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-class ValidationTest : public ::testing::Test {
+class ValidationTest : public SharedServerTest<ValidationTest> {
+ public:
+  static std::vector<std::string> ServerFlags() { return {"--max_waypoints=50", "--max_request_bytes=65536"}; }
+
  protected:
-  static void SetUpTestSuite() {
-    auto server = ServerProcess::Start({"--max_waypoints=50", "--max_request_bytes=65536"});
-    ASSERT_TRUE(server.ok()) << server.status();
-    server_ = server->release();
-  }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-  void SetUp() override {
-    ASSERT_NE(server_, nullptr);
-    client_ = std::make_unique<client::RiskplanClient>(server_->address());
-  }
 
   void ExpectPlanError(const v1::PlanRequest& request, grpc::StatusCode code,
                        const std::string& message_part) {
@@ -49,11 +40,7 @@ class ValidationTest : public ::testing::Test {
     EXPECT_THAT(status.error_message(), HasSubstr(message_part));
   }
 
-  static ServerProcess* server_;
-  std::unique_ptr<client::RiskplanClient> client_;
 };
-
-ServerProcess* ValidationTest::server_ = nullptr;
 
 TEST_F(ValidationTest, UnknownMapIsNotFound) {
   v1::PlanRequest plan = SmallCityPlan(300);

@@ -11,10 +11,7 @@
 namespace riskplan::testing {
 namespace {
 
-class PlanStreamTest : public SharedServerTest<PlanStreamTest> {
- protected:
-
-};
+class PlanStreamTest : public SharedServerTest<PlanStreamTest> {};
 
 TEST_F(PlanStreamTest, StreamsImprovementsThenOneFinalMessage) {
   PlanOutcome plan = RunPlan(*client_, SmallCityPlan(800));

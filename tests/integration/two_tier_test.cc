@@ -14,7 +14,6 @@ using ::testing::HasSubstr;
 
 class TwoTierTest : public SharedServerTest<TwoTierTest> {
  protected:
-
   // A polyline on the small demo-city with the two-tier check enabled.
   static v1::EvaluateRiskRequest Request(const std::string& points) {
     v1::EvaluateRiskRequest r;
@@ -30,7 +29,6 @@ class TwoTierTest : public SharedServerTest<TwoTierTest> {
     EXPECT_TRUE(status.ok()) << status.error_message();
     return response;
   }
-
 };
 
 // Four pieces at 250 m, then (optionally) a dive into the terrain.

@@ -20,10 +20,11 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 class ValidationTest : public SharedServerTest<ValidationTest> {
  public:
-  static std::vector<std::string> ServerFlags() { return {"--max_waypoints=50", "--max_request_bytes=65536"}; }
+  static std::vector<std::string> ServerFlags() {
+    return {"--max_waypoints=50", "--max_request_bytes=65536"};
+  }
 
  protected:
-
   void ExpectPlanError(const v1::PlanRequest& request, grpc::StatusCode code,
                        const std::string& message_part) {
     PlanOutcome plan = RunPlan(*client_, request, absl::Seconds(30));
@@ -39,7 +40,6 @@ class ValidationTest : public SharedServerTest<ValidationTest> {
     EXPECT_EQ(status.error_code(), code) << status.error_message();
     EXPECT_THAT(status.error_message(), HasSubstr(message_part));
   }
-
 };
 
 TEST_F(ValidationTest, UnknownMapIsNotFound) {

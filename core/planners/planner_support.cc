@@ -73,16 +73,15 @@ bool IsRunStopped(const absl::Status& status) {
 bool CellBand(const RiskModel& model, int i, int j, double* low_m, double* high_m) {
   const RiskMap& map = model.map();
   if (!map.Contains(i, j) || map.nofly(i, j)) return false;
-  // A cell near the edge, where a fall's impact window may reach past the
-  // map, is left out whole (spec version 2): inside the margins, no height in
-  // the band and no heading breaks the window rule.
-  if (!model.band_margins().Inside(i, j, map.nx(), map.ny())) return false;
   // The same arithmetic as RiskModel::CheckConfiguration, so that a z inside
   // [low, high] passes it (z > terrain holds because min_agl >= 0 and the
   // band is checked to lie above the terrain).
   const double terrain = map.terrain(i, j);
   const double low = model.SafeAltitude(i, j);
-  const double high = terrain + model.params().max_agl_m;
+  // Near the edges the band ends lower, where a fall's impact window would
+  // reach past the map at some heading (spec version 2).
+  const double high =
+      std::min(terrain + model.params().max_agl_m, terrain + model.WindowCeilingAgl(i, j));
   if (!(low <= high) || !(high > terrain)) return false;
   *low_m = low > terrain ? low : std::nextafter(terrain, high);
   *high_m = high;

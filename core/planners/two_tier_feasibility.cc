@@ -86,9 +86,7 @@ TwoTierFeasibility::TwoTierFeasibility(const RiskModel& model, TwoTierOptions op
         detailed_.floor[k] = terrain_f;  // exact: the layer is float
         continue;
       }
-      // No-fly cells, and cells where a fall's impact window may reach past
-      // the map (spec version 2), are closed at every altitude.
-      if (map.nofly(i, j) || !model.band_margins().Inside(i, j, map.nx(), map.ny())) {
+      if (map.nofly(i, j)) {
         detailed_.floor[k] = kFloatInf;
         detailed_.ceiling[k] = -kFloatInf;
         continue;
@@ -101,7 +99,10 @@ TwoTierFeasibility::TwoTierFeasibility(const RiskModel& model, TwoTierOptions op
       const double floor_d =
           safe > terrain ? safe : std::nextafter(terrain, std::numeric_limits<double>::infinity());
       detailed_.floor[k] = std::isinf(floor_d) ? kFloatInf : RoundUp(floor_d);
-      detailed_.ceiling[k] = RoundDown(terrain + max_agl);
+      // Near the edges the ceiling is lower: above it a fall's impact window
+      // may reach past the map at some heading (spec version 2).
+      detailed_.ceiling[k] =
+          RoundDown(std::min(terrain + max_agl, terrain + model.WindowCeilingAgl(i, j)));
     }
   }
   const int b = options.block_cells;
@@ -155,12 +156,15 @@ bool TwoTierFeasibility::CellCollides(const Tier& tier, int i, int j, double z_l
   const RiskMap& map = model_.map();
   if (map.nofly(i, j)) {
     *kind = ViolationKind::kNoFlyZone;
-  } else if (!model_.band_margins().Inside(i, j, map.nx(), map.ny())) {
-    *kind = ViolationKind::kImpactOutsideMap;
   } else if (z_low - kAltitudeSlackM <= map.terrain(i, j)) {
     *kind = ViolationKind::kTerrainCollision;
+  } else if (below) {
+    *kind = ViolationKind::kBelowSafeAltitude;
   } else {
-    *kind = below ? ViolationKind::kBelowSafeAltitude : ViolationKind::kAboveMaxAltitude;
+    // Above the band's top, or above the lower ceiling near the edges.
+    const float max_ceiling = RoundDown(map.terrain(i, j) + model_.params().max_agl_m);
+    *kind = z_high + kAltitudeSlackM > max_ceiling ? ViolationKind::kAboveMaxAltitude
+                                                   : ViolationKind::kImpactOutsideMap;
   }
   return true;
 }

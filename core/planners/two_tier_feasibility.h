@@ -42,9 +42,9 @@ enum class CollisionRule {
   // Seed 001: a collision is z <= terrain (and any point outside the map).
   kTerrain = 0,
   // Spec section 6 per cell: outside the map, no-fly, z <= terrain,
-  // z < safe altitude or z > terrain + max_agl, and the cells near the edge
-  // where a fall's impact window may reach past the map (the model's
-  // band_margins(), whole cells, conservative).
+  // z < safe altitude or z > terrain + max_agl; near the edges, z above the
+  // height where a fall's impact window may reach past the map (the model's
+  // WindowCeilingAgl(), whole-cell margins per height bin, conservative).
   kFlightBand = 1,
 };
 

@@ -123,9 +123,33 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
     model->glide_ = model->own_glide_.get();
   }
   const ImpactTable& t = *model->table_;
-  model->band_margins_ =
-      MarginsOver(t, t.HeightBinOf(params.min_agl_m), t.HeightBinOf(params.max_agl_m));
+  model->first_band_bin_ = t.HeightBinOf(params.min_agl_m);
+  CellMargins upto;
+  for (int b = model->first_band_bin_; b <= t.HeightBinOf(params.max_agl_m); ++b) {
+    const CellMargins m = MarginsOver(t, b, b);
+    upto.west = std::max(upto.west, m.west);
+    upto.east = std::max(upto.east, m.east);
+    upto.south = std::max(upto.south, m.south);
+    upto.north = std::max(upto.north, m.north);
+    model->margins_upto_.push_back(upto);
+  }
+  model->band_margins_ = upto;
   return std::shared_ptr<const RiskModel>(std::move(model));
+}
+
+double RiskModel::WindowCeilingAgl(int i, int j) const {
+  const int nx = map_->nx();
+  const int ny = map_->ny();
+  if (band_margins_.Inside(i, j, nx, ny)) return std::numeric_limits<double>::infinity();
+  // The margins only grow with the height bin: the last bin whose margins
+  // hold the cell.
+  size_t n = 0;
+  while (n < margins_upto_.size() && margins_upto_[n].Inside(i, j, nx, ny)) ++n;
+  if (n == 0) return -std::numeric_limits<double>::infinity();
+  // Heights h < (b + 1/2) dh round to bin b or lower (spec step 2); a small
+  // margin keeps the division's rounding from reaching bin b + 1.
+  const int b = first_band_bin_ + static_cast<int>(n) - 1;
+  return (b + 0.5 - 1e-9) * table_->params().height_bin_m;
 }
 
 double RiskModel::SafeAltitude(int i, int j) const {

@@ -141,6 +141,13 @@ class RiskModel {
   // may hold an admissible configuration only if some height or heading
   // keeps its window in; a cell inside them never breaks the window rule.
   const CellMargins& band_margins() const { return band_margins_; }
+  // The height above the ground below which every configuration in cell
+  // (i, j), at any heading, keeps its window inside the map, from whole-cell
+  // margins per height bin (conservative like band_margins()): +inf inside
+  // band_margins(), -inf where even the flight band's lowest height bin may
+  // reach past the map. Near the edges a lower flight is the one allowed:
+  // a lower fall lands closer.
+  double WindowCeilingAgl(int i, int j) const;
 
   // Admissibility of one sample (spec section 6), the rules in the spec's
   // order, the impact window last. Also reports the altitude limit that was
@@ -174,6 +181,10 @@ class RiskModel {
   const std::vector<double>* glide_ = nullptr;
   std::shared_ptr<const std::vector<double>> own_glide_;
   CellMargins band_margins_;
+  // margins_upto_[n]: the margins over height bins [first_band_bin_,
+  // first_band_bin_ + n]; the last is band_margins_.
+  std::vector<CellMargins> margins_upto_;
+  int first_band_bin_ = 1;
 };
 
 }  // namespace riskplan

@@ -175,12 +175,19 @@ TEST(TwoTierFeasibilityTest, ReportsWhichTierAndSegmentFoundTheCollision) {
   EXPECT_EQ(r.kind, ViolationKind::kAboveMaxAltitude);
   r = checker.CheckPath(std::vector<Point3>{{250.0, 250.0, 190.0}, {-10.0, 250.0, 190.0}});
   EXPECT_EQ(r.kind, ViolationKind::kOutsideMap);
-  // Towards the west edge: the margin where an impact window may reach past
-  // the map, in whole cells, before the edge itself.
+  // Towards the west edge at 90 m above the ground: the first cell whose
+  // ceiling for the impact window is below 90 m, before the edge itself.
   r = checker.CheckPath(std::vector<Point3>{{250.0, 250.0, 190.0}, {5.0, 250.0, 190.0}});
   EXPECT_EQ(r.tier, FeasibilityTier::kDetailed);
   EXPECT_EQ(r.kind, ViolationKind::kImpactOutsideMap);
-  EXPECT_EQ(r.cell_i, model->band_margins().west - 1);
+  EXPECT_GT(r.cell_i, 0);
+  EXPECT_LT(model->WindowCeilingAgl(r.cell_i, r.cell_j), 90.0);
+  EXPECT_GE(model->WindowCeilingAgl(r.cell_i + 1, r.cell_j), 90.0);
+  // Lower, the same path flies closer to the edge.
+  const FeasibilityResult low =
+      checker.CheckPath(std::vector<Point3>{{250.0, 250.0, 135.0}, {5.0, 250.0, 135.0}});
+  EXPECT_EQ(low.kind, ViolationKind::kImpactOutsideMap);
+  EXPECT_LT(low.cell_i, r.cell_i);
   // Counting every colliding cell.
   path = {{500.0, 610.0, 190.0}, {700.0, 610.0, 190.0}};
   EXPECT_EQ(checker.CheckPath(path, /*count_all=*/true).colliding_cells, 2);

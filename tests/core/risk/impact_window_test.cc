@@ -3,6 +3,7 @@
 // reach the model reports is exactly where that starts; the risk layer's
 // NODATA band has the reach's width.
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "core/base/geometry.h"
@@ -196,6 +197,38 @@ TEST(ImpactWindowTest, BandMarginsAreConservative) {
       }
     }
   }
+}
+
+// Near the edges, below WindowCeilingAgl no height of the flight band and no
+// heading breaks the window rule; the ceiling only rises going inwards.
+TEST(ImpactWindowTest, WindowCeilingIsConservativeAndRisesInwards) {
+  auto model = FlatModel();
+  ASSERT_NE(model, nullptr);
+  const ModelParams& p = model->params();
+  const int j = kCells / 2;
+  int finite = 0;
+  double previous = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < kCells / 2; ++i) {
+    const double cap = model->WindowCeilingAgl(i, j);
+    EXPECT_GE(cap, previous) << i;
+    previous = cap;
+    if (std::isinf(cap)) {
+      EXPECT_EQ(cap > 0, model->band_margins().Inside(i, j, kCells, kCells)) << i;
+      continue;
+    }
+    ++finite;
+    for (double agl = p.min_agl_m; agl < cap; agl += 0.5) {
+      for (double fx : {0.0, 0.5, 0.999999}) {
+        for (int k = 0; k < 72; ++k) {
+          const Pose q{(i + fx) * kRes, (j + 0.5) * kRes, kTerrain + agl, (k + 0.4) * kTwoPi / 72};
+          ASSERT_EQ(model->CheckConfiguration(q), ViolationKind::kNone)
+              << i << " agl " << agl << " k " << k;
+        }
+      }
+    }
+  }
+  // Between the closed edge and the band margins, cells with a lower ceiling.
+  EXPECT_GT(finite, 2);
 }
 
 // The risk layer's NODATA band (NaN) is exactly the reach: at a fixed height

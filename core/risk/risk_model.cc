@@ -27,26 +27,27 @@ KernelSite SiteOf(const RiskMap& map, const ImpactTable& table, const Pose& q, d
   return site;
 }
 
-// CellMargins over height bins [b_first, b_last] and every heading bin. The
-// impact cell of a configuration in cell i is floor(i + f + o/res) for some
-// f in [0, 1), that is i + floor(o/res) or one more; one cell more on each
-// side absorbs the rounding of the division.
-CellMargins MarginsOver(const ImpactTable& table, int b_first, int b_last) {
-  CellMargins m;
+// Widens `m` to hold `other` as well.
+void Widen(const CellMargins& other, CellMargins* m) {
+  m->west = std::max(m->west, other.west);
+  m->east = std::max(m->east, other.east);
+  m->south = std::max(m->south, other.south);
+  m->north = std::max(m->north, other.north);
+}
+
+// Widens `m` over height bin b and every heading bin. The impact cell of a
+// configuration in cell i is floor(i + f + o/res) for some f in [0, 1), that
+// is i + floor(o/res) or one more; one cell more on each side absorbs the
+// rounding of the division.
+void WidenOverBin(const ImpactTable& table, int b, CellMargins* m) {
   const double res = table.res_m();
-  for (int b = b_first; b <= b_last; ++b) {
-    for (int k = 0; k < table.heading_bins(); ++k) {
-      const ImpactKernel& kernel = table.kernel(b, k);
-      const int hw = kernel.half_width;
-      const int fx = static_cast<int>(std::floor(kernel.offset_x_m / res));
-      const int fy = static_cast<int>(std::floor(kernel.offset_y_m / res));
-      m.west = std::max(m.west, hw + 1 - fx);
-      m.east = std::max(m.east, hw + 2 + fx);
-      m.south = std::max(m.south, hw + 1 - fy);
-      m.north = std::max(m.north, hw + 2 + fy);
-    }
+  for (int k = 0; k < table.heading_bins(); ++k) {
+    const ImpactKernel& kernel = table.kernel(b, k);
+    const int hw = kernel.half_width;
+    const int fx = static_cast<int>(std::floor(kernel.offset_x_m / res));
+    const int fy = static_cast<int>(std::floor(kernel.offset_y_m / res));
+    Widen(CellMargins{hw + 1 - fx, hw + 2 + fx, hw + 1 - fy, hw + 2 + fy}, m);
   }
-  return m;
 }
 
 }  // namespace
@@ -126,11 +127,7 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
   model->first_band_bin_ = t.HeightBinOf(params.min_agl_m);
   CellMargins upto;
   for (int b = model->first_band_bin_; b <= t.HeightBinOf(params.max_agl_m); ++b) {
-    const CellMargins m = MarginsOver(t, b, b);
-    upto.west = std::max(upto.west, m.west);
-    upto.east = std::max(upto.east, m.east);
-    upto.south = std::max(upto.south, m.south);
-    upto.north = std::max(upto.north, m.north);
+    WidenOverBin(t, b, &upto);
     model->margins_upto_.push_back(upto);
   }
   model->band_margins_ = upto;

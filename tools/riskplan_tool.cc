@@ -21,7 +21,7 @@
 #include "core/map/map_bundle.h"
 #include "core/risk/risk_layer.h"
 #include "core/risk/risk_model.h"
-#include "core/tools/layer_writers.h"
+#include "tools/layer_writers.h"
 #include "nlohmann/json.hpp"
 
 ABSL_FLAG(std::string, map, "",

@@ -2,6 +2,7 @@
 
 #include <proj.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -60,6 +61,50 @@ std::string OperationOf(double lat0, double lon0, double x0, double y0) {
 
 bool ValidLatLon(double lat, double lon) {
   return lat >= -90.0 && lat <= 90.0 && lon >= -180.0 && lon <= 180.0;
+}
+
+// WGS84, for the radii of curvature of a heading's step.
+constexpr double kSemiMajorM = 6378137.0;
+constexpr double kFlattening = 1.0 / 298.257223563;
+constexpr double kE2 = kFlattening * (2.0 - kFlattening);
+constexpr double kDegPerRad = 180.0 / kPi;
+// Half the step along a heading: 1 m either side of the point.
+constexpr double kHeadingStepM = 1.0;
+// Below this cos(lat) a point is at a pole, where azimuths are undefined.
+constexpr double kMinCosLat = 1e-6;
+
+double MeridianRadius(double phi) {
+  const double s = std::sin(phi);
+  return kSemiMajorM * (1.0 - kE2) / std::pow(1.0 - kE2 * s * s, 1.5);
+}
+
+double PrimeVerticalRadius(double phi) {
+  const double s = std::sin(phi);
+  return kSemiMajorM / std::sqrt(1.0 - kE2 * s * s);
+}
+
+double NormalizeDegrees(double deg) {
+  double d = std::fmod(deg, 360.0);
+  if (d < 0.0) d += 360.0;
+  if (d >= 360.0) d = 0.0;
+  return d;
+}
+
+// Local (x, y) of (lat, lon) in radians; not finite when PROJ fails.
+LocalXY Forward(PJ* pj, double phi, double lam) {
+  const PJ_COORD r = proj_trans(pj, PJ_FWD, proj_coord(lam, phi, 0.0, 0.0));
+  return {r.xy.x, r.xy.y};
+}
+
+struct LatLonRad {
+  double phi = 0.0;
+  double lam = 0.0;
+};
+
+// (lat, lon) in radians of local (x, y); not finite when PROJ fails.
+LatLonRad InverseRad(PJ* pj, double x, double y) {
+  const PJ_COORD r = proj_trans(pj, PJ_INV, proj_coord(x, y, 0.0, 0.0));
+  return {r.lp.phi, r.lp.lam};
 }
 
 }  // namespace
@@ -138,6 +183,10 @@ absl::StatusOr<std::vector<LatLon>> GeoFrame::ToWgs84(const std::vector<LocalXY>
   return out;
 }
 
+bool GeoFrame::Covers(double x, double y) const {
+  return std::isfinite(x) && std::isfinite(y) && std::hypot(x - x0_, y - y0_) <= kMaxLocalRadiusM;
+}
+
 absl::StatusOr<LocalXY> GeoFrame::ToLocal(const LatLon& p) const {
   auto v = ToLocal(std::vector<LatLon>{p});
   if (!v.ok()) return v.status();
@@ -148,6 +197,134 @@ absl::StatusOr<LatLon> GeoFrame::ToWgs84(const LocalXY& p) const {
   auto v = ToWgs84(std::vector<LocalXY>{p});
   if (!v.ok()) return v.status();
   return (*v)[0];
+}
+
+absl::StatusOr<std::vector<Pose>> GeoFrame::ToLocal(std::span<const GeoPose> poses) const {
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const GeoPose& p = poses[k];
+    if (!ValidLatLon(p.lat_deg, p.lon_deg) || !std::isfinite(p.alt_m) ||
+        !std::isfinite(p.heading_deg)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "pose %d: (%.9g, %.9g) deg, altitude %.9g m, heading %.9g deg: the latitude must be in "
+          "[-90, 90], the longitude in [-180, 180], the altitude and heading finite",
+          k, p.lat_deg, p.lon_deg, p.alt_m, p.heading_deg));
+    }
+    if (std::cos(proj_torad(p.lat_deg)) < kMinCosLat) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "pose %d: latitude %.9g deg is at a pole, where a heading has no meaning", k, p.lat_deg));
+    }
+  }
+  auto proj = Projection::Make(OperationOf(lat0_, lon0_, x0_, y0_));
+  if (!proj.ok()) return proj.status();
+  std::vector<Pose> out(poses.size());
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const GeoPose& p = poses[k];
+    const double phi = proj_torad(p.lat_deg), lam = proj_torad(p.lon_deg);
+    const double psi = proj_torad(p.heading_deg);
+    // A step of kHeadingStepM at azimuth psi, in radians of latitude and
+    // longitude; its two ends' images give the local direction.
+    const double dphi = kHeadingStepM * std::cos(psi) / MeridianRadius(phi);
+    const double dlam = kHeadingStepM * std::sin(psi) / (PrimeVerticalRadius(phi) * std::cos(phi));
+    const LocalXY c = Forward(proj->pj(), phi, lam);
+    const LocalXY ahead = Forward(proj->pj(), phi + dphi, lam + dlam);
+    const LocalXY behind = Forward(proj->pj(), phi - dphi, lam - dlam);
+    const double dx = c.x - x0_, dy = c.y - y0_;
+    if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(ahead.x) ||
+        !std::isfinite(behind.x) || std::hypot(dx, dy) > kMaxLocalRadiusM) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "pose %d: (%.9g, %.9g) deg is more than %.0f km from the map's geo-reference origin "
+          "(%.9g, %.9g)",
+          k, p.lat_deg, p.lon_deg, kMaxLocalRadiusM / 1000.0, lat0_, lon0_));
+    }
+    out[k] = Pose{c.x, c.y, p.alt_m,
+                  NormalizeHeading(std::atan2(ahead.y - behind.y, ahead.x - behind.x))};
+  }
+  return out;
+}
+
+absl::StatusOr<std::vector<GeoPose>> GeoFrame::ToWgs84(std::span<const Pose> poses) const {
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const Pose& p = poses[k];
+    const double dx = p.x - x0_, dy = p.y - y0_;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
+        !std::isfinite(p.theta) || std::hypot(dx, dy) > kMaxLocalRadiusM) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "pose %d: local (%.9g, %.9g, %.9g, %.9g) is not finite or more than %.0f km from the "
+          "map's origin (%.9g, %.9g) m",
+          k, p.x, p.y, p.z, p.theta, kMaxLocalRadiusM / 1000.0, x0_, y0_));
+    }
+  }
+  auto proj = Projection::Make(OperationOf(lat0_, lon0_, x0_, y0_));
+  if (!proj.ok()) return proj.status();
+  std::vector<GeoPose> out(poses.size());
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const Pose& p = poses[k];
+    const double ux = kHeadingStepM * std::cos(p.theta), uy = kHeadingStepM * std::sin(p.theta);
+    const LatLonRad c = InverseRad(proj->pj(), p.x, p.y);
+    const LatLonRad ahead = InverseRad(proj->pj(), p.x + ux, p.y + uy);
+    const LatLonRad behind = InverseRad(proj->pj(), p.x - ux, p.y - uy);
+    if (!std::isfinite(c.phi) || !std::isfinite(c.lam) || !std::isfinite(ahead.phi) ||
+        !std::isfinite(behind.phi)) {
+      return absl::InternalError(
+          absl::StrFormat("pose %d: PROJ cannot invert local (%.9g, %.9g) m", k, p.x, p.y));
+    }
+    if (std::cos(c.phi) < kMinCosLat) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "pose %d: local (%.9g, %.9g) m is at a pole, where a heading has no meaning", k, p.x,
+          p.y));
+    }
+    // The step's north and east components on the ellipsoid (the longitude
+    // difference wrapped, should the step cross the antimeridian).
+    const double north = (ahead.phi - behind.phi) * MeridianRadius(c.phi);
+    const double dlam = std::remainder(ahead.lam - behind.lam, 2.0 * kPi);
+    const double east = dlam * PrimeVerticalRadius(c.phi) * std::cos(c.phi);
+    out[k] = GeoPose{proj_todeg(c.phi), proj_todeg(c.lam), p.z,
+                     NormalizeDegrees(std::atan2(east, north) * kDegPerRad)};
+  }
+  return out;
+}
+
+absl::StatusOr<double> GeoFrame::GridConvergenceRad(const LocalXY& p) const {
+  auto ll = ToWgs84(p);
+  if (!ll.ok()) return ll.status();
+  auto proj = Projection::Make(OperationOf(lat0_, lon0_, x0_, y0_));
+  if (!proj.ok()) return proj.status();
+  const PJ_FACTORS f = proj_factors(
+      proj->pj(), proj_coord(proj_torad(ll->lon_deg), proj_torad(ll->lat_deg), 0.0, 0.0));
+  if (!std::isfinite(f.meridian_convergence)) {
+    return absl::InternalError(absl::StrFormat(
+        "PROJ cannot compute the grid convergence at local (%.9g, %.9g) m", p.x, p.y));
+  }
+  return f.meridian_convergence;
+}
+
+absl::StatusOr<GeoBounds> GeoFrame::BoundsOf(double x_min, double y_min, double x_max,
+                                             double y_max) const {
+  constexpr int kPerEdge = 65;
+  // Corners first (south-west, south-east, north-east, north-west), then
+  // the inner points of each edge.
+  std::vector<LocalXY> points = {{x_min, y_min}, {x_max, y_min}, {x_max, y_max}, {x_min, y_max}};
+  for (int k = 1; k < kPerEdge - 1; ++k) {
+    const double t = static_cast<double>(k) / (kPerEdge - 1);
+    const double x = x_min + t * (x_max - x_min), y = y_min + t * (y_max - y_min);
+    points.push_back({x, y_min});
+    points.push_back({x, y_max});
+    points.push_back({x_min, y});
+    points.push_back({x_max, y});
+  }
+  auto ll = ToWgs84(points);
+  if (!ll.ok()) return ll.status();
+  GeoBounds b;
+  for (int k = 0; k < 4; ++k) b.corners[k] = (*ll)[k];
+  b.min_lat_deg = b.max_lat_deg = (*ll)[0].lat_deg;
+  b.min_lon_deg = b.max_lon_deg = (*ll)[0].lon_deg;
+  for (const LatLon& p : *ll) {
+    b.min_lat_deg = std::min(b.min_lat_deg, p.lat_deg);
+    b.max_lat_deg = std::max(b.max_lat_deg, p.lat_deg);
+    b.min_lon_deg = std::min(b.min_lon_deg, p.lon_deg);
+    b.max_lon_deg = std::max(b.max_lon_deg, p.lon_deg);
+  }
+  return b;
 }
 
 absl::StatusOr<GeoFrame> FrameOfMap(const MapHeader& header) {

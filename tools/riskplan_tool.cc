@@ -21,8 +21,10 @@
 #include "core/map/map_bundle.h"
 #include "core/risk/risk_layer.h"
 #include "core/risk/risk_model.h"
-#include "tools/layer_writers.h"
+#include "geo/geo_frame.h"
+#include "geo/risk_layer_geotiff.h"
 #include "nlohmann/json.hpp"
+#include "tools/layer_writers.h"
 
 ABSL_FLAG(std::string, map, "",
           "Map bundle directory (docs/map-bundle.md). Empty: the built-in demo-city.");
@@ -86,8 +88,10 @@ cmdline::ProgramHelp Help() {
        "  riskplan-tool risk-layer [--map=DIR] --out=PREFIX [--agl_m=100] [--heading_deg=0|max]\n"
        "                           [--threads=N] [--stride=1]\n"
        "\n"
-       "Writes a PNG heat map (PREFIX.png) and an ESRI ASCII grid (PREFIX.asc), plus its\n"
-       "projection (PREFIX.prj) when the map has a geo-reference.\n"
+       "Writes a PNG heat map (PREFIX.png), an ESRI ASCII grid (PREFIX.asc), plus its\n"
+       "projection (PREFIX.prj) when the map has a geo-reference, and a Cloud-Optimized\n"
+       "GeoTIFF (PREFIX.tif: Float64 M, NODATA NaN where undefined, the map's local frame\n"
+       "as its CRS when the map has a geo-reference).\n"
        "\n"
        "Example:\n"
        "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2",
@@ -323,10 +327,14 @@ int RiskLayerCommand() {
   // costs nothing.
   const std::optional<GeoReference>& geo = (*map)->header().geo;
   std::string wkt;
+  std::optional<geo::GeoFrame> frame;
   if (geo.has_value()) {
     auto text = LocalAzimuthalEquidistantWkt(*geo, (*map)->name(), (*map)->x0(), (*map)->y0());
     if (!text.ok()) return Fail(text.status());
     wkt = *std::move(text);
+    auto f = geo::FrameOfMap((*map)->header());
+    if (!f.ok()) return Fail(f.status());
+    frame = *std::move(f);
   }
   const absl::Time start = absl::Now();
   auto layer = ComputeRiskLayer(**model, options);
@@ -334,6 +342,15 @@ int RiskLayerCommand() {
   const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
   if (absl::Status s = WriteHeatMapPng(*layer, out + ".png"); !s.ok()) return Fail(s);
   if (absl::Status s = WriteAsciiGrid(*layer, out + ".asc"); !s.ok()) return Fail(s);
+  if (absl::Status s = geo::WriteRiskLayerGeoTiff(
+          *layer, frame.has_value() ? &*frame : nullptr,
+          {(*map)->name(), options.height_agl_m,
+           heading == "max" ? "max over heading bins"
+                            : heading + " deg counter-clockwise from east"},
+          out + ".tif");
+      !s.ok()) {
+    return Fail(s);
+  }
   const std::string prj = out + ".prj";
   bool removed_stale_prj = false;
   if (geo.has_value()) {
@@ -369,6 +386,8 @@ int RiskLayerCommand() {
         out.c_str(), out.c_str(),
         removed_stale_prj ? (" (removed a stale " + prj + ")").c_str() : "");
   }
+  std::printf("wrote %s.tif (Cloud-Optimized GeoTIFF, Float64, NODATA NaN%s)\n", out.c_str(),
+              geo.has_value() ? ", CRS the map's local frame" : ", no CRS");
   return 0;
 }
 

@@ -195,8 +195,9 @@ void PlanCall::OfferFinal(const PlanResult& result) {
   env_.metrics->RecordPlan(v1::EndReason_Name(end_reason), absl::Seconds(result.elapsed_s));
   // Built outside the lock (the display path and the tree can be large): the
   // plan thread pays for it, and gRPC's threads never wait for it.
-  absl::StatusOr<v1::PlanUpdate> final_update = FinalUpdateToProto(
-      result, end_reason, spec_.params, spec_.display_step_m, spec_.options.record_tree);
+  absl::StatusOr<v1::PlanUpdate> final_update =
+      FinalUpdateToProto(result, end_reason, spec_.params, spec_.display_step_m,
+                         spec_.options.record_tree, spec_.frame.get());
   // A planner's best trajectory always converts; in a release build a
   // failure still ends the call, with INTERNAL, instead of a final message
   // without its trajectory.
@@ -223,7 +224,7 @@ void PlanCall::OfferFinal(const PlanResult& result) {
 void PlanCall::OnImprovement(const PlanImprovement& improvement) {
   // Built outside the lock: the planner thread pays for it, not gRPC's.
   absl::StatusOr<v1::PlanUpdate> update =
-      ImprovementToProto(improvement, spec_.params, spec_.display_step_m);
+      ImprovementToProto(improvement, spec_.params, spec_.display_step_m, spec_.frame.get());
   // Never fails for a planner's output; in a release build the update is
   // dropped (a later improvement or the final message carries a newer one).
   RISKPLAN_DCHECK(update.ok());

@@ -3,9 +3,11 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <tuple>
 
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "core/flight/trajectory.h"
 #include "google/protobuf/descriptor.h"
 #include "google/protobuf/reflection.h"
 
@@ -18,6 +20,90 @@ absl::Status CheckFinite(double value, std::string_view field) {
   if (std::isfinite(value)) return absl::OkStatus();
   return absl::InvalidArgumentError(
       absl::StrFormat("%s has value %g; it must be finite", std::string(field), value));
+}
+
+// A latitude and a longitude, each finite and in range, named by `field`.
+absl::Status CheckLatLon(double lat, double lon, const std::string& field) {
+  if (!(lat >= -90.0 && lat <= 90.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s.lat_deg has value %g; it must be in [-90, 90]", field, lat));
+  }
+  if (!(lon >= -180.0 && lon <= 180.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s.lon_deg has value %g; it must be in [-180, 180]", field, lon));
+  }
+  return absl::OkStatus();
+}
+
+// GeoFrame's batch errors start "pose K: " or "point K: "; for a single pose
+// the field alone names it.
+absl::Status ConversionError(const absl::Status& status, std::string_view field, bool single) {
+  std::string message(status.message());
+  if (single) {
+    for (const std::string prefix : {"pose 0: ", "point 0: "}) {
+      if (message.rfind(prefix, 0) == 0) message = message.substr(prefix.size());
+    }
+  }
+  return absl::Status(status.code(), absl::StrFormat("%s: %s", std::string(field), message));
+}
+
+// WGS84 points (polyline points, obstacles) into the local frame; errors as
+// PosesFromWgs84's.
+absl::StatusOr<std::vector<geo::LocalXY>> PointsFromWgs84(const geo::GeoFrame& frame,
+                                                          const std::vector<geo::LatLon>& points,
+                                                          std::string_view field) {
+  absl::StatusOr<std::vector<geo::LocalXY>> local = frame.ToLocal(points);
+  if (!local.ok()) return ConversionError(local.status(), field, /*single=*/false);
+  return local;
+}
+
+// INVALID_ARGUMENT when a pose given in WGS84 lies outside `map`: the message
+// gives both frames, and the map's WGS84 box.
+absl::Status CheckWgs84InsideMap(const RiskMap& map, const geo::GeoFrame& frame, const Pose& pose,
+                                 const geo::GeoPose& given, std::string_view field) {
+  int i = 0, j = 0;
+  if (map.CellOf(pose.x, pose.y, &i, &j)) return absl::OkStatus();
+  std::string box;
+  absl::StatusOr<geo::GeoBounds> b =
+      frame.BoundsOf(map.x0(), map.y0(), map.x0() + map.width_m(), map.y0() + map.height_m());
+  if (b.ok()) {
+    box = absl::StrFormat(" (latitudes %.6f to %.6f, longitudes %.6f to %.6f)", b->min_lat_deg,
+                          b->max_lat_deg, b->min_lon_deg, b->max_lon_deg);
+  }
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s (lat, lon) = (%.9g, %.9g) deg, local (x, y) = (%.2f, %.2f) m, is outside map '%s', "
+      "which covers x in [%g, %g), y in [%g, %g)%s",
+      std::string(field), given.lat_deg, given.lon_deg, pose.x, pose.y, map.name(), map.x0(),
+      map.x0() + map.width_m(), map.y0(), map.y0() + map.height_m(), box));
+}
+
+// The start or goal of a plan, from whichever frame the request gives it in,
+// checked inside the map. `name` is "start" or "goal".
+absl::StatusOr<Pose> PlanEndpoint(const MapRegistry& registry, const RiskMap& map, bool has_local,
+                                  const v1::Pose& local, bool has_wgs84, const v1::GeoPose& wgs84,
+                                  const std::string& name) {
+  const std::string wgs84_name = name + "_wgs84";
+  if (has_local) {
+    absl::StatusOr<Pose> pose = PoseFromProto(local, name);
+    if (!pose.ok()) return pose.status();
+    if (absl::Status s = CheckInsideMap(map, *pose, name); !s.ok()) return s;
+    return pose;
+  }
+  if (!has_wgs84) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s is required (or %s on a geo-referenced map)", name, wgs84_name));
+  }
+  absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+      FrameForField(registry, map, wgs84_name, name);
+  if (!frame.ok()) return frame.status();
+  absl::StatusOr<geo::GeoPose> given = GeoPoseFromProto(wgs84, wgs84_name);
+  if (!given.ok()) return given.status();
+  absl::StatusOr<std::vector<Pose>> pose = PosesFromWgs84(**frame, {*given}, wgs84_name, true);
+  if (!pose.ok()) return pose.status();
+  if (absl::Status s = CheckWgs84InsideMap(map, **frame, (*pose)[0], *given, wgs84_name); !s.ok()) {
+    return s;
+  }
+  return (*pose)[0];
 }
 
 }  // namespace
@@ -75,6 +161,33 @@ absl::StatusOr<Pose> PoseFromProto(const v1::Pose& pose, std::string_view field)
   if (absl::Status s = CheckFinite(pose.z(), f + ".z"); !s.ok()) return s;
   if (absl::Status s = CheckFinite(pose.theta(), f + ".theta"); !s.ok()) return s;
   return Pose{pose.x(), pose.y(), pose.z(), NormalizeHeading(pose.theta())};
+}
+
+absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> FrameForField(const MapRegistry& registry,
+                                                                   const RiskMap& map,
+                                                                   std::string_view field,
+                                                                   std::string_view local_field) {
+  std::shared_ptr<const geo::GeoFrame> frame = registry.Frame(map.name());
+  if (frame != nullptr) return frame;
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s: map '%s' has no geo-reference, so it takes positions in its local metres only (%s)",
+      std::string(field), map.name(), std::string(local_field)));
+}
+
+absl::StatusOr<geo::GeoPose> GeoPoseFromProto(const v1::GeoPose& pose, std::string_view field) {
+  const std::string f(field);
+  if (absl::Status s = CheckLatLon(pose.lat_deg(), pose.lon_deg(), f); !s.ok()) return s;
+  if (absl::Status s = CheckFinite(pose.alt_m(), f + ".alt_m"); !s.ok()) return s;
+  if (absl::Status s = CheckFinite(pose.heading_deg(), f + ".heading_deg"); !s.ok()) return s;
+  return geo::GeoPose{pose.lat_deg(), pose.lon_deg(), pose.alt_m(), pose.heading_deg()};
+}
+
+absl::StatusOr<std::vector<Pose>> PosesFromWgs84(const geo::GeoFrame& frame,
+                                                 const std::vector<geo::GeoPose>& poses,
+                                                 std::string_view field, bool single) {
+  absl::StatusOr<std::vector<Pose>> local = frame.ToLocal(poses);
+  if (!local.ok()) return ConversionError(local.status(), field, single);
+  return local;
 }
 
 absl::StatusOr<std::shared_ptr<const RiskMap>> FindMap(const MapRegistry& registry,
@@ -159,14 +272,14 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   if (!map.ok()) return map.status();
   spec.map = *std::move(map);
 
-  if (!request.has_start()) return absl::InvalidArgumentError("start is required");
-  if (!request.has_goal()) return absl::InvalidArgumentError("goal is required");
-  absl::StatusOr<Pose> start = PoseFromProto(request.start(), "start");
+  spec.frame = registry.Frame(spec.map->name());
+  absl::StatusOr<Pose> start =
+      PlanEndpoint(registry, *spec.map, request.has_start(), request.start(),
+                   request.has_start_wgs84(), request.start_wgs84(), "start");
   if (!start.ok()) return start.status();
-  absl::StatusOr<Pose> goal = PoseFromProto(request.goal(), "goal");
+  absl::StatusOr<Pose> goal = PlanEndpoint(registry, *spec.map, request.has_goal(), request.goal(),
+                                           request.has_goal_wgs84(), request.goal_wgs84(), "goal");
   if (!goal.ok()) return goal.status();
-  if (absl::Status s = CheckInsideMap(*spec.map, *start, "start"); !s.ok()) return s;
-  if (absl::Status s = CheckInsideMap(*spec.map, *goal, "goal"); !s.ok()) return s;
   spec.start = *start;
   spec.goal = *goal;
 
@@ -227,10 +340,13 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
 
   // Counts first, so that the loops below (and the planners) only ever see
   // a bounded number of points and areas.
-  if (static_cast<size_t>(request.obstacle_points_size()) > limits.max_obstacle_points) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("obstacle_points has %d points; the limit is %d",
-                        request.obstacle_points_size(), limits.max_obstacle_points));
+  if (static_cast<size_t>(request.obstacle_points_size()) +
+          static_cast<size_t>(request.obstacle_points_wgs84_size()) >
+      limits.max_obstacle_points) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "obstacle_points has %d points and obstacle_points_wgs84 %d; the limit is %d together",
+        request.obstacle_points_size(), request.obstacle_points_wgs84_size(),
+        limits.max_obstacle_points));
   }
   if (static_cast<size_t>(request.dynamic_obstacles_size()) > kMaxDynamicObstacles) {
     return absl::InvalidArgumentError(
@@ -243,6 +359,26 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
     if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
     if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
     spec.options.obstacle_points.push_back(Point2{p.x(), p.y()});
+  }
+  if (request.obstacle_points_wgs84_size() > 0) {
+    absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+        FrameForField(registry, *spec.map, "obstacle_points_wgs84", "obstacle_points");
+    if (!frame.ok()) return frame.status();
+    std::vector<geo::LatLon> points;
+    points.reserve(request.obstacle_points_wgs84_size());
+    for (int i = 0; i < request.obstacle_points_wgs84_size(); ++i) {
+      const v1::GeoPoint2& p = request.obstacle_points_wgs84(i);
+      if (absl::Status s = CheckLatLon(p.lat_deg(), p.lon_deg(),
+                                       absl::StrFormat("obstacle_points_wgs84[%d]", i));
+          !s.ok()) {
+        return s;
+      }
+      points.push_back({p.lat_deg(), p.lon_deg()});
+    }
+    absl::StatusOr<std::vector<geo::LocalXY>> local =
+        PointsFromWgs84(**frame, points, "obstacle_points_wgs84");
+    if (!local.ok()) return local.status();
+    for (const geo::LocalXY& p : *local) spec.options.obstacle_points.push_back(Point2{p.x, p.y});
   }
   for (int i = 0; i < request.dynamic_obstacles_size(); ++i) {
     const v1::DynamicObstacle& o = request.dynamic_obstacles(i);
@@ -343,10 +479,64 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
       }
       break;
     }
+    case v1::EvaluateRiskRequest::kWaypointsWgs84: {
+      const auto& poses = request.waypoints_wgs84().poses();
+      if (poses.size() < 2 || static_cast<size_t>(poses.size()) > limits.max_waypoints) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("waypoints_wgs84.poses has %d poses; it must have 2 to %d",
+                            poses.size(), limits.max_waypoints));
+      }
+      absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+          FrameForField(registry, *spec.map, "waypoints_wgs84", "waypoints");
+      if (!frame.ok()) return frame.status();
+      std::vector<geo::GeoPose> given;
+      given.reserve(poses.size());
+      for (int i = 0; i < poses.size(); ++i) {
+        absl::StatusOr<geo::GeoPose> pose =
+            GeoPoseFromProto(poses[i], absl::StrFormat("waypoints_wgs84.poses[%d]", i));
+        if (!pose.ok()) return pose.status();
+        given.push_back(*pose);
+      }
+      absl::StatusOr<std::vector<Pose>> local =
+          PosesFromWgs84(**frame, given, "waypoints_wgs84.poses", /*single=*/false);
+      if (!local.ok()) return local.status();
+      spec.waypoints = *std::move(local);
+      break;
+    }
+    case v1::EvaluateRiskRequest::kPolylineWgs84: {
+      const auto& points = request.polyline_wgs84().points();
+      if (points.size() < 2 || static_cast<size_t>(points.size()) > limits.max_waypoints) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("polyline_wgs84.points has %d points; it must have 2 to %d",
+                            points.size(), limits.max_waypoints));
+      }
+      absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+          FrameForField(registry, *spec.map, "polyline_wgs84", "polyline");
+      if (!frame.ok()) return frame.status();
+      std::vector<geo::LatLon> given;
+      given.reserve(points.size());
+      for (int i = 0; i < points.size(); ++i) {
+        const v1::GeoPoint3& p = points[i];
+        const std::string field = absl::StrFormat("polyline_wgs84.points[%d]", i);
+        if (absl::Status s = CheckLatLon(p.lat_deg(), p.lon_deg(), field); !s.ok()) return s;
+        if (absl::Status s = CheckFinite(p.alt_m(), field + ".alt_m"); !s.ok()) return s;
+        given.push_back({p.lat_deg(), p.lon_deg()});
+      }
+      absl::StatusOr<std::vector<geo::LocalXY>> local =
+          PointsFromWgs84(**frame, given, "polyline_wgs84.points");
+      if (!local.ok()) return local.status();
+      spec.polyline.reserve(points.size());
+      for (int i = 0; i < points.size(); ++i) {
+        spec.polyline.push_back(Point3{(*local)[i].x, (*local)[i].y, points[i].alt_m()});
+      }
+      break;
+    }
     default:
       return absl::InvalidArgumentError(
-          "trajectory is required: set waypoints (poses) or polyline (points)");
+          "trajectory is required: set waypoints (poses) or polyline (points), or on a "
+          "geo-referenced map waypoints_wgs84 or polyline_wgs84");
   }
+  spec.frame = registry.Frame(spec.map->name());
 
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
   if (!params.ok()) return params.status();
@@ -358,7 +548,24 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   absl::StatusOr<TwoTierOptions> two_tier = TwoTierOptionsFromProto(request.two_tier());
   if (!two_tier.ok()) return two_tier.status();
   if (request.two_tier().enabled()) spec.two_tier = *two_tier;
+  const double spacing = request.path_spacing_m();
+  if (spacing != 0.0 && !(std::isfinite(spacing) && spacing >= 1.0 && spacing <= 100000.0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "path_spacing_m has value %g; it must be finite and in [1, 100000] (0: no path)", spacing));
+  }
+  spec.path_spacing_m = spacing;
   return spec;
+}
+
+absl::Status CheckPathCount(double length_m, double spacing_m, const RequestLimits& limits) {
+  const int64_t poses = PathPoseCount(length_m, spacing_m);
+  if (poses > limits.max_response_samples) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "path_spacing_m: the path of %.1f m sampled every %g m has %d poses; at most %d can be "
+        "returned (--max_response_samples)",
+        length_m, spacing_m, poses, limits.max_response_samples));
+  }
+  return absl::OkStatus();
 }
 
 absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_step_m,
@@ -375,6 +582,165 @@ absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_st
         samples, length_m, sample_step_m, limits.max_response_samples));
   }
   return absl::OkStatus();
+}
+
+}  // namespace riskplan::server
+
+namespace riskplan::server {
+namespace {
+
+// The map cells [i0, i1) x [j0, j1) that the local rectangle overlaps,
+// clipped to the map; INVALID_ARGUMENT naming `field` when it overlaps none.
+absl::Status WindowOfRect(const RiskMap& map, double x_min, double y_min, double x_max,
+                          double y_max, const std::string& field, RiskLayerOptions* options) {
+  // Indices computed in double and clipped before any conversion, so a far
+  // rectangle cannot overflow an int.
+  const double i0 = std::max(0.0, std::floor((x_min - map.x0()) / map.res()));
+  const double j0 = std::max(0.0, std::floor((y_min - map.y0()) / map.res()));
+  const double i1 = std::min<double>(map.nx(), std::ceil((x_max - map.x0()) / map.res()));
+  const double j1 = std::min<double>(map.ny(), std::ceil((y_max - map.y0()) / map.res()));
+  if (!(i1 > i0) || !(j1 > j0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s x in [%g, %g], y in [%g, %g] does not overlap map '%s', which covers x in [%g, %g), "
+        "y in [%g, %g)",
+        field, x_min, x_max, y_min, y_max, map.name(), map.x0(), map.x0() + map.width_m(), map.y0(),
+        map.y0() + map.height_m()));
+  }
+  options->first_column = static_cast<int>(i0);
+  options->first_row = static_cast<int>(j0);
+  options->columns = static_cast<int>(i1 - i0);
+  options->rows = static_cast<int>(j1 - j0);
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<RiskLayerSpec> ValidateRiskLayerRequest(const v1::GetRiskLayerRequest& request,
+                                                       const MapRegistry& registry,
+                                                       const RequestLimits& limits) {
+  RiskLayerSpec spec;
+  absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(registry, request.map());
+  if (!map.ok()) return map.status();
+  spec.map = *std::move(map);
+  spec.frame = registry.Frame(spec.map->name());
+  const RiskMap& m = *spec.map;
+  RiskLayerOptions& options = spec.options;
+  options.threads = 1;  // the evaluation pool is the parallelism
+  switch (request.area_case()) {
+    case v1::GetRiskLayerRequest::kRegion: {
+      const v1::LocalRect& r = request.region();
+      for (auto [name, value] : {std::pair{"x_min_m", r.x_min_m()},
+                                 {"y_min_m", r.y_min_m()},
+                                 {"x_max_m", r.x_max_m()},
+                                 {"y_max_m", r.y_max_m()}}) {
+        if (absl::Status s = CheckFinite(value, absl::StrFormat("region.%s", name)); !s.ok()) {
+          return s;
+        }
+      }
+      if (!(r.x_min_m() < r.x_max_m()) || !(r.y_min_m() < r.y_max_m())) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "region is x in [%g, %g], y in [%g, %g]; it needs x_min_m < x_max_m and y_min_m < "
+            "y_max_m",
+            r.x_min_m(), r.x_max_m(), r.y_min_m(), r.y_max_m()));
+      }
+      if (absl::Status s = WindowOfRect(m, r.x_min_m(), r.y_min_m(), r.x_max_m(), r.y_max_m(),
+                                        "region", &options);
+          !s.ok()) {
+        return s;
+      }
+      break;
+    }
+    case v1::GetRiskLayerRequest::kRegionWgs84: {
+      const v1::GeoRect& r = request.region_wgs84();
+      absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+          FrameForField(registry, m, "region_wgs84", "region");
+      if (!frame.ok()) return frame.status();
+      for (auto [name, value, limit] : {std::tuple{"south_lat_deg", r.south_lat_deg(), 90.0},
+                                        {"north_lat_deg", r.north_lat_deg(), 90.0},
+                                        {"west_lon_deg", r.west_lon_deg(), 180.0},
+                                        {"east_lon_deg", r.east_lon_deg(), 180.0}}) {
+        if (!(value >= -limit && value <= limit)) {
+          return absl::InvalidArgumentError(absl::StrFormat(
+              "region_wgs84.%s has value %g; it must be in [%g, %g]", name, value, -limit, limit));
+        }
+      }
+      if (!(r.south_lat_deg() < r.north_lat_deg()) || !(r.west_lon_deg() < r.east_lon_deg())) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "region_wgs84 is latitudes [%g, %g], longitudes [%g, %g]; it needs south < north "
+            "and west < east",
+            r.south_lat_deg(), r.north_lat_deg(), r.west_lon_deg(), r.east_lon_deg()));
+      }
+      // The box's edges, 65 points each, into the local frame: their local
+      // bounding box is the region.
+      constexpr int kPerEdge = 65;
+      std::vector<geo::LatLon> edge;
+      for (int k = 0; k < kPerEdge; ++k) {
+        const double t = static_cast<double>(k) / (kPerEdge - 1);
+        const double lat = r.south_lat_deg() + t * (r.north_lat_deg() - r.south_lat_deg());
+        const double lon = r.west_lon_deg() + t * (r.east_lon_deg() - r.west_lon_deg());
+        edge.push_back({r.south_lat_deg(), lon});
+        edge.push_back({r.north_lat_deg(), lon});
+        edge.push_back({lat, r.west_lon_deg()});
+        edge.push_back({lat, r.east_lon_deg()});
+      }
+      absl::StatusOr<std::vector<geo::LocalXY>> local =
+          PointsFromWgs84(**frame, edge, "region_wgs84");
+      if (!local.ok()) return local.status();
+      double x_min = (*local)[0].x, x_max = x_min, y_min = (*local)[0].y, y_max = y_min;
+      for (const geo::LocalXY& p : *local) {
+        x_min = std::min(x_min, p.x);
+        x_max = std::max(x_max, p.x);
+        y_min = std::min(y_min, p.y);
+        y_max = std::max(y_max, p.y);
+      }
+      if (absl::Status s = WindowOfRect(m, x_min, y_min, x_max, y_max, "region_wgs84", &options);
+          !s.ok()) {
+        return s;
+      }
+      break;
+    }
+    default:
+      break;  // the whole map
+  }
+  const int stride = request.stride() == 0 ? 1 : request.stride();
+  if (stride < 1 || stride > 4096) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("stride has value %d; it must be in [1, 4096] (0: 1)", request.stride()));
+  }
+  options.stride = stride;
+  const double height = request.height_agl_m() == 0.0 ? 100.0 : request.height_agl_m();
+  if (!(std::isfinite(height) && height > 0.0 && height <= 10000.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("height_agl_m has value %g; it must be finite and in (0, 10000] (0: 100)",
+                        request.height_agl_m()));
+  }
+  options.height_agl_m = height;
+  if (absl::Status s = CheckFinite(request.heading_rad(), "heading_rad"); !s.ok()) return s;
+  options.heading_rad =
+      request.max_over_headings() ? std::nan("") : NormalizeHeading(request.heading_rad());
+
+  absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
+  if (!params.ok()) return params.status();
+  spec.params = *params;
+  if (absl::Status s = CheckModelWork(spec.params, limits); !s.ok()) return s;
+
+  absl::StatusOr<LayerShape> shape = LayerCells(m, options);
+  if (!shape.ok()) return shape.status();
+  spec.cells = static_cast<int64_t>(shape->nx) * shape->ny;
+  const int64_t per_cell = request.max_over_headings() ? spec.params.heading_bins : 1;
+  spec.evaluations = spec.cells * per_cell;
+  if (spec.cells > kMaxRiskLayerCells || spec.evaluations > limits.max_risk_layer_evaluations) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "the risk layer of %d x %d cells (stride %d) needs %d configuration risks%s; the limits "
+        "are %d cells and %d risks (--max_risk_layer_evaluations): ask for a smaller region or a "
+        "larger stride",
+        shape->nx, shape->ny, stride, spec.evaluations,
+        request.max_over_headings()
+            ? absl::StrFormat(" (%d heading bins each)", spec.params.heading_bins)
+            : "",
+        kMaxRiskLayerCells, limits.max_risk_layer_evaluations));
+  }
+  return spec;
 }
 
 }  // namespace riskplan::server

@@ -15,6 +15,8 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -26,6 +28,8 @@
 #include "core/planners/planner.h"
 #include "core/planners/two_tier_feasibility.h"
 #include "core/risk/impact_table.h"
+#include "core/risk/risk_layer.h"
+#include "geo/geo_frame.h"
 #include "riskplan/v1/planner.pb.h"
 #include "server/map_registry.h"
 
@@ -43,7 +47,14 @@ struct RequestLimits {
   size_t max_obstacle_points = 10000;     // PlanRequest.obstacle_points (<= kMaxObstaclePoints)
   int64_t max_edge_samples = kDefaultMaxEdgeSamples;  // samples of one edge of a plan
   size_t max_table_bytes = kDefaultMaxTableBytes;     // impact table of a request's parameters
+  // Configuration risks of one GetRiskLayer (cells, times the heading bins
+  // for the maximum over headings).
+  int64_t max_risk_layer_evaluations = int64_t{1} << 24;
 };
+
+// Most cells of a GetRiskLayer response (8 bytes each: 32 MiB, inside the
+// 64 MiB a client accepts).
+inline constexpr int64_t kMaxRiskLayerCells = int64_t{1} << 22;
 
 // The bounds of building a model for a request: --max_table_bytes, and
 // `stop` (the server's drain).
@@ -67,6 +78,27 @@ absl::Status CheckModelWork(const ModelParams& params, const RequestLimits& limi
 // Checks that the four numbers are finite; `field` names the pose in errors.
 absl::StatusOr<Pose> PoseFromProto(const v1::Pose& pose, std::string_view field);
 
+// The frame of `map` for a request field given in WGS84: INVALID_ARGUMENT
+// naming the field and the map when the map has no geo-reference, e.g.
+// "start_wgs84: map 'demo-city' has no geo-reference, so it takes positions
+// in its local metres only (start)".
+absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> FrameForField(const MapRegistry& registry,
+                                                                   const RiskMap& map,
+                                                                   std::string_view field,
+                                                                   std::string_view local_field);
+
+// The numbers of a WGS84 pose, checked: every one finite, the latitude in
+// [-90, 90], the longitude in [-180, 180]; errors name "FIELD.lat_deg" and
+// the value.
+absl::StatusOr<geo::GeoPose> GeoPoseFromProto(const v1::GeoPose& pose, std::string_view field);
+
+// Checked WGS84 poses into the local frame (GeoFrame::ToLocal); errors (a
+// pose over 1000 km from the map's origin, a heading at a pole) are prefixed
+// by `field`, and name the pose by index unless `single`.
+absl::StatusOr<std::vector<Pose>> PosesFromWgs84(const geo::GeoFrame& frame,
+                                                 const std::vector<geo::GeoPose>& poses,
+                                                 std::string_view field, bool single);
+
 // Looks `name` up: INVALID_ARGUMENT when empty, NOT_FOUND when not served;
 // both messages list the served maps.
 absl::StatusOr<std::shared_ptr<const RiskMap>> FindMap(const MapRegistry& registry,
@@ -78,6 +110,9 @@ absl::Status CheckInsideMap(const RiskMap& map, const Pose& pose, std::string_vi
 // A validated PlanRequest.
 struct PlanSpec {
   std::shared_ptr<const RiskMap> map;
+  // The map's WGS84 frame (null without a geo-reference): responses carry
+  // both frames when it is set.
+  std::shared_ptr<const geo::GeoFrame> frame;
   ModelParams params;
   PlannerAlgorithm algorithm = PlannerAlgorithm::kRiskRrtStar;
   Pose start;
@@ -100,12 +135,15 @@ absl::Status CheckPlannerParams(PlannerAlgorithm algorithm,
 // non-empty.
 struct EvaluateSpec {
   std::shared_ptr<const RiskMap> map;
+  std::shared_ptr<const geo::GeoFrame> frame;  // null without a geo-reference
   ModelParams params;
   std::vector<Pose> waypoints;
   std::vector<Point3> polyline;
   bool include_samples = false;
   // Set when two_tier.enabled; passed CheckTwoTierOptions().
   std::optional<TwoTierOptions> two_tier;
+  // Spacing of EvaluateRiskResponse.path, m, in [1, 100000]; 0: no path.
+  double path_spacing_m = 0.0;
 };
 
 // The options of EvaluateRiskRequest.two_tier (unset fields take their
@@ -123,6 +161,32 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
 // `sample_step_m` only explain the count in the message.
 absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_step_m,
                               bool include_samples, const RequestLimits& limits);
+
+// The number of poses of EvaluateRiskResponse.path for a trajectory of
+// `length_m` at `spacing_m` (PathPoseCount), checked against
+// --max_response_samples before the path is sampled.
+absl::Status CheckPathCount(double length_m, double spacing_m, const RequestLimits& limits);
+
+// A validated GetRiskLayerRequest: the map, its frame, the model
+// parameters, and the layer options (window, stride, height, heading; one
+// thread) whose work LayerCells has counted within the limits.
+struct RiskLayerSpec {
+  std::shared_ptr<const RiskMap> map;
+  std::shared_ptr<const geo::GeoFrame> frame;
+  ModelParams params;
+  RiskLayerOptions options;
+  int64_t cells = 0;
+  int64_t evaluations = 0;
+};
+
+// Checks every field of a GetRiskLayerRequest and counts the layer's cells
+// and configuration risks before anything is computed: more than
+// kMaxRiskLayerCells cells or limits.max_risk_layer_evaluations risks is
+// INVALID_ARGUMENT naming both numbers and the limit. The region (local or
+// WGS84) becomes the window of map cells it overlaps, clipped to the map.
+absl::StatusOr<RiskLayerSpec> ValidateRiskLayerRequest(const v1::GetRiskLayerRequest& request,
+                                                       const MapRegistry& registry,
+                                                       const RequestLimits& limits);
 
 // The algorithm of a request: ALGORITHM_UNSPECIFIED and RISK_RRT_STAR give
 // kRiskRrtStar, RRT, GENETIC and HARMONIC their planners; anything else is

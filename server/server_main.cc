@@ -66,6 +66,9 @@ ABSL_FLAG(int64_t, max_response_samples, 200000,
 ABSL_FLAG(int64_t, max_edge_samples, riskplan::kDefaultMaxEdgeSamples,
           "Most samples one edge of a plan may need, projected from the request before it is "
           "queued (map diagonal, turn radius, climbs, sample_step_m); more: INVALID_ARGUMENT");
+ABSL_FLAG(int64_t, max_risk_layer_evaluations, int64_t{1} << 24,
+          "Most configuration risks one GetRiskLayer may compute (cells, times the heading bins "
+          "for the maximum over headings); larger layers are refused before any is computed");
 ABSL_FLAG(int64_t, max_table_bytes, int64_t{512} << 20,
           "Largest impact table a request's model parameters may build, bytes (the default "
           "parameters' is about 34 MB on a 5 m map); larger: INVALID_ARGUMENT");
@@ -125,7 +128,7 @@ constexpr char kUsage[] =
     "\n"
     "  riskplan-server --listen=HOST:PORT [--maps=DIR] [flags]\n"
     "\n"
-    "Serves PlanTrajectory, EvaluateRisk, ListMaps, GetMapLayer and Ping, plus\n"
+    "Serves PlanTrajectory, EvaluateRisk, ListMaps, GetMapLayer, GetRiskLayer and Ping, plus\n"
     "grpc.health.v1.Health and server reflection. Prints\n"
     "'riskplan-server listening on HOST:PORT' on stdout once it serves. On SIGTERM or\n"
     "SIGINT it drains (see --grace_period_ms) and exits 0. Exit code 1: cannot start\n"
@@ -190,6 +193,7 @@ ServiceOptions ServiceOptionsFromFlags() {
   options.limits.max_eval_samples = absl::GetFlag(FLAGS_max_eval_samples);
   options.limits.max_response_samples = absl::GetFlag(FLAGS_max_response_samples);
   options.limits.max_edge_samples = absl::GetFlag(FLAGS_max_edge_samples);
+  options.limits.max_risk_layer_evaluations = absl::GetFlag(FLAGS_max_risk_layer_evaluations);
   options.limits.max_table_bytes =
       static_cast<size_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_max_table_bytes)));
   return options;
@@ -230,6 +234,9 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
     return absl::InvalidArgumentError(
         "--max_edge_samples must be >= 2, --max_table_bytes and --max_eval_samples >= 1, "
         "--max_response_samples >= 0");
+  }
+  if (options.limits.max_risk_layer_evaluations < 1) {
+    return absl::InvalidArgumentError("--max_risk_layer_evaluations must be >= 1");
   }
   if (absl::GetFlag(FLAGS_feasibility_cache_size) < 1) {
     return absl::InvalidArgumentError("--feasibility_cache_size must be >= 1");

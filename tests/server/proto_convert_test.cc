@@ -83,7 +83,7 @@ TEST(ProtoConvertTest, TrajectoryPathIsSampledAndEndsAtTheGoal) {
   improvement.length_m = 1234.0;
   improvement.iterations = 42;
   v1::Trajectory t;
-  ASSERT_TRUE(TrajectoryToProto(improvement, ModelParams{}, 25.0, &t).ok());
+  ASSERT_TRUE(TrajectoryToProto(improvement, ModelParams{}, 25.0, nullptr, &t).ok());
   EXPECT_EQ(t.waypoints_size(), 3);
   EXPECT_EQ(t.risk(), 1e-7);
   EXPECT_EQ(t.found_at_iteration(), 42);

@@ -15,6 +15,7 @@
 #include "core/risk/risk_layer.h"
 #include "server/message_codec.h"
 #include "server/proto_convert.h"
+#include "server/risk_layer_request.h"
 #include "server/rpc_log.h"
 #include "server/status_util.h"
 

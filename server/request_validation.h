@@ -28,7 +28,6 @@
 #include "core/planners/planner.h"
 #include "core/planners/two_tier_feasibility.h"
 #include "core/risk/impact_table.h"
-#include "core/risk/risk_layer.h"
 #include "geo/geo_frame.h"
 #include "riskplan/v1/planner.pb.h"
 #include "server/map_registry.h"
@@ -52,13 +51,13 @@ struct RequestLimits {
   int64_t max_risk_layer_evaluations = int64_t{1} << 24;
 };
 
-// Most cells of a GetRiskLayer response (8 bytes each: 32 MiB, inside the
-// 64 MiB a client accepts).
-inline constexpr int64_t kMaxRiskLayerCells = int64_t{1} << 22;
-
 // The bounds of building a model for a request: --max_table_bytes, and
 // `stop` (the server's drain).
 ModelBuildLimits BuildLimits(const RequestLimits& limits, StopCondition stop = {});
+
+// INVALID_ARGUMENT "FIELD has value V; it must be finite" unless `value` is
+// finite.
+absl::Status CheckFinite(double value, std::string_view field);
 
 // `status` with its message prefixed by the request field it concerns,
 // "FIELD: MESSAGE" (OK stays OK).
@@ -77,27 +76,6 @@ absl::Status CheckModelWork(const ModelParams& params, const RequestLimits& limi
 
 // Checks that the four numbers are finite; `field` names the pose in errors.
 absl::StatusOr<Pose> PoseFromProto(const v1::Pose& pose, std::string_view field);
-
-// The frame of `map` for a request field given in WGS84: INVALID_ARGUMENT
-// naming the field and the map when the map has no geo-reference, e.g.
-// "start_wgs84: map 'demo-city' has no geo-reference, so it takes positions
-// in its local metres only (start)".
-absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> FrameForField(const MapRegistry& registry,
-                                                                   const RiskMap& map,
-                                                                   std::string_view field,
-                                                                   std::string_view local_field);
-
-// The numbers of a WGS84 pose, checked: every one finite, the latitude in
-// [-90, 90], the longitude in [-180, 180]; errors name "FIELD.lat_deg" and
-// the value.
-absl::StatusOr<geo::GeoPose> GeoPoseFromProto(const v1::GeoPose& pose, std::string_view field);
-
-// Checked WGS84 poses into the local frame (GeoFrame::ToLocal); errors (a
-// pose over 1000 km from the map's origin, a heading at a pole) are prefixed
-// by `field`, and name the pose by index unless `single`.
-absl::StatusOr<std::vector<Pose>> PosesFromWgs84(const geo::GeoFrame& frame,
-                                                 const std::vector<geo::GeoPose>& poses,
-                                                 std::string_view field, bool single);
 
 // Looks `name` up: INVALID_ARGUMENT when empty, NOT_FOUND when not served;
 // both messages list the served maps.
@@ -166,27 +144,6 @@ absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_st
 // `length_m` at `spacing_m` (PathPoseCount), checked against
 // --max_response_samples before the path is sampled.
 absl::Status CheckPathCount(double length_m, double spacing_m, const RequestLimits& limits);
-
-// A validated GetRiskLayerRequest: the map, its frame, the model
-// parameters, and the layer options (window, stride, height, heading; one
-// thread) whose work LayerCells has counted within the limits.
-struct RiskLayerSpec {
-  std::shared_ptr<const RiskMap> map;
-  std::shared_ptr<const geo::GeoFrame> frame;
-  ModelParams params;
-  RiskLayerOptions options;
-  int64_t cells = 0;
-  int64_t evaluations = 0;
-};
-
-// Checks every field of a GetRiskLayerRequest and counts the layer's cells
-// and configuration risks before anything is computed: more than
-// kMaxRiskLayerCells cells or limits.max_risk_layer_evaluations risks is
-// INVALID_ARGUMENT naming both numbers and the limit. The region (local or
-// WGS84) becomes the window of map cells it overlaps, clipped to the map.
-absl::StatusOr<RiskLayerSpec> ValidateRiskLayerRequest(const v1::GetRiskLayerRequest& request,
-                                                       const MapRegistry& registry,
-                                                       const RequestLimits& limits);
 
 // The algorithm of a request: ALGORITHM_UNSPECIFIED and RISK_RRT_STAR give
 // kRiskRrtStar, RRT, GENETIC and HARMONIC their planners; anything else is

@@ -14,6 +14,7 @@
 #include "gtest/gtest.h"
 #include "server/proto_convert.h"
 #include "server/request_validation.h"
+#include "server/risk_layer_request.h"
 #include "tests/core/test_maps.h"
 
 namespace riskplan::server {

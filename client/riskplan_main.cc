@@ -123,10 +123,11 @@ riskplan::cmdline::ProgramHelp Help() {
       {"eval", "risk, length and admissibility of a trajectory",
        "  riskplan eval (--waypoints=... | --polyline=... | --trajectory_file=F) [flags]\n"
        "\n"
-       "Prints the risk per flight hour (risk / (length / airspeed)) and whether it meets\n"
-       "--target_level_of_safety. On a geo-referenced map the trajectory may be given in\n"
-       "WGS84 ('wgs84:lat,lon,alt,heading_deg; ...'), and --plan_out, --geojson_out and\n"
-       "--kml_out write it for ground stations and GIS (docs/api.md, \"Exports\").\n"
+       "Prints the risk per flight hour (risk / (length / airspeed)) and whether it\n"
+       "meets --target_level_of_safety. On a geo-referenced map the trajectory may be\n"
+       "given in WGS84 ('wgs84:lat,lon,alt,heading_deg; ...'), and --plan_out,\n"
+       "--geojson_out and --kml_out write it for ground stations and GIS\n"
+       "(docs/geodata-exports.md).\n"
        "\n"
        "Example:\n"
        "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'",

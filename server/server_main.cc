@@ -49,7 +49,8 @@ ABSL_FLAG(int, plan_threads, 0, "Planners running at once (0: one per CPU core)"
 ABSL_FLAG(int, max_running_plans, 0,
           "Plans admitted at once, planning or waiting for a planning thread; one more gets "
           "RESOURCE_EXHAUSTED at once (0: twice --plan_threads)");
-ABSL_FLAG(int, eval_threads, 0, "EvaluateRisk and GetMapLayer workers (0: one per CPU core)");
+ABSL_FLAG(int, eval_threads, 0,
+          "EvaluateRisk, GetMapLayer and GetRiskLayer workers (0: one per CPU core)");
 ABSL_FLAG(int, max_queued_evals, 1024,
           "Evaluations waiting for a worker; one more gets RESOURCE_EXHAUSTED");
 ABSL_FLAG(int64_t, max_plan_time_ms, 600000,
@@ -128,8 +129,8 @@ constexpr char kUsage[] =
     "\n"
     "  riskplan-server --listen=HOST:PORT [--maps=DIR] [flags]\n"
     "\n"
-    "Serves PlanTrajectory, EvaluateRisk, ListMaps, GetMapLayer, GetRiskLayer and Ping, plus\n"
-    "grpc.health.v1.Health and server reflection. Prints\n"
+    "Serves PlanTrajectory, EvaluateRisk, ListMaps, GetMapLayer, GetRiskLayer and\n"
+    "Ping, plus grpc.health.v1.Health and server reflection. Prints\n"
     "'riskplan-server listening on HOST:PORT' on stdout once it serves. On SIGTERM or\n"
     "SIGINT it drains (see --grace_period_ms) and exits 0. Exit code 1: cannot start\n"
     "(bad map bundle, address in use) or a flag unknown or malformed; 2: a flag's value\n"

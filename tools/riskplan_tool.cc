@@ -90,8 +90,8 @@ cmdline::ProgramHelp Help() {
        "\n"
        "Writes a PNG heat map (PREFIX.png), an ESRI ASCII grid (PREFIX.asc), plus its\n"
        "projection (PREFIX.prj) when the map has a geo-reference, and a Cloud-Optimized\n"
-       "GeoTIFF (PREFIX.tif: Float64 M, NODATA NaN where undefined, the map's local frame\n"
-       "as its CRS when the map has a geo-reference).\n"
+       "GeoTIFF (PREFIX.tif: Float64 M, NODATA NaN where undefined, and the map's local\n"
+       "frame as its CRS when the map has a geo-reference).\n"
        "\n"
        "Example:\n"
        "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2",

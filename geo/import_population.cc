@@ -4,6 +4,7 @@
 #include <ogr_api.h>
 #include <ogr_geometry.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -21,6 +22,49 @@
 namespace riskplan::geo::internal {
 namespace {
 
+// Population rasters are warped onto blocks of cells a quarter of a pixel
+// wide, of at most 16 x 16 cells (see WarpPopulation).
+constexpr double kCellsPerPixelWidth = 4.0;
+constexpr int kMaxBlock = 16;
+
+// The people (or density) of a raster on the map's cells. A population raster
+// holds nothing finer than its pixels (WorldPop's and GHSL's are 100 m), so
+// when they are at least 4 cells wide it is warped onto blocks of k x k cells
+// (k = pixel / (4 cells), at most 16) and each block's value is spread evenly
+// over its cells: the same total, k^2 times less warping. A block the input
+// leaves without data (at the input's edge) sends the warp back to single
+// cells, so that a refusal names exactly the cells without data.
+absl::StatusOr<std::vector<double>> WarpPopulation(const RasterInput& in, const TargetGrid& grid,
+                                                   Resampling r, int threads, int* k_used) {
+  auto pixel_m = PixelSizeNearMap(in, grid);
+  if (!pixel_m.ok()) return pixel_m.status();
+  const int k =
+      static_cast<int>(std::clamp(std::floor(*pixel_m / (kCellsPerPixelWidth * grid.res_m)), 1.0,
+                                  static_cast<double>(kMaxBlock)));
+  *k_used = 1;
+  if (k > 1) {
+    TargetGrid blocks = grid;
+    blocks.nx = (grid.nx + k - 1) / k;
+    blocks.ny = (grid.ny + k - 1) / k;
+    blocks.res_m = grid.res_m * k;
+    auto coarse = WarpOntoGrid(in, blocks, r, threads);
+    if (!coarse.ok()) return coarse.status();
+    if (std::none_of(coarse->begin(), coarse->end(), [](double v) { return std::isnan(v); })) {
+      // A sum is shared among the block's k^2 cells; a mean is every cell's.
+      const double share = r == Resampling::kSum ? 1.0 / (k * k) : 1.0;
+      std::vector<double> values(static_cast<size_t>(grid.cells()));
+      for (int j = 0; j < grid.ny; ++j) {
+        const double* row = coarse->data() + static_cast<size_t>(j / k) * blocks.nx;
+        double* out = values.data() + static_cast<size_t>(j) * grid.nx;
+        for (int i = 0; i < grid.nx; ++i) out[i] = row[i / k] * share;
+      }
+      *k_used = k;
+      return values;
+    }
+  }
+  return WarpOntoGrid(in, grid, r, threads);
+}
+
 absl::StatusOr<std::vector<double>> DensityFromRaster(ImportContext& ctx) {
   const ImportOptions& o = ctx.options;
   auto in = OpenRasterInput("population", o.population);
@@ -30,7 +74,8 @@ absl::StatusOr<std::vector<double>> DensityFromRaster(ImportContext& ctx) {
   // every pixel it covers (GDAL's 'sum'). People per km^2 are a density: the
   // area-weighted mean ('average'). Both keep the total.
   const Resampling r = per_cell ? Resampling::kSum : Resampling::kAverage;
-  auto values = WarpOntoGrid(*in, ctx.grid, r, o.threads);
+  int k = 1;
+  auto values = WarpPopulation(*in, ctx.grid, r, o.threads, &k);
   if (!values.ok()) return values.status();
   const double to_density = per_cell ? 1.0 / ctx.cell_area_m2() : 1e-6;
   for (size_t c = 0; c < values->size(); ++c) {
@@ -62,6 +107,7 @@ absl::StatusOr<std::vector<double>> DensityFromRaster(ImportContext& ctx) {
   ctx.out->stats.filled_density_cells = filled;
   std::string detail = absl::StrFormat("%s; people %s, resampling %s", in->Summary(),
                                        per_cell ? "per pixel" : "per km^2", ResamplingName(r));
+  if (k > 1) detail += absl::StrFormat(" onto blocks of %d x %d cells spread evenly", k, k);
   if (filled > 0) {
     detail += absl::StrFormat("; %d cells without data filled with %.9g people/m^2", filled,
                               o.density_fill.value);

@@ -3,6 +3,7 @@
 #ifndef RISKPLAN_GEO_IMPORT_STEPS_H_
 #define RISKPLAN_GEO_IMPORT_STEPS_H_
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -36,6 +37,27 @@ struct ImportContext {
 struct LandCover {
   std::vector<double> classes;
   ShelterTable table;
+};
+
+// The rule of a cell's class, or nullptr for a class the table lacks. Looks
+// the table up only when the class changes from the last call's (land cover
+// comes in runs of one class).
+class ClassRules {
+ public:
+  explicit ClassRules(const ShelterTable& table) : table_(table) {}
+  const ClassRule* Find(double cls) {
+    if (cls != last_) {
+      last_ = cls;
+      auto it = table_.rules.find(static_cast<int>(cls));
+      rule_ = it == table_.rules.end() ? nullptr : &it->second;
+    }
+    return rule_;
+  }
+
+ private:
+  const ShelterTable& table_;
+  double last_ = std::nan("");
+  const ClassRule* rule_ = nullptr;
 };
 
 // Terrain, m AMSL, south row first.

@@ -222,10 +222,11 @@ absl::StatusOr<std::vector<LandingSite>> ImportLandingSites(
           "cover; give --landcover");
     }
     std::vector<uint8_t> open(static_cast<size_t>(grid.cells()), 0);
+    ClassRules rules(land_cover->table);
     for (size_t c = 0; c < open.size(); ++c) {
       const double v = land_cover->classes[c];
       if (std::isnan(v) || nofly[c] != 0) continue;
-      open[c] = land_cover->table.rules.at(static_cast<int>(v)).landing ? 1 : 0;
+      open[c] = rules.Find(v)->landing ? 1 : 0;
     }
     int32_t count = 0;
     const std::vector<int32_t> labels = LabelComponents(open, grid.nx, grid.ny, &count);

@@ -232,7 +232,8 @@ TEST(LuxembourgTest, CityMapPlannedEndToEnd) {
       << r.output;
   EXPECT_GT(risk, 0.0);
   EXPECT_LT(risk, 1e-5);
-  std::printf("luxembourg-city plan %s -> %s: risk %.9g\n", start.c_str(), goal.c_str(), risk);
+  std::printf("luxembourg-city plan %s -> %s: %s\n", start.c_str(), goal.c_str(),
+              r.output.substr(at, r.output.find('\n', at) - at).c_str());
 
   // The same trajectory evaluated offline: admissible, the same risk.
   r = RunCommand(ToolCommand(

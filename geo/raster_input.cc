@@ -140,16 +140,23 @@ absl::StatusOr<std::vector<double>> WarpOntoGrid(const RasterInput& input, const
                                                  Resampling resampling, int threads) {
   auto frame_srs = SpatialReferenceFrom(grid.frame.proj_definition());
   if (!frame_srs.ok()) return frame_srs.status();
-  auto dst = CreateMemRaster(grid.nx, grid.ny, 1, GDT_Float64, grid.frame.x0(),
+  // The warp writes straight into the vector returned (a MEM band over its
+  // buffer), north row first; cells no source pixel reaches keep the NaN.
+  std::vector<double> values(static_cast<size_t>(grid.cells()),
+                             std::numeric_limits<double>::quiet_NaN());
+  auto dst = CreateMemRaster(grid.nx, grid.ny, 0, GDT_Float64, grid.frame.x0(),
                              grid.frame.y0() + grid.height_m(), grid.res_m, **frame_srs);
   if (!dst.ok()) {
     return absl::Status(dst.status().code(),
                         absl::StrCat(input.Label(), ": ", dst.status().message()));
   }
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  GDALRasterBand* out_band = (*dst)->GetRasterBand(1);
-  out_band->SetNoDataValue(nan);
-  out_band->Fill(nan);
+  const std::string pointer = absl::StrFormat("DATAPOINTER=%p", static_cast<void*>(values.data()));
+  const char* band_options[] = {pointer.c_str(), nullptr};
+  if ((*dst)->AddBand(GDT_Float64, const_cast<char**>(band_options)) != CE_None) {
+    return absl::InternalError(
+        absl::StrFormat("%s: cannot make the warp's destination band", input.Label()));
+  }
+  (*dst)->GetRasterBand(1)->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
 
   GdalErrorCapture errors;
   GDALDatasetH source = GDALDataset::ToHandle(input.dataset.get());
@@ -187,12 +194,8 @@ absl::StatusOr<std::vector<double>> WarpOntoGrid(const RasterInput& input, const
         "%s: GDAL cannot warp it onto the map's grid: %s", input.Label(), errors.Errors()));
   }
 
-  std::vector<double> values(static_cast<size_t>(grid.cells()));
-  if (out_band->RasterIO(GF_Read, 0, 0, grid.nx, grid.ny, values.data(), grid.nx, grid.ny,
-                         GDT_Float64, 0, 0, nullptr) != CE_None) {
-    return absl::InternalError(
-        absl::StrFormat("%s: cannot read the warped raster: %s", input.Label(), errors.Errors()));
-  }
+  // The band must not outlive the buffer it writes to.
+  dst->reset();
   FlipRows(grid.nx, grid.ny, values);
   int has_scale = 0, has_offset = 0;
   GDALRasterBand* in_band = input.dataset->GetRasterBand(1);

@@ -273,7 +273,7 @@ int ImportCommand(int argc, char** argv) {
   MapHeader header = imported->header;
   // RiskMap::Create checks every layer against the format's domains, the
   // importer's result included.
-  auto map = RiskMap::Create(std::move(header), imported->layers);
+  auto map = RiskMap::Create(std::move(header), std::move(imported->layers));
   if (!map.ok()) return Fail(map.status());
   const std::string out = absl::GetFlag(FLAGS_out);
   if (absl::Status st = geo::WriteBundleReplacing(**map, out, imported->provenance_json);

@@ -1,6 +1,7 @@
-// riskplan-tool: offline access to riskplan's core (no server needed). Its
-// commands, their synopses and flags are in Help() below (`riskplan-tool
-// --help`, `riskplan-tool COMMAND --help`).
+// riskplan-tool: offline access to riskplan's core (no server needed), and
+// map bundles from real geodata (import). Its commands, their synopses and
+// flags are in Help() below (`riskplan-tool --help`, `riskplan-tool COMMAND
+// --help`).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -24,6 +25,7 @@
 #include "geo/geo_frame.h"
 #include "geo/risk_layer_geotiff.h"
 #include "nlohmann/json.hpp"
+#include "tools/import_command.h"
 #include "tools/layer_writers.h"
 
 ABSL_FLAG(std::string, map, "",
@@ -40,15 +42,16 @@ ABSL_FLAG(bool, json, false, "evaluate: print the result as JSON");
 ABSL_FLAG(std::string, params, "",
           "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
           "mass_kg=12,airspeed_mps=20)");
-ABSL_FLAG(std::string, out, "", "write-map: directory to write the bundle into");
+ABSL_FLAG(std::string, out, "",
+          "the bundle's directory (write-map, import), or the output files' prefix (risk-layer)");
 ABSL_FLAG(uint64_t, seed, riskplan::kDemoCitySeed, "write-map: demo-city seed");
-ABSL_FLAG(double, size_m, 8000.0, "write-map: demo-city side in metres");
-ABSL_FLAG(double, res_m, 5.0, "write-map: demo-city cell size in metres");
+ABSL_FLAG(double, size_m, 8000.0, "write-map, import: the map's side in metres");
+ABSL_FLAG(double, res_m, 5.0, "write-map, import: the cell size in metres");
 ABSL_FLAG(double, agl_m, 100.0, "risk-layer: height above the terrain of every cell, m");
 ABSL_FLAG(std::string, heading_deg, "0",
           "risk-layer: heading in degrees counter-clockwise from east, or 'max' for the maximum "
           "over all heading bins");
-ABSL_FLAG(int, threads, 1, "risk-layer: worker threads");
+ABSL_FLAG(int, threads, 1, "risk-layer, import: worker threads");
 ABSL_FLAG(int, stride, 1,
           "risk-layer: layer cell side in map cells; each value is M at the centre of its "
           "stride x stride block, and a partial block at the east or north edge is left out");
@@ -96,6 +99,7 @@ cmdline::ProgramHelp Help() {
        "Example:\n"
        "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2",
        {"map", "out", "agl_m", "heading_deg", "threads", "stride", "params"}},
+      ImportCommandHelp(),
   };
   help.footer = "Exit codes: 0 success; 1 failure, or a flag unknown or malformed; 2 bad input.";
   return help;
@@ -399,5 +403,6 @@ int main(int argc, char** argv) {
   if (command == "evaluate") return riskplan::Evaluate();
   if (command == "write-map") return riskplan::WriteMap();
   if (command == "info") return riskplan::Info();
+  if (command == "import") return riskplan::ImportCommand(argc, argv);
   return riskplan::RiskLayerCommand();  // ParseCommand allows no other
 }

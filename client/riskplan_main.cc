@@ -127,7 +127,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "meets --target_level_of_safety. On a geo-referenced map the trajectory may be\n"
        "given in WGS84 ('wgs84:lat,lon,alt,heading_deg; ...'), and --plan_out,\n"
        "--geojson_out and --kml_out write it for ground stations and GIS\n"
-       "(docs/geodata-exports.md).\n"
+       "(docs/geodata.md).\n"
        "\n"
        "Example:\n"
        "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'",

@@ -12,6 +12,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -27,6 +28,15 @@ void EnsureGdalRegistered() {
     CPLSetConfigOption("GTIFF_POINT_GEO_IGNORE", "FALSE");
     GDALAllRegister();
   });
+}
+
+bool IsRemotePath(const std::string& path) {
+  for (const char* prefix :
+       {"/vsicurl", "/vsis3", "/vsigs", "/vsiaz", "/vsiadls", "/vsioss", "/vsiswift", "/vsihdfs",
+        "/vsiwebhdfs", "http://", "https://", "ftp://"}) {
+    if (absl::StartsWith(path, prefix)) return true;
+  }
+  return false;
 }
 
 GdalErrorCapture::GdalErrorCapture() {

@@ -58,6 +58,10 @@ struct CoordinateTransformationDeleter {
 using CoordinateTransformationPtr =
     std::unique_ptr<OGRCoordinateTransformation, CoordinateTransformationDeleter>;
 
+// True for a path GDAL would read over the network (/vsicurl/, /vsis3/, ...,
+// http://, https://, ftp://): the importer reads local files only.
+bool IsRemotePath(const std::string& path);
+
 // A spatial reference from any text GDAL accepts ("EPSG:4326", a PROJ string,
 // WKT), with OAMS_TRADITIONAL_GIS_ORDER: x is longitude (or easting) and y
 // latitude (or northing) whatever the CRS's official axis order. EPSG:4326's

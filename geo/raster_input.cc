@@ -13,7 +13,6 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "geo/grid_rasterize.h"
@@ -23,15 +22,6 @@ namespace {
 
 // Points per edge of an input's outline when it is carried into the frame.
 constexpr int kOutlinePoints = 256;
-
-bool IsRemote(const std::string& path) {
-  for (const char* prefix :
-       {"/vsicurl", "/vsis3", "/vsigs", "/vsiaz", "/vsiadls", "/vsioss", "/vsiswift", "/vsihdfs",
-        "/vsiwebhdfs", "http://", "https://", "ftp://"}) {
-    if (absl::StartsWith(path, prefix)) return true;
-  }
-  return false;
-}
 
 std::string MaskText(GDALRasterBand* band) {
   const int flags = band->GetMaskFlags();
@@ -95,7 +85,7 @@ absl::StatusOr<RasterInput> OpenRasterInput(const std::string& layer, const std:
   RasterInput in;
   in.layer = layer;
   in.path = path;
-  if (IsRemote(path)) {
+  if (IsRemotePath(path)) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "%s: not a local file; an import reads no network (download it first)", in.Label()));
   }

@@ -13,7 +13,6 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -24,18 +23,12 @@ namespace {
 // Points per side when the map's outline is carried into an input's CRS.
 constexpr int kOutlinePoints = 64;
 
-bool IsRemote(const std::string& path) {
-  return absl::StartsWith(path, "/vsicurl") || absl::StartsWith(path, "/vsis3") ||
-         absl::StartsWith(path, "/vsigs") || absl::StartsWith(path, "/vsiaz") ||
-         absl::StartsWith(path, "http://") || absl::StartsWith(path, "https://") ||
-         absl::StartsWith(path, "ftp://");
-}
-
 std::string FieldNames(OGRLayer& layer) {
   std::vector<std::string> names;
   OGRFeatureDefn* defn = layer.GetLayerDefn();
-  for (int k = 0; k < defn->GetFieldCount(); ++k)
+  for (int k = 0; k < defn->GetFieldCount(); ++k) {
     names.push_back(defn->GetFieldDefn(k)->GetNameRef());
+  }
   return names.empty() ? "none" : absl::StrJoin(names, ", ");
 }
 
@@ -60,7 +53,7 @@ absl::StatusOr<VectorInput> OpenVectorInput(const std::string& layer, const std:
   in.path = path;
   in.where = where;
   const std::string label = absl::StrFormat("layer '%s', input '%s'", layer, path);
-  if (IsRemote(path)) {
+  if (IsRemotePath(path)) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "%s: not a local file; an import reads no network (download it first)", label));
   }

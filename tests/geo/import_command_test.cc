@@ -6,7 +6,9 @@
 #include <sstream>
 #include <string>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
 #include "core/map/map_bundle.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -53,6 +55,12 @@ TEST(ImportCommandTest, HelpListsTheFlags) {
     EXPECT_THAT(r.output, HasSubstr(absl::StrFormat("\n  --%s=", flag))) << flag;
   }
   EXPECT_THAT(r.output, Not(HasSubstr("--seed=")));
+  // Prose fits a terminal; synopses and examples are indented.
+  for (absl::string_view line : absl::StrSplit(r.output, '\n')) {
+    if (!absl::StartsWith(line, " ")) {
+      EXPECT_LE(line.size(), 80u) << line;
+    }
+  }
   EXPECT_THAT(Tool("--help").output, HasSubstr("\n  import "));
 }
 

@@ -168,31 +168,46 @@ void FpgaWorker::Run() {
           break;
         }
         const absl::Time start = absl::Now();
+        const size_t count = chunk->count;
         bool unsupported = false;
-        absl::Status s = RunChunk(chunk, &unsupported);
+        bool taken_over = false;
+        absl::Status s = RunChunk(chunk, &unsupported, &taken_over);
         const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
         if (s.ok()) {
+          // The board answered well (whether or not its caller still wanted it).
           consecutive_failures_ = 0;
           backoff_ = options_.backoff_initial;
           {
             absl::MutexLock lock(&mu_);
-            ++stats_.chunks;
-            stats_.configurations += chunk->count;
+            if (taken_over) {
+              ++stats_.taken_over;
+            } else {
+              ++stats_.chunks;
+              stats_.configurations += count;
+            }
             stats_.busy_seconds += seconds;
           }
-          queue_->Complete(chunk);
+          if (!taken_over) queue_->Complete(chunk);
           break;
         }
         {
           absl::MutexLock lock(&mu_);
           stats_.busy_seconds += seconds;
           ++(unsupported ? stats_.unsupported : stats_.failures);
+          if (taken_over) ++stats_.taken_over;
           stats_.last_error = std::string(s.message());
         }
-        if (unsupported || ++chunk->fpga_failures >= options_.max_failures_per_chunk) {
-          chunk->cpu_only = true;
+        // A chunk taken over is its caller's now: it is neither counted nor given back.
+        if (!taken_over) {
+          if (unsupported || ++chunk->fpga_failures >= options_.max_failures_per_chunk) {
+            chunk->cpu_only = true;
+          }
+          {
+            absl::MutexLock lock(&mu_);
+            ++stats_.requeued;
+          }
+          queue_->Requeue(chunk);
         }
-        queue_->Requeue(chunk);
         if (!unsupported) {
           DropClient();
           if (stop_.load()) break;
@@ -235,11 +250,12 @@ absl::StatusOr<EvalReply> FpgaWorker::EvalWithUploads(const Blob& map, const Blo
   return reply;
 }
 
-absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
+absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over) {
   const RiskModel& model = *chunk->batch->model;
   const ImpactTable& table = model.table();
   const HelloReply& hello = owned_client_->hello();
   *unsupported = true;
+  *taken_over = false;
   const int widest = 2 * table.bin(table.height_bins()).half_width + 1;
   if (widest > static_cast<int>(hello.max_kernel_side) || table.height_bins() > 65535 ||
       table.heading_bins() > 65535) {
@@ -259,8 +275,41 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
   }
   *unsupported = false;
 
+  // Before the board is asked: everything the requests need, in this
+  // worker's own memory (the chunk may be taken over while they run).
   sites_.clear();
   CpuRiskKernel::LocateBatch(model, chunk->configs(), chunk->out(), &sites_);
+  device_sites_.resize(sites_.size());
+  for (size_t a = 0; a < sites_.size(); ++a) {
+    const KernelSite& s = sites_[a].site;
+    device_sites_[a] = DeviceSite{static_cast<uint16_t>(s.height_bin),
+                                  static_cast<uint16_t>(s.heading_bin), s.impact_i, s.impact_j};
+  }
+  const size_t step = hello.max_sites_per_eval;
+  replies_.clear();
+
+  // The board's time: its requests (uploads included) touch no chunk memory,
+  // and a caller whose stop is reached may take the chunk over meanwhile.
+  queue_->BeginIo(&lease_, chunk);
+  absl::Status io = absl::OkStatus();
+  for (size_t first = 0; first < sites_.size(); first += step) {
+    const size_t n = std::min(step, sites_.size() - first);
+    absl::StatusOr<EvalReply> reply = EvalWithUploads(
+        *map, *kernels, std::span<const DeviceSite>(device_sites_).subspan(first, n));
+    if (!reply.ok()) {
+      io = reply.status();
+      break;
+    }
+    replies_.push_back(*std::move(reply));
+  }
+  if (!queue_->EndIo(&lease_)) {
+    // Taken over: the chunk is the caller's (and may be gone). A failed
+    // request is still the board's failure; a good reply is dropped.
+    *taken_over = true;
+    return io;
+  }
+  if (!io.ok()) return io;
+
   const NumberFormat& format = hello.format;
   // The scales the board must report (its exponent rule is part of the
   // format), and the largest sums the quantised inputs allow.
@@ -273,26 +322,19 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
   const double impact_max = weight_sum_max * map->max_density * margin;
   const double shelter_max = weight_sum_max * 10.0 * margin;
   std::span<ConfigurationRisk> out = chunk->out();
-  const size_t step = hello.max_sites_per_eval;
   uint64_t cycles = 0;
-  for (size_t first = 0; first < sites_.size(); first += step) {
+  for (size_t r = 0; r < replies_.size(); ++r) {
+    const EvalReply& reply = replies_[r];
+    const size_t first = r * step;
     const size_t n = std::min(step, sites_.size() - first);
-    device_sites_.resize(n);
-    for (size_t a = 0; a < n; ++a) {
-      const KernelSite& s = sites_[first + a].site;
-      device_sites_[a] = DeviceSite{static_cast<uint16_t>(s.height_bin),
-                                    static_cast<uint16_t>(s.heading_bin), s.impact_i, s.impact_j};
-    }
-    absl::StatusOr<EvalReply> reply = EvalWithUploads(*map, *kernels, device_sites_);
-    if (!reply.ok()) return reply.status();
-    if (reply->impact_scale != impact_scale || reply->shelter_scale != shelter_scale) {
-      return absl::DataLossError(
-          absl::StrFormat("shim %s: result scales %d/%d, expected %d/%d", endpoint_,
-                          reply->impact_scale, reply->shelter_scale, impact_scale, shelter_scale));
+    if (reply.impact_scale != impact_scale || reply.shelter_scale != shelter_scale) {
+      return absl::DataLossError(absl::StrFormat("shim %s: result scales %d/%d, expected %d/%d",
+                                                 endpoint_, reply.impact_scale, reply.shelter_scale,
+                                                 impact_scale, shelter_scale));
     }
     for (size_t a = 0; a < n; ++a) {
-      const double impact = AccumulatorToDouble(reply->impact[a], impact_scale);
-      const double shelter = AccumulatorToDouble(reply->shelter[a], shelter_scale);
+      const double impact = AccumulatorToDouble(reply.impact[a], impact_scale);
+      const double shelter = AccumulatorToDouble(reply.shelter[a], shelter_scale);
       if (!(impact <= impact_max) || !(shelter <= shelter_max)) {
         return absl::DataLossError(
             absl::StrFormat("shim %s: implausible sums I = %g, S = %g (largest possible %g, %g)",
@@ -307,8 +349,8 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
     for (int k = 0; k < audits; ++k) {
       const size_t a = std::uniform_int_distribution<size_t>(0, n - 1)(rng_);
       absl::Status audit = AuditBoardSums(model, sites_[first + a].site, scales,
-                                          AccumulatorToDouble(reply->impact[a], impact_scale),
-                                          AccumulatorToDouble(reply->shelter[a], shelter_scale));
+                                          AccumulatorToDouble(reply.impact[a], impact_scale),
+                                          AccumulatorToDouble(reply.shelter[a], shelter_scale));
       if (!audit.ok()) {
         absl::MutexLock lock(&mu_);
         stats_.audited += k + 1;
@@ -321,7 +363,7 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
       absl::MutexLock lock(&mu_);
       stats_.audited += audits;
     }
-    cycles += reply->device_cycles;
+    cycles += reply.device_cycles;
   }
   absl::MutexLock lock(&mu_);
   stats_.device_cycles += cycles;

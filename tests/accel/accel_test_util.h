@@ -281,6 +281,7 @@ enum class Misbehaviour {
   kSilent,         // accepts connections, never answers anything (not even HELLO)
   kCorruptHeader,  // big EVALs: a header byte flipped (header checksum mismatch)
   kWrongSums,      // big EVALs: a valid frame, every impact sum off by 2^-20 (plausible)
+  kSlow,           // big EVALs: the right reply, 1.5 s late
 };
 
 // An in-process shim serving ShimSession over a ModelDevice, misbehaving as
@@ -350,6 +351,9 @@ class FakeShim {
       } else if (big && m == Misbehaviour::kHang) {
         ++misbehaved_;
         continue;  // never answered; the client times out and hangs up
+      } else if (big && m == Misbehaviour::kSlow) {
+        ++misbehaved_;
+        absl::SleepFor(absl::Milliseconds(1500));
       } else if (big && m == Misbehaviour::kCloseOnEval) {
         ++misbehaved_;
         break;

@@ -263,20 +263,13 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_o
         absl::StrFormat("the board takes kernels up to %d cells wide; this model needs %d",
                         hello.max_kernel_side, widest));
   }
-  std::shared_ptr<const Blob> map = blobs_->MapBlob(model.map_ptr());
-  std::shared_ptr<const Blob> kernels = blobs_->KernelsBlob(model.table_ptr());
-  if (map == nullptr || kernels == nullptr) {
-    return absl::ResourceExhaustedError(
-        absl::StrFormat("the model's %s blob is larger than the blob cache (%d bytes)",
-                        map == nullptr ? "map" : "kernels", blobs_->budget_bytes()));
-  }
-  if (map->bytes.size() > hello.store_bytes || kernels->bytes.size() > hello.store_bytes) {
-    return absl::ResourceExhaustedError("the model's blobs exceed the board's store");
-  }
   *unsupported = false;
 
   // Before the board is asked: everything the requests need, in this
-  // worker's own memory (the chunk may be taken over while they run).
+  // worker's own memory (the chunk may be taken over while they run; the
+  // map and table are shared, they outlive it).
+  const std::shared_ptr<const RiskMap> map_ptr = model.map_ptr();
+  const std::shared_ptr<const ImpactTable> table_ptr = model.table_ptr();
   sites_.clear();
   CpuRiskKernel::LocateBatch(model, chunk->configs(), chunk->out(), &sites_);
   device_sites_.resize(sites_.size());
@@ -288,11 +281,24 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_o
   const size_t step = hello.max_sites_per_eval;
   replies_.clear();
 
-  // The board's time: its requests (uploads included) touch no chunk memory,
-  // and a caller whose stop is reached may take the chunk over meanwhile.
+  // The board's time: building the blobs (the first time, about a second
+  // for a large map) and the requests (uploads included) touch no chunk
+  // memory, and a caller whose stop is reached may take the chunk over
+  // meanwhile.
   queue_->BeginIo(&lease_, chunk);
   absl::Status io = absl::OkStatus();
-  for (size_t first = 0; first < sites_.size(); first += step) {
+  std::shared_ptr<const Blob> map = blobs_->MapBlob(map_ptr);
+  std::shared_ptr<const Blob> kernels = blobs_->KernelsBlob(table_ptr);
+  if (map == nullptr || kernels == nullptr) {
+    *unsupported = true;
+    io = absl::ResourceExhaustedError(
+        absl::StrFormat("the model's %s blob is larger than the blob cache (%d bytes)",
+                        map == nullptr ? "map" : "kernels", blobs_->budget_bytes()));
+  } else if (map->bytes.size() > hello.store_bytes || kernels->bytes.size() > hello.store_bytes) {
+    *unsupported = true;
+    io = absl::ResourceExhaustedError("the model's blobs exceed the board's store");
+  }
+  for (size_t first = 0; io.ok() && first < sites_.size(); first += step) {
     const size_t n = std::min(step, sites_.size() - first);
     absl::StatusOr<EvalReply> reply = EvalWithUploads(
         *map, *kernels, std::span<const DeviceSite>(device_sites_).subspan(first, n));

@@ -105,6 +105,7 @@ absl::Status FpgaWorker::Connect() {
       ShimClient::Connect(endpoint_, options_.client);
   if (!client.ok()) return client.status();
   owned_client_ = *std::move(client);
+  uploads_since_chunk_ = 0;
   absl::MutexLock lock(&mu_);
   if (stop_.load()) owned_client_->Interrupt();
   client_ = owned_client_.get();
@@ -171,11 +172,42 @@ void FpgaWorker::Run() {
         const size_t count = chunk->count;
         bool unsupported = false;
         bool taken_over = false;
-        absl::Status s = RunChunk(chunk, &unsupported, &taken_over);
+        std::shared_ptr<const Blob> missing;
+        absl::Status s = RunChunk(chunk, &unsupported, &taken_over, &missing);
         const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
+        if (missing != nullptr) {
+          // The board lacks a blob (it restarted, or dropped it): not its
+          // failure. The chunk goes back at once, for the CPU or another
+          // board, and the blob is uploaded with no chunk held (seconds for a
+          // large map), so that no caller waits for the upload.
+          {
+            absl::MutexLock lock(&mu_);
+            stats_.busy_seconds += seconds;
+            ++(taken_over ? stats_.taken_over : stats_.requeued);
+          }
+          if (!taken_over) queue_->Requeue(chunk);
+          s = Upload(*missing);
+          if (s.ok()) break;
+          {
+            absl::MutexLock lock(&mu_);
+            ++stats_.failures;
+            stats_.last_error = std::string(s.message());
+          }
+          DropClient();
+          if (stop_.load()) break;
+          if (++consecutive_failures_ >= options_.max_consecutive_failures) {
+            SetState(WorkerState::kDown,
+                     absl::StrFormat("%d requests failed in a row, the last: %s",
+                                     consecutive_failures_, s.message()));
+          } else {
+            SetState(WorkerState::kSuspect, std::string(s.message()));
+          }
+          break;
+        }
         if (s.ok()) {
           // The board answered well (whether or not its caller still wanted it).
           consecutive_failures_ = 0;
+          uploads_since_chunk_ = 0;
           backoff_ = options_.backoff_initial;
           {
             absl::MutexLock lock(&mu_);
@@ -227,30 +259,25 @@ void FpgaWorker::Run() {
   SetState(WorkerState::kDown, "stopped");
 }
 
-absl::StatusOr<EvalReply> FpgaWorker::EvalWithUploads(const Blob& map, const Blob& kernels,
-                                                      std::span<const DeviceSite> sites) {
-  absl::StatusOr<EvalReply> reply = owned_client_->Eval(map.hash, kernels.hash, sites);
-  // At most one upload of each blob per request.
-  for (int upload = 0; upload < 2 && absl::IsNotFound(reply.status()); ++upload) {
-    const BlobHash missing = owned_client_->missing_blob();
-    const Blob* blob = missing == map.hash ? &map : missing == kernels.hash ? &kernels : nullptr;
-    if (blob == nullptr) {
-      return absl::DataLossError(
-          absl::StrCat("shim ", endpoint_, " asked for a blob that was not named"));
-    }
-    if (absl::Status s = owned_client_->PutBlob(blob->kind, blob->hash, blob->bytes); !s.ok()) {
-      return s;
-    }
-    {
-      absl::MutexLock lock(&mu_);
-      ++stats_.uploads;
-    }
-    reply = owned_client_->Eval(map.hash, kernels.hash, sites);
+absl::Status FpgaWorker::Upload(const Blob& blob) {
+  // A board that asks again and again (its store too small for a model's
+  // blobs, say) without completing a chunk is failing, not missing a blob.
+  if (uploads_since_chunk_ >= 2) {
+    return absl::DataLossError(
+        absl::StrFormat("shim %s asked for a blob again after %d uploads without a completed chunk",
+                        endpoint_, uploads_since_chunk_));
   }
-  return reply;
+  if (absl::Status s = owned_client_->PutBlob(blob.kind, blob.hash, blob.bytes); !s.ok()) {
+    return s;
+  }
+  ++uploads_since_chunk_;
+  absl::MutexLock lock(&mu_);
+  ++stats_.uploads;
+  return absl::OkStatus();
 }
 
-absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over) {
+absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over,
+                                  std::shared_ptr<const Blob>* missing) {
   const RiskModel& model = *chunk->batch->model;
   const ImpactTable& table = model.table();
   const HelloReply& hello = owned_client_->hello();
@@ -300,8 +327,16 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_o
   }
   for (size_t first = 0; io.ok() && first < sites_.size(); first += step) {
     const size_t n = std::min(step, sites_.size() - first);
-    absl::StatusOr<EvalReply> reply = EvalWithUploads(
-        *map, *kernels, std::span<const DeviceSite>(device_sites_).subspan(first, n));
+    absl::StatusOr<EvalReply> reply = owned_client_->Eval(
+        map->hash, kernels->hash, std::span<const DeviceSite>(device_sites_).subspan(first, n));
+    if (absl::IsNotFound(reply.status())) {
+      const BlobHash wanted = owned_client_->missing_blob();
+      *missing = wanted == map->hash ? map : wanted == kernels->hash ? kernels : nullptr;
+      io = *missing != nullptr ? reply.status()
+                               : absl::DataLossError(absl::StrCat(
+                                     "shim ", endpoint_, " asked for a blob that was not named"));
+      break;
+    }
     if (!reply.ok()) {
       io = reply.status();
       break;
@@ -310,7 +345,8 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_o
   }
   if (!queue_->EndIo(&lease_)) {
     // Taken over: the chunk is the caller's (and may be gone). A failed
-    // request is still the board's failure; a good reply is dropped.
+    // request is still the board's failure, a missing blob still uploaded; a
+    // good reply is dropped.
     *taken_over = true;
     return io;
   }

@@ -22,14 +22,16 @@
 // A request fails on a connection or deadline error, a corrupt frame, an
 // ERROR reply, wrong scales, implausible sums, or sums that the spot check
 // finds outside the format's error bound (accel/board_audit.h).
+// A board that lacks a blob of the chunk's model gets the chunk given back
+// (not a failure) and the blob uploaded with no chunk held.
 // A chunk whose model the board cannot serve (kernel wider than the board's
 // largest side, too many bins, blobs too large for its store or for the
 // server's blob cache) goes back to the queue marked CPU-only, and the
 // worker stays up.
 // While the board works on a chunk, the chunk's caller may take it over
-// (once its cancellation, deadline or time budget is reached: a stalled,
-// restarting or uploading board must not hold a plan past them); the board's
-// reply is then dropped, and only a failure of the request counts.
+// (once its cancellation, deadline or time budget is reached: a stalled
+// board must not hold a plan past them); the board's reply is then dropped,
+// and only a failure of the request counts.
 //
 // Thread-safe: the worker runs on its own thread; Stats() and Stop() may be
 // called from any thread.
@@ -133,9 +135,12 @@ class FpgaWorker {
   // `unsupported` is set when the failure is the model's, not the board's;
   // `taken_over` when the caller took the chunk over during the requests
   // (then the chunk must not be touched again, whatever the status).
-  absl::Status RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over);
-  absl::StatusOr<EvalReply> EvalWithUploads(const Blob& map, const Blob& kernels,
-                                            std::span<const DeviceSite> sites);
+  // `missing` is set when the board lacks one of the model's blobs (then the
+  // status is NotFound, and the worker gives the chunk back and uploads it).
+  absl::Status RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over,
+                        std::shared_ptr<const Blob>* missing);
+  // Uploads a blob the board asked for, holding no chunk.
+  absl::Status Upload(const Blob& blob);
   void SetState(WorkerState to, std::string reason);
   // Waits `duration` unless stopped first.
   void Sleep(absl::Duration duration);
@@ -157,6 +162,7 @@ class FpgaWorker {
   WorkQueue::Lease lease_;
   absl::Duration backoff_;
   int consecutive_failures_ = 0;
+  int uploads_since_chunk_ = 0;
   std::mt19937_64 rng_;  // jitter and the sites to spot-check
 
   mutable absl::Mutex mu_;

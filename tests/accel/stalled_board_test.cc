@@ -3,7 +3,8 @@
 // caller's cancellation, deadline or time budget is reached, the caller takes
 // the chunk the board is working on back and computes it itself
 // (WorkQueue's "Taking over"), and the board's late reply is dropped, never
-// written into a batch that has already returned.
+// written into a batch that has already returned. And a board that must
+// first receive a model's blobs holds no chunk while it does.
 //
 // Found by the soak and chaos run (scripts/soak.sh): with a shim stopped by
 // SIGSTOP a plan with a 300 ms budget ran 2.1 s and one cancelled by its
@@ -132,6 +133,40 @@ TEST(StalledBoardTest, ALateReplyToAChunkTakenOverIsDroppedAndTheBoardStaysUp) {
   board = engine->Stats().fpga[0];
   EXPECT_GE(board.chunks, 1u);
   EXPECT_GE(board.configurations, configs.size());
+}
+
+// A board that lacks the model's blobs (a fresh or restarted board) and
+// takes a minute to receive them: the worker gives the chunk back before
+// uploading, so the batch is computed by the CPU meanwhile and nobody waits
+// for the upload (the soak run saw an EvaluateRisk wait 12.7 s for uploads
+// to a restarted shim). No stop condition is involved.
+TEST(StalledBoardTest, NoCallerWaitsForABoardsBlobUpload) {
+  FakeShim shim(Misbehaviour::kSlowUpload);
+  RiskEngineOptions options;
+  options.cpu_workers = 1;
+  options.caller_runs = true;
+  options.min_chunk_configs = 1000;
+  options.max_chunk_configs = 4000;
+  options.fpga_shims = {shim.endpoint()};
+  options.fpga.client.upload_timeout = kBoardDeadline;
+  absl::StatusOr<std::unique_ptr<RiskEngine>> engine = RiskEngine::Create(options);
+  ASSERT_TRUE(engine.ok()) << engine.status();
+  ASSERT_TRUE(WaitFor([&] { return (*engine)->Stats().fpga[0].state == WorkerState::kUp; }));
+  const RiskModel& model = *SmallCity();
+  for (uint64_t seed : {41, 42, 43}) {
+    const std::vector<Pose> configs = MixedConfigs(model, 20000, seed);
+    std::vector<ConfigurationRisk> out(configs.size());
+    const absl::Time start = absl::Now();
+    ASSERT_TRUE((*engine)->Evaluate(model, configs, out).ok());
+    EXPECT_LT(absl::Now() - start, kAllowed) << "a caller waited for the upload";
+    for (size_t i = 0; i < configs.size(); ++i) {
+      ASSERT_TRUE(SameRisk(out[i], model.Evaluate(configs[i]))) << "configuration " << i;
+    }
+  }
+  EXPECT_GT(shim.misbehaved(), 0) << "the board was never asked for the model's blobs";
+  const FpgaWorkerStats board = (*engine)->Stats().fpga[0];
+  EXPECT_EQ(board.chunks, 0u);
+  EXPECT_EQ(board.failures, 0u) << board.last_error;
 }
 
 }  // namespace

@@ -110,8 +110,9 @@ esac
 
 PYTHON=${PYTHON:-/usr/bin/python3}
 if [ "${SOAK_INSTALL:-1}" != 0 ]; then bash scripts/install-deps.sh python3-matplotlib; fi
-BIN=$ROOT/${BUILD_DIR:-build}/bin
-OUT=$ROOT/${OUT_DIR:-out}/soak
+abs() { case "$1" in /*) echo "$1" ;; *) echo "$ROOT/$1" ;; esac; }
+BIN=$(abs "${BUILD_DIR:-build}")/bin
+OUT=$(abs "${OUT_DIR:-out}")/soak
 for p in riskplan-server riskplan riskplan-fpga-shim; do
   [ -x "$BIN/$p" ] || { echo "soak: $BIN/$p missing: build first (scripts/build.sh)" >&2; exit 1; }
 done
@@ -198,7 +199,13 @@ start_shim() {  # start_shim NAME [PORT]: prints HOST:PORT once it listens
   disown  # killed on purpose: no job report from the shell
   ready "shim_$1" "riskplan-fpga-shim listening on "
 }
-metrics() { curl -sf --max-time 5 "http://$METRICS/metrics" || true; }
+# The metrics page (HTTP/1.0 through bash's /dev/tcp: no curl needed), or
+# nothing within 5 s.
+metrics() {
+  timeout 5 bash -c 'exec 5<>"/dev/tcp/${1%:*}/${1##*:}" &&
+    printf "GET /metrics HTTP/1.0\r\nHost: %s\r\n\r\n" "$1" >&5 && cat <&5' _ "$METRICS" \
+    2>/dev/null | tr -d '\r' || true
+}
 metric() {  # metric SERIES: its value in the last scrape ($work/metrics.txt), or empty
   awk -v s="$1" '$1 == s {print $2}' "$work/metrics.txt"
 }

@@ -203,11 +203,14 @@ def plot(path, samples, events, soak_start, warm_end, soak_end, rss_med):
         pad = max(1.0, 0.1 * (hi - lo))
         ax.set_ylim(lo - pad, hi + pad)
     if rss_med:
+        # Scaled to the soak (the start-up's lower values run off the axis),
+        # so that the band and any drift inside it are visible.
         med = rss_med / 1024.0
         axes[0].axhspan(med * (1 - RSS_BAND), med * (1 + RSS_BAND), color="tab:green", alpha=0.12,
                         lw=0)
-        lo = min(min(series[0][1]), med * (1 - RSS_BAND))
-        hi = max(max(series[0][1]), med * (1 + RSS_BAND))
+        soak = [y for x, y in zip(t, series[0][1]) if x >= 0]
+        lo = min(min(soak), med * (1 - RSS_BAND))
+        hi = max(max(soak), med * (1 + RSS_BAND))
         axes[0].set_ylim(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo))
     axes[0].set_title("riskplan-server under load and chaos. Light grey: measurement, and after the "
                       "end; grey: warm-up;\ngreen: RSS +-5 % of the post-warm-up median; red: shim "
@@ -396,6 +399,7 @@ def main():
                      f"failures {m.get('worker_failures_total', '?')}, "
                      f"state changes {m.get('worker_state_changes_total', '?')}, "
                      f"uploads {m.get('blob_uploads_total', 0)}, "
+                     f"chunks taken over by stopped callers {m.get('worker_taken_over_total', 0)}, "
                      f"audited {m.get('audited_sites_total', 0)}, audit failures "
                      f"{m.get('audit_failures_total', 0)}")
         if not m.get("configurations_total"):

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <exception>
+#include <optional>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -175,9 +176,21 @@ absl::StatusOr<PlanResult> PlanCall::Plan() {
   if (!endpoints_checked_.load()) {
     if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
   }
-  // One evaluator per plan: it counts the plan's configurations.
-  std::unique_ptr<RiskEvaluator> evaluator =
-      env_.engine != nullptr ? env_.engine->NewEvaluator() : nullptr;
+  // One evaluator per plan: it counts the plan's configurations. It stops
+  // waiting for boards once the plan is cancelled or its time budget is over
+  // (measured from here, just before the planner's own clock starts): a
+  // stalled or restarting board's chunk is then computed by this thread, and
+  // the planner ends on time instead of after the board's request deadline.
+  std::unique_ptr<RiskEvaluator> evaluator;
+  if (env_.engine != nullptr) {
+    std::optional<std::chrono::steady_clock::time_point> deadline;
+    if (spec_.options.budget.max_time_s > 0.0) {
+      deadline = std::chrono::steady_clock::now() +
+                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                     std::chrono::duration<double>(spec_.options.budget.max_time_s));
+    }
+    evaluator = env_.engine->NewEvaluator(StopCondition(&cancel_, nullptr, deadline));
+  }
   absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec_.algorithm, evaluator.get());
   if (!planner.ok()) return planner.status();
   return (*planner)->Plan(

@@ -146,7 +146,10 @@ absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel:
     return s;
   }
   // Without an engine: accel's exact kernel on this thread (RiskModel::Evaluate bit for bit).
-  std::unique_ptr<RiskEvaluator> evaluator = engine != nullptr ? engine->NewEvaluator() : nullptr;
+  // With one, a batch stops waiting for boards once `stop` is reached (its
+  // remaining chunks are computed here, RiskEngine::Evaluate).
+  std::unique_ptr<RiskEvaluator> evaluator =
+      engine != nullptr ? engine->NewEvaluator(stop) : nullptr;
   absl::StatusOr<TrajectoryEvaluation> evaluation = EvaluateTrajectory(
       **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples},
       evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator(), stop);

@@ -281,6 +281,8 @@ enum class Misbehaviour {
   kSilent,         // accepts connections, never answers anything (not even HELLO)
   kCorruptHeader,  // big EVALs: a header byte flipped (header checksum mismatch)
   kWrongSums,      // big EVALs: a valid frame, every impact sum off by 2^-20 (plausible)
+  kSlow,           // big EVALs: the right reply, 1.5 s late
+  kSlowUpload,     // big PUT_BLOBs (a model's map or kernels): each chunk answered 60 s late
 };
 
 // An in-process shim serving ShimSession over a ModelDevice, misbehaving as
@@ -336,6 +338,12 @@ class FakeShim {
         break;
       }
       const Misbehaviour m = misbehaviour_.load();
+      if (m == Misbehaviour::kSlowUpload && header.type == MessageType::kPutBlob &&
+          payload.size() > (size_t{64} << 10)) {
+        ++misbehaved_;
+        const absl::Time until = absl::Now() + absl::Seconds(60);
+        while (!stop_.load() && absl::Now() < until) absl::SleepFor(absl::Milliseconds(10));
+      }
       if (m == Misbehaviour::kSilent) {
         ++misbehaved_;
         continue;
@@ -350,6 +358,9 @@ class FakeShim {
       } else if (big && m == Misbehaviour::kHang) {
         ++misbehaved_;
         continue;  // never answered; the client times out and hangs up
+      } else if (big && m == Misbehaviour::kSlow) {
+        ++misbehaved_;
+        absl::SleepFor(absl::Milliseconds(1500));
       } else if (big && m == Misbehaviour::kCloseOnEval) {
         ++misbehaved_;
         break;

@@ -1,6 +1,5 @@
 // riskplan-tool end to end: the real binary on a bundle it wrote itself.
 #include <png.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -20,6 +19,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
+#include "tests/child_process.h"
 
 namespace riskplan {
 namespace {
@@ -32,16 +32,9 @@ struct Output {
 };
 
 Output RunTool(const std::string& args) {
-  const std::string command = std::string(RISKPLAN_BIN_DIR) + "/riskplan-tool " + args + " 2>&1";
-  Output out;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return out;
-  char buffer[4096];
-  size_t n = 0;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) out.text.append(buffer, n);
-  const int status = pclose(pipe);
-  out.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return out;
+  const testing::CommandResult r =
+      testing::RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan-tool " + args + " 2>&1");
+  return Output{r.exit_code, r.output};
 }
 
 // An ESRI ASCII grid as written: its six header fields and its rows, south first.

@@ -265,6 +265,10 @@ class ReservedPort {
 // callers do not compute while it is up: every chunk goes to the board),
 // returned once that worker is up. Null, with a test failure, when the
 // engine cannot be made; a test failure when the board never comes up.
+// Its users check that every configuration went to the board, so the
+// worker's deadlines are far longer than the production defaults (2 s per
+// EVAL, plus 20 us a site): a simulated RTL board on a loaded machine can take
+// longer than that for a chunk, which would then fall back to the CPU.
 inline std::unique_ptr<RiskEngine> BoardOnlyEngine(const std::string& endpoint,
                                                    int min_chunk_configs = 512) {
   RiskEngineOptions options;
@@ -272,6 +276,10 @@ inline std::unique_ptr<RiskEngine> BoardOnlyEngine(const std::string& endpoint,
   options.caller_runs = false;
   options.min_chunk_configs = min_chunk_configs;
   options.fpga_shims = {endpoint};
+  options.fpga.client.eval_timeout = absl::Minutes(10);
+  options.fpga.client.hello_timeout = absl::Seconds(60);
+  options.fpga.client.ping_timeout = absl::Seconds(60);
+  options.fpga.client.upload_timeout = absl::Seconds(60);
   absl::StatusOr<std::unique_ptr<RiskEngine>> engine = RiskEngine::Create(options);
   if (!engine.ok()) {
     ADD_FAILURE() << engine.status();

@@ -61,6 +61,7 @@ struct Drill {
     options.fpga.client.eval_timeout = timeouts.eval;
     options.fpga.client.ping_timeout = timeouts.ping;
     options.fpga.client.hello_timeout = timeouts.hello;
+    options.fpga.client.upload_timeout = absl::Seconds(30);
     options.fpga.backoff_initial = absl::Milliseconds(10);
     options.fpga.backoff_max = absl::Milliseconds(100);
     options.fpga.ping_interval = absl::Milliseconds(100);

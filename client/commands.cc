@@ -292,6 +292,112 @@ absl::StatusOr<std::pair<v1::Pose, v1::Pose>> LocalEndpoints(RiskplanClient& cli
   return std::pair{request.start(), first};
 }
 
+// The map's landing sites and the picture's layers, fetched before the plan
+// so that a plan cut short by the server's end can still be drawn. The layers
+// are downsampled by the server to the picture's size: a full layer is 4
+// bytes a map cell, far more than a picture of a few hundred pixels needs.
+// Both are asked for at the same size, so they come on the same grid.
+int FetchPictureLayers(const CliOptions& o, RiskplanClient& client, PictureInput* picture) {
+  v1::ListMapsResponse maps;
+  if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError("ListMaps", s);
+  for (const v1::MapInfo& m : maps.maps()) {
+    if (m.name() == o.map) picture->map = m;
+  }
+  v1::GetMapLayerRequest layer;
+  layer.set_map(o.map);
+  layer.set_max_side_cells(o.picture_size);
+  layer.set_layer(v1::POPULATION_DENSITY);
+  if (grpc::Status s = client.GetMapLayer(layer, &picture->density); !s.ok()) {
+    return RpcError("GetMapLayer", s);
+  }
+  layer.set_layer(v1::NO_FLY);
+  if (grpc::Status s = client.GetMapLayer(layer, &picture->nofly); !s.ok()) {
+    return RpcError("GetMapLayer", s);
+  }
+  return 0;
+}
+
+// --trajectory_out: the waypoints of `best`; 0, or the exit code of a
+// failure.
+int WriteTrajectoryOut(const CliOptions& o, const v1::Trajectory& best) {
+  if (o.trajectory_out.empty()) return 0;
+  std::ofstream out(o.trajectory_out);
+  out << WaypointsToJson(best.waypoints());
+  out.close();
+  if (!out) return Usage(absl::StrFormat("cannot write --trajectory_out=%s", o.trajectory_out));
+  std::printf("trajectory: %s\n", o.trajectory_out.c_str());
+  return 0;
+}
+
+// --picture of `plan` (its improvements received, and with `final_update`
+// its tree and end), its layers already in `picture`; 0, or 1 on failure.
+// The picture's endpoints are local: a request in WGS84 takes them from the
+// best trajectory (or asks the server, when there is none).
+int WritePlanPicture(const CliOptions& o, RiskplanClient& client, const v1::PlanRequest& request,
+                     const v1::PlanUpdate& final_update, PictureInput& picture) {
+  picture.tree.assign(final_update.tree_edges().begin(), final_update.tree_edges().end());
+  picture.start = request.start();
+  picture.goal = request.goal();
+  if (request.has_start_wgs84() || request.has_goal_wgs84()) {
+    // The client has no map projection: the server's local form of the
+    // endpoints is the best trajectory's ends, or, without one, the ends of
+    // a two-point polyline it evaluates.
+    if (absl::StatusOr<std::pair<v1::Pose, v1::Pose>> ends =
+            LocalEndpoints(client, request, final_update, TimeoutOr(o, absl::Seconds(30)));
+        ends.ok()) {
+      picture.start = ends->first;
+      picture.goal = ends->second;
+    } else {
+      std::fprintf(stderr, "riskplan: %s\n", std::string(ends.status().message()).c_str());
+      return 1;
+    }
+  }
+  if (absl::Status s = WritePicture(o.picture, picture); !s.ok()) {
+    std::fprintf(stderr, "riskplan: %s\n", std::string(s.message()).c_str());
+    return 1;
+  }
+  std::printf("picture: %s\n", o.picture.c_str());
+  return 0;
+}
+
+// The stream broke (the server died or was restarted, the network failed,
+// the deadline passed): what was received is kept, as it would have been at
+// the end. Risk never increases along the stream, so the last improvement is
+// the best one. Returns 1, the exit code of a failed RPC.
+int KeepWhatWasReceived(const CliOptions& o, RiskplanClient& client, const v1::PlanRequest& request,
+                        const grpc::Status& status, const ExportFiles& exports,
+                        PictureInput& picture) {
+  RpcError("PlanTrajectory", status);
+  const std::vector<v1::Trajectory>& improvements = picture.improvements;
+  if (improvements.empty()) {
+    std::fprintf(stderr, "riskplan: no improvement was received before the stream ended\n");
+    return 1;
+  }
+  const v1::Trajectory& best = improvements.back();
+  std::fprintf(stderr,
+               "riskplan: received %d improvements before the stream ended; keeping the best: "
+               "risk %.9g expected casualties per flight, length %.1f m, %d waypoints\n",
+               static_cast<int>(improvements.size()), best.risk(), best.length_m(),
+               best.waypoints_size());
+  WriteTrajectoryOut(o, best);
+  if (exports.any()) {
+    std::fprintf(stderr,
+                 "riskplan: --plan_out, --geojson_out and --kml_out are not written: the server "
+                 "samples their path\n");
+  }
+  if (!o.picture.empty()) {
+    picture.caption = absl::StrFormat(
+        "%s, %s: %d improvements, best risk %.4g, length %.0f m (stream ended early: %s)", o.map,
+        v1::Algorithm_Name(request.algorithm()), static_cast<int>(improvements.size()), best.risk(),
+        best.length_m(), StatusCodeName(status.error_code()));
+    // The best trajectory's ends are the endpoints: no call to the server.
+    v1::PlanUpdate received;
+    *received.mutable_trajectory() = best;
+    WritePlanPicture(o, client, request, received, picture);
+  }
+  return 1;
+}
+
 }  // namespace
 
 int RunMaps(const CliOptions& o, RiskplanClient& client) {
@@ -386,6 +492,10 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
   if (exports->any()) {
     if (absl::Status s = CheckMapHasGeo(client, o.map); !s.ok()) return ExportError(s);
   }
+  PictureInput picture;
+  if (!o.picture.empty()) {
+    if (int code = FetchPictureLayers(o, client, &picture); code != 0) return code;
+  }
   std::printf("plan on %s: start %s -> goal %s, %s, budget %d ms%s, seed %d\n", o.map.c_str(),
               StartText(*request).c_str(), GoalText(*request).c_str(),
               v1::Algorithm_Name(request->algorithm()).c_str(), static_cast<int>(o.budget_ms),
@@ -397,7 +507,7 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
   // point of streaming is to see each improvement as it arrives.
   std::fflush(stdout);
 
-  std::vector<v1::Trajectory> improvements;
+  std::vector<v1::Trajectory>& improvements = picture.improvements;
   v1::PlanUpdate final_update;
   // No deadline by default: the plan's budget already bounds it on the server
   // (and --max_plan_time_ms caps every plan), so a client deadline could only
@@ -426,7 +536,7 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
         return true;
       },
       timeout);
-  if (!status.ok()) return RpcError("PlanTrajectory", status);
+  if (!status.ok()) return KeepWhatWasReceived(o, client, *request, status, *exports, picture);
 
   // "found" counts every improvement of the planner, also those the server
   // never sent because a newer one replaced them (docs/api.md, "The
@@ -446,12 +556,7 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
                             best.flight_time_s() > 0 ? best.length_m() / best.flight_time_s() : 0,
                             o.target_level_of_safety)
                             .c_str());
-    if (!o.trajectory_out.empty()) {
-      std::ofstream out(o.trajectory_out);
-      out << WaypointsToJson(best.waypoints());
-      if (!out) return Usage(absl::StrFormat("cannot write --trajectory_out=%s", o.trajectory_out));
-      std::printf("trajectory: %s\n", o.trajectory_out.c_str());
-    }
+    if (int code = WriteTrajectoryOut(o, best); code != 0) return code;
     if (exports->any()) {
       // The server samples the best trajectory's path in both frames: the
       // client cannot (it has no map projection), and the same waypoints
@@ -476,56 +581,14 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
   }
 
   if (!o.picture.empty()) {
-    // The landing sites come from ListMaps, the layers from GetMapLayer,
-    // downsampled by the server to the picture's size: a full layer is 4
-    // bytes a map cell, far more than a picture of a few hundred pixels
-    // needs. Both layers are asked for at the same size, so they come on the
-    // same grid.
-    PictureInput picture;
-    v1::ListMapsResponse maps;
-    if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError("ListMaps", s);
-    for (const v1::MapInfo& m : maps.maps()) {
-      if (m.name() == o.map) picture.map = m;
-    }
-    v1::GetMapLayerRequest layer;
-    layer.set_map(o.map);
-    layer.set_max_side_cells(o.picture_size);
-    layer.set_layer(v1::POPULATION_DENSITY);
-    if (grpc::Status s = client.GetMapLayer(layer, &picture.density); !s.ok()) {
-      return RpcError("GetMapLayer", s);
-    }
-    layer.set_layer(v1::NO_FLY);
-    if (grpc::Status s = client.GetMapLayer(layer, &picture.nofly); !s.ok()) {
-      return RpcError("GetMapLayer", s);
-    }
-    picture.improvements = improvements;
-    picture.tree.assign(final_update.tree_edges().begin(), final_update.tree_edges().end());
-    picture.start = request->start();
-    picture.goal = request->goal();
-    if (request->has_start_wgs84() || request->has_goal_wgs84()) {
-      // The client has no map projection: the server's local form of the
-      // endpoints is the best trajectory's ends, or, without one, the ends
-      // of a two-point polyline it evaluates.
-      if (absl::StatusOr<std::pair<v1::Pose, v1::Pose>> ends =
-              LocalEndpoints(client, *request, final_update, TimeoutOr(o, absl::Seconds(30)));
-          ends.ok()) {
-        picture.start = ends->first;
-        picture.goal = ends->second;
-      } else {
-        std::fprintf(stderr, "riskplan: %s\n", std::string(ends.status().message()).c_str());
-        return 1;
-      }
-    }
     picture.caption = absl::StrFormat(
         "%s, %s: %d improvements, best risk %.4g, length %.0f m, %d iterations (%s)", o.map,
         v1::Algorithm_Name(request->algorithm()), static_cast<int>(improvements.size()),
         final_update.trajectory().risk(), final_update.trajectory().length_m(),
         static_cast<int>(final_update.iterations()), v1::EndReason_Name(final_update.end_reason()));
-    if (absl::Status s = WritePicture(o.picture, picture); !s.ok()) {
-      std::fprintf(stderr, "riskplan: %s\n", std::string(s.message()).c_str());
-      return 1;
+    if (int code = WritePlanPicture(o, client, *request, final_update, picture); code != 0) {
+      return code;
     }
-    std::printf("picture: %s\n", o.picture.c_str());
   }
   // 3 tells a script that the plan ran but found nothing (NO_SOLUTION, or a
   // SHUTDOWN before the first solution), which is not an RPC failure.

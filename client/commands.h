@@ -2,7 +2,8 @@
 // (riskplan_main.cc). Each prints to stdout (results, progress) and stderr
 // (errors), and returns the process exit code:
 //   0  success;
-//   1  the RPC failed (the status code and message are printed);
+//   1  the RPC failed (the status code and message are printed; a `plan`
+//      whose stream broke still writes the best trajectory it received);
 //   2  bad command-line input;
 //   3  `plan` only: the plan ended without a trajectory (NO_SOLUTION, SHUTDOWN).
 #ifndef RISKPLAN_CLIENT_COMMANDS_H_

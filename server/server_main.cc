@@ -30,6 +30,7 @@
 #include "grpcpp/health_check_service_interface.h"
 #include "server/accel_metrics.h"
 #include "server/cache_metrics.h"
+#include "server/connection_acceptor.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
@@ -332,22 +333,35 @@ absl::Status StartMetrics(accel::RiskEngine* engine, ServerMetrics& metrics) {
   return absl::OkStatus();
 }
 
-// The gRPC server, listening and serving `service`, health and reflection.
+// The gRPC server, serving `service`, health and reflection on the
+// connections `acceptor` accepts (ConnectionAcceptor: it survives running out
+// of file descriptors, which gRPC's own listener does not).
 struct Serving {
   std::unique_ptr<grpc::Server> server;
   std::string host;  // of --listen
   int port = 0;      // the bound one (--listen may ask for port 0)
+  // Declared after the server, so destroyed before it: no connection is
+  // handed to a server that is gone.
+  std::unique_ptr<ConnectionAcceptor> acceptor;
 };
 
-absl::StatusOr<Serving> BuildAndStart(PlannerService& service) {
+absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& metrics) {
+  const std::string listen = absl::GetFlag(FLAGS_listen);
+  absl::StatusOr<std::unique_ptr<ConnectionAcceptor>> acceptor = ConnectionAcceptor::Listen(listen);
+  if (!acceptor.ok()) {
+    return absl::UnavailableError(absl::StrFormat("cannot start: cannot listen on --listen=%s: %s",
+                                                  listen, acceptor.status().message()));
+  }
   // Both must be set before the builder is created: they install themselves
   // as builder plugins.
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  const std::string listen = absl::GetFlag(FLAGS_listen);
   Serving serving;
-  builder.AddListeningPort(listen, grpc::InsecureServerCredentials(), &serving.port);
+  std::unique_ptr<grpc::experimental::ExternalConnectionAcceptor> connections =
+      builder.experimental().AddExternalConnectionAcceptor(
+          grpc::ServerBuilder::experimental_type::ExternalConnectionType::FROM_FD,
+          grpc::InsecureServerCredentials());
   builder.SetMaxReceiveMessageSize(absl::GetFlag(FLAGS_max_request_bytes));
   // Responses are bounded by the request limits (samples, tree edges, layer
   // side); 64 MiB is the client library's receive limit too.
@@ -357,15 +371,17 @@ absl::StatusOr<Serving> BuildAndStart(PlannerService& service) {
   }
   builder.RegisterService(&service);
   serving.server = builder.BuildAndStart();
-  // gRPC leaves the port at 0 when it could not bind.
-  if (serving.server == nullptr || serving.port == 0) {
+  if (serving.server == nullptr) {
     return absl::UnavailableError(
-        absl::StrFormat("cannot start: cannot listen on --listen=%s", listen));
+        absl::StrFormat("cannot start: gRPC did not start on --listen=%s", listen));
   }
+  serving.acceptor = *std::move(acceptor);
+  serving.acceptor->Start(std::move(connections), [&metrics] { metrics.RecordAcceptError(); });
   grpc::HealthCheckServiceInterface* health = serving.server->GetHealthCheckService();
   health->SetServingStatus("", true);
   health->SetServingStatus("riskplan.v1.Planner", true);
   serving.host = listen.substr(0, listen.rfind(':'));
+  serving.port = serving.acceptor->port();
   return serving;
 }
 
@@ -383,8 +399,9 @@ void AnnounceServing(const Serving& serving, const ServiceOptions& options) {
 // Waits for SIGTERM or SIGINT, then drains: refuse new work, let running
 // plans use the grace period, then stop them so that they send their best
 // trajectory before the server stops.
-void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, grpc::Server& server,
+void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, Serving& serving,
                   int64_t grace_ms) {
+  grpc::Server& server = *serving.server;
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);
 
@@ -423,6 +440,9 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, grpc::S
   // open after the grace period are cancelled). Waiting on gRPC's Shutdown
   // deadline alone would also wait for idle clients to acknowledge GOAWAY.
   const bool none_open = service.open_calls().WaitUntilNone(drain_start + grace);
+  // New connections are refused from here on (a connection handed to gRPC
+  // after its shutdown began would be dropped without being closed).
+  serving.acceptor->Stop();
   server.Shutdown(absl::ToChronoTime(
       none_open ? absl::Now()
                 : std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
@@ -456,10 +476,10 @@ int Main() {
   metrics.AddCollectable(std::make_shared<CacheMetrics>(
       maps->models.get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
       service.checkers()));
-  absl::StatusOr<Serving> serving = BuildAndStart(service);
+  absl::StatusOr<Serving> serving = BuildAndStart(service, metrics);
   if (!serving.ok()) return Fail(1, serving.status().message());
   AnnounceServing(*serving, config->options);
-  WaitAndDrain(stop_signals, service, *serving->server, config->grace_ms);
+  WaitAndDrain(stop_signals, service, *serving, config->grace_ms);
   return 0;
 }
 

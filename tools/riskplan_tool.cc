@@ -3,6 +3,7 @@
 // flags are in Help() below (`riskplan-tool --help`, `riskplan-tool COMMAND
 // --help`).
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -81,6 +82,11 @@ cmdline::ProgramHelp Help() {
       {"write-map",
        "write the built-in demo-city as a map bundle (--out=DIR)",
        "  riskplan-tool write-map --out=DIR [--seed=N] [--size_m=M] [--res_m=R]\n"
+       "\n"
+       "DIR appears complete or not at all: the bundle is written beside it, flushed\n"
+       "to disk, then renamed into place, replacing a map bundle (or an empty\n"
+       "directory) at DIR in one step; anything else there is left alone\n"
+       "(docs/map-bundle.md, \"Writing a bundle\").\n"
        "\n"
        "Example:\n"
        "  riskplan-tool write-map --out=maps/demo-city",
@@ -267,7 +273,13 @@ int WriteMap() {
                           *params);
   if (!map.ok()) return Fail(map.status());
   const double generate_s = absl::ToDoubleSeconds(absl::Now() - start);
-  if (absl::Status s = WriteMapBundle(**map, out); !s.ok()) return Fail(s);
+  // A file size limit (ulimit -f) then fails a write with EFBIG, which is
+  // reported and cleaned up, instead of killing the process mid-bundle.
+  std::signal(SIGXFSZ, SIG_IGN);
+  // As import does: a bundle at --out is replaced, anything else refused.
+  if (absl::Status s = WriteMapBundleAtomically(**map, out, ExistingDirectory::kReplace); !s.ok()) {
+    return Fail(s);
+  }
   std::printf("wrote %s (%d x %d cells, generated in %.2f s) to %s\n", (*map)->name().c_str(),
               (*map)->nx(), (*map)->ny(), generate_s, out.c_str());
   return 0;

@@ -9,8 +9,8 @@
 
 namespace riskplan::rrt_star {
 
-Run::Run(const RiskModel& model, const Pose& goal, std::vector<RunMission> missions,
-         uint64_t seed, bool record_tree, const Params& params, RiskEvaluator* evaluator,
+Run::Run(const RiskModel& model, const Pose& goal, std::vector<RunMission> missions, uint64_t seed,
+         bool record_tree, const Params& params, RiskEvaluator* evaluator,
          const CancellationToken& cancel, RunCallbacks callbacks)
     : model_(model),
       goal_(goal),

@@ -241,9 +241,9 @@ class Run {
   Rng refine_rng_;  // the refiner's own stream: the tree's samples do not depend on it
   PathRefiner refiner_;
   double refine_credit_ = 0.0;
-  size_t start_cursor_ = 0;   // round-robin of the goal-biased samples
-  size_t path_cursor_ = 0;    // ... of the path-biased samples
-  size_t refine_cursor_ = 0;  // ... of the refinement edits
+  size_t start_cursor_ = 0;                   // round-robin of the goal-biased samples
+  size_t path_cursor_ = 0;                    // ... of the path-biased samples
+  size_t refine_cursor_ = 0;                  // ... of the refinement edits
   std::optional<CoarseRiskGrid> guide_grid_;  // built for the first guide route
   SpatialGrid grid_;
   std::vector<Node> nodes_;

@@ -22,8 +22,8 @@ absl::Status CheckMission(const SharedTreeProblem& problem, const SharedTreeOpti
   if (absl::Status s = CheckEndpoints(single); !s.ok()) return s;
   if (absl::Status s = CheckBudget(mission.budget); !s.ok()) return s;
   return CheckEdgeSampleBound(PlannerAlgorithm::kRiskRrtStar, problem.model->map(),
-                              problem.model->params(), mission.start, problem.goal,
-                              options.params, options.max_edge_samples);
+                              problem.model->params(), mission.start, problem.goal, options.params,
+                              options.max_edge_samples);
 }
 
 }  // namespace
@@ -84,8 +84,9 @@ absl::StatusOr<std::vector<absl::StatusOr<PlanResult>>> SharedGoalTreePlanner::P
   out.reserve(results.size());
   for (std::optional<absl::StatusOr<PlanResult>>& r : results) {
     // Execute gives every planned mission exactly one result.
-    out.push_back(r.has_value() ? std::move(*r)
-                                : absl::InternalError("the shared tree gave this mission no result"));
+    out.push_back(r.has_value()
+                      ? std::move(*r)
+                      : absl::InternalError("the shared tree gave this mission no result"));
   }
   return out;
 }

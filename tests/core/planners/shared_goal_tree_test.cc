@@ -89,9 +89,9 @@ class SharedGoalTreeTest : public ::testing::Test {
   static void SetUpTestSuite() {
     model_ = DemoCityModel();
     depot_ = *FindFlyablePose(*model_, 6500, 1500, kPi / 2);
-    const double spots[][3] = {{1200, 6500, 0.0},  {1500, 2500, 0.5}, {4000, 7000, 4.7},
-                               {7000, 6500, 4.0},  {2500, 4200, 1.0}, {5200, 5200, 5.5},
-                               {800, 1000, 0.3},   {3500, 1200, 6.0}};
+    const double spots[][3] = {{1200, 6500, 0.0}, {1500, 2500, 0.5}, {4000, 7000, 4.7},
+                               {7000, 6500, 4.0}, {2500, 4200, 1.0}, {5200, 5200, 5.5},
+                               {800, 1000, 0.3},  {3500, 1200, 6.0}};
     for (const auto& s : spots) starts_.push_back(*FindFlyablePose(*model_, s[0], s[1], s[2]));
   }
   static SharedTreeProblem Problem(const std::vector<int64_t>& iterations) {
@@ -201,10 +201,9 @@ TEST_F(SharedGoalTreeTest, OneMissionIsRiskRrtStarBitForBit) {
       options.params = params;
       CancellationToken cancel;
       std::vector<PlanImprovement> single_improvements;
-      auto single = (*planner)->Plan({model_, sc.start, sc.goal}, options, cancel,
-                                     [&](const PlanImprovement& i) {
-                                       single_improvements.push_back(i);
-                                     });
+      auto single =
+          (*planner)->Plan({model_, sc.start, sc.goal}, options, cancel,
+                           [&](const PlanImprovement& i) { single_improvements.push_back(i); });
       ASSERT_TRUE(single.ok()) << single.status();
 
       SharedTreeProblem problem;
@@ -433,9 +432,8 @@ TEST(SharedGoalTreeSmallMapTest, EveryImpactWindowStaysInsideTheMap) {
   const std::optional<Pose> goal = FindFlyablePose(*model, w / 2, w / 2, 0.0);
   ASSERT_TRUE(goal.has_value());
   problem.goal = *goal;
-  const double spots[][3] = {{350, 350, 0.0},         {w - 350, 350, kPi / 2},
-                             {350, w - 350, 0.0},     {w - 350, w - 350, kPi},
-                             {w / 2, 300, kPi / 2},  {300, w / 2, 0.0}};
+  const double spots[][3] = {{350, 350, 0.0},         {w - 350, 350, kPi / 2}, {350, w - 350, 0.0},
+                             {w - 350, w - 350, kPi}, {w / 2, 300, kPi / 2},   {300, w / 2, 0.0}};
   for (const auto& s : spots) {
     const std::optional<Pose> start = FindFlyablePose(*model, s[0], s[1], s[2]);
     ASSERT_TRUE(start.has_value()) << s[0] << ", " << s[1];

@@ -59,8 +59,8 @@ struct SharedTreeMission {
 };
 
 struct SharedTreeProblem {
-  std::shared_ptr<const RiskModel> model;  // map + parameters, shared
-  Pose goal;                               // shared
+  std::shared_ptr<const RiskModel> model;   // map + parameters, shared
+  Pose goal;                                // shared
   std::vector<SharedTreeMission> missions;  // 1 ... kMaxSharedTreeMissions
 };
 
@@ -91,9 +91,11 @@ using MissionResultCallback =
 
 class SharedGoalTreePlanner {
  public:
-  // `evaluator` computes the risk batches (when null, the planner's own, as
-  // RISK_RRT_STAR chooses it from risk_cache_log2); it must outlive the
-  // planner.
+  // `evaluator` computes the risk batches of every mission (when null, the
+  // planner's own, as RISK_RRT_STAR chooses it from risk_cache_log2); it must
+  // outlive the planner. If it stops on a condition of its own, that must be
+  // the whole call's (its cancellation, the latest mission deadline): it
+  // serves the missions that are still running when the first ones end.
   explicit SharedGoalTreePlanner(RiskEvaluator* evaluator = nullptr) : evaluator_(evaluator) {}
 
   // Plans every mission on one tree and returns their results by index.

@@ -17,6 +17,7 @@
 // A per-mission table follows the benchmark output.
 //
 //   riskplan-bench-shared-tree [--missions=32] [--separate_s=1] [--seed=1]
+//                              [--separate_iterations=0] [--shared_params=path_bias=0.5]
 #include <time.h>
 
 #include <algorithm>
@@ -24,10 +25,12 @@
 #include <cstdio>
 #include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
+#include "absl/strings/str_split.h"
 #include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
 #include "core/base/random.h"
@@ -42,6 +45,9 @@ ABSL_FLAG(int64_t, separate_iterations, 0,
 ABSL_FLAG(double, cap_factor, 1.0,
           "the shared tree stops at this many times the separate plans' total CPU time");
 ABSL_FLAG(uint64_t, seed, 1, "seed of every plan");
+ABSL_FLAG(std::string, shared_params, "",
+          "RISK_RRT_STAR parameters of the shared tree only, name=value,... (the separate plans "
+          "keep the defaults)");
 
 namespace riskplan {
 namespace {
@@ -178,6 +184,11 @@ void BM_SharedTree(benchmark::State& state) {
     }
     SharedTreeOptions options;
     options.seed = absl::GetFlag(FLAGS_seed);
+    for (absl::string_view kv :
+         absl::StrSplit(absl::GetFlag(FLAGS_shared_params), ',', absl::SkipEmpty())) {
+      std::vector<std::string> parts = absl::StrSplit(kv, '=');
+      if (parts.size() == 2) options.params[parts[0]] = std::stod(parts[1]);
+    }
     CancellationToken cancel;
     size_t reached = 0;
     const double before = ThreadCpuSeconds();

@@ -235,9 +235,9 @@ TEST(HelpTest, GoogleBenchmarkPrograms) {
     !defined(HAVE_RISKPLAN_BENCH_SHARED_TREE)
   GTEST_SKIP() << "the benchmarks are not built (RISKPLAN_BUILD_BENCH=OFF)";
 #endif
-  for (const char* program : {"riskplan-bench-risk", "riskplan-bench-accel", "riskplan-bench-shim",
-                              "riskplan-bench-seeds", "riskplan-bench-evaluate",
-                              "riskplan-bench-shared-tree"}) {
+  for (const char* program :
+       {"riskplan-bench-risk", "riskplan-bench-accel", "riskplan-bench-shim",
+        "riskplan-bench-seeds", "riskplan-bench-evaluate", "riskplan-bench-shared-tree"}) {
     CommandResult r = RunProgram(std::string(program) + " --help");
     EXPECT_EQ(r.exit_code, 0) << program << "\n" << r.output;
     EXPECT_THAT(r.output, HasSubstr("--benchmark_filter")) << program;

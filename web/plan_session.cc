@@ -73,7 +73,7 @@ void PlanSession::Run(v1::Planner::Stub* stub) {
     return;
   }
   // The server's own words, untouched: the page shows them as they are.
-  Append("error",
+  Append("failed",
          nlohmann::json{{"code", client::StatusCodeName(status.error_code())},
                         {"message", status.error_message()}}
              .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),

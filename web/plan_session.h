@@ -31,8 +31,9 @@ namespace riskplan::web {
 // One event of a plan, as sent to viewers. The types:
 //   "update"    an improvement: {"gateway_ms": T, "update": PlanUpdate}
 //   "final"     the final PlanUpdate, same form; the stream ends after it
-//   "error"     the call failed: {"code": "INVALID_ARGUMENT", "message":
-//               the server's message as it wrote it}; the stream ends
+//   "failed"    the call failed: {"code": "INVALID_ARGUMENT", "message":
+//               the server's message as it wrote it}; the stream ends (not
+//               "error": that name is EventSource's own, for a broken link)
 //   "cancelled" the plan was cancelled from the page: {"message": ...}
 // T is when the gateway read the message from the server, in milliseconds
 // since the Unix epoch (the page measures its drawing latency from it).

@@ -106,6 +106,7 @@ function decades(values) {
 // The map
 
 const map = L.map('map', { crs: L.CRS.Simple, minZoom: -8, maxZoom: 4, zoomSnap: 0.25, attributionControl: false });
+rp.leaflet = map;
 L.control.scale({ imperial: false, maxWidth: 160, position: 'bottomleft' }).addTo(map);
 const layerControl = L.control.layers(null, null, { collapsed: false, position: 'topright' }).addTo(map);
 const overlays = {};       // name -> Leaflet layer
@@ -181,7 +182,7 @@ async function loadMap(info) {
   addOverlay('population density', rasterOverlay(density, gridImage(density.nx, density.ny, density.values, (v) => {
     if (!(v > 0)) return null;
     const c = ramp(VIRIDIS, (Math.log10(v) - lo) / (hi - lo));
-    return [c[0], c[1], c[2], 170];
+    return [c[0], c[1], c[2], 140];
   })), true, scaleLegend('population density, people per m²', VIRIDIS,
     Array.from({ length: hi - lo + 1 }, (_, k) => `1e${lo + k}`)));
 
@@ -235,6 +236,7 @@ map.on('mousemove', (e) => {
 // Start and goal: press, drag for the heading, release.
 
 const endpoints = { start: null, goal: null };
+rp.endpoints = endpoints;
 const endpointLayers = { start: L.layerGroup().addTo(map), goal: L.layerGroup().addTo(map) };
 let picking = null;  // 'start' | 'goal' | null
 let pressed = null;  // the point pressed, while dragging
@@ -263,6 +265,8 @@ function pick(which) {
 
 map.on('mousedown', (e) => {
   if (!picking) return;
+  // With dragging off, the browser would select the page's text instead.
+  L.DomEvent.preventDefault(e.originalEvent);
   pressed = e.latlng;
   dragLine = L.polyline([pressed, pressed], { color: '#333', dashArray: '4 4' }).addTo(map);
 });

@@ -8,11 +8,13 @@ In order, each step checking behaviour and numbers, never speed:
      landing sites: one marker per site the server lists), the legend and the
      scale bar; the risk layer at a chosen height is drawn too;
   2. start and goal are set by clicks on the map, with a drag for the heading;
+     the cursor's readout shows WGS84 on this geo-referenced map;
   3. a plan with an iteration budget streams: at least two improvements are
      drawn, their risks never increase, the plot holds one point per
      improvement, the iteration count reaches the budget, and the final
      trajectory's risk profile (EvaluateRisk per sample) gives the plan's risk;
-  4. the trajectory downloads as GeoJSON, in WGS84 near the map's origin;
+  4. the trajectory downloads as GeoJSON, in WGS84 near the map's origin; a
+     polyline drawn by three clicks is evaluated (its length, its profile);
   5. a second plan (ten minutes of budget) is cancelled from the page, and
      the server's riskplan_running_plans gauge goes from 1 back to 0;
   6. a start below the terrain: the page shows the server's error exactly as
@@ -183,6 +185,9 @@ def main():
             check(abs(pose["theta"] - math.pi / 4) < 0.05,
                   f"{name} heading {pose['theta']:.3f} rad from the drag (north-east)")
 
+        cursor = js(driver, "document.getElementById('cursor').textContent")
+        check("°" in cursor, f"the cursor shows local and WGS84 positions: {cursor}")
+
         # 3. A plan with an iteration budget: improvements arrive and are drawn.
         iterations = 3000
         set_value(driver, "budget-ms", 0)
@@ -227,6 +232,25 @@ def main():
                                 f"{len(coords)} points")
         check(all(abs(c[0] - wf.GEO_ORIGIN[1]) < 0.05 and abs(c[1] - wf.GEO_ORIGIN[0]) < 0.05
                   for c in coords), "in WGS84, within the 2 km map placed at (49.6, 6.1)")
+
+        # A polyline drawn by clicks, evaluated.
+        driver.execute_script("rp.profile = null; document.getElementById('evaluation').textContent = '';")
+        click(driver, "draw-polyline")
+        corners = [(500.0, 500.0), (1000.0, 900.0), (1500.0, 1200.0)]
+        set_value(driver, "altitude", 250)
+        for x, y in corners:
+            click_drag(driver, x, y, (0, 0))
+        wf.wait_for(lambda: js(driver, "document.querySelectorAll('path.drawn-polyline').length") == 1,
+                    30, "the drawn polyline")
+        click(driver, "evaluate-polyline")
+        wf.wait_for(lambda: js(driver, "rp.profile && rp.profile.samples.length > 0 && "
+                                       "document.getElementById('evaluation').textContent"
+                                       ".includes('samples')"), 120, "the polyline's evaluation")
+        evaluation = js(driver, "document.getElementById('evaluation').textContent")
+        length = js(driver, "rp.profile.length_m")
+        want = sum(math.dist(a, b) for a, b in zip(corners, corners[1:]))
+        check(abs(length - want) < 4 * 2 * metres_per_px,
+              f"a 3-point polyline evaluated: {evaluation}")
 
         # 5. Cancel a long plan; the server's running-plans gauge drops.
         check(wf.metric(metrics, "riskplan_running_plans") == 0, "no plan runs on the server")

@@ -342,6 +342,41 @@ TEST_F(GatewayTest, BadRequestsAreRefusedNamingWhatIsWrong) {
   EXPECT_EQ(Json::parse(events[0].data)["code"], "NOT_FOUND");
 }
 
+TEST_F(GatewayTest, APlanKeepsItsNewestEventsWithinItsBound) {
+  // A gateway of its own, keeping 5 events a plan.
+  auto small = ServerProcess::StartWeb(server_->address(), {"--max_events_per_plan=5"});
+  ASSERT_TRUE(small.ok()) << small.status();
+  auto call = [&](const std::string& method, const std::string& path, const std::string& body,
+                  const std::map<std::string, std::string>& headers = {}) {
+    auto r = HttpRequest((*small)->address(), method, path, body, headers, kDeadline);
+    EXPECT_TRUE(r.ok()) << r.status();
+    return r.ok() ? *r : HttpResponse{};
+  };
+  const std::string id =
+      Json::parse(call("POST", "/api/plans", PlanBody(300).dump()).body)["id"].get<std::string>();
+  ASSERT_TRUE(Eventually([&] {
+    return Json::parse(call("GET", "/api/plans/" + id, "").body)["state"] == "finished";
+  }));
+  const Json info = Json::parse(call("GET", "/api/plans/" + id, "").body);
+  const uint64_t last = info["last_event_id"].get<uint64_t>();
+  ASSERT_GT(last, 5u);
+  EXPECT_EQ(info["first_kept_event_id"].get<uint64_t>(), last - 4);
+  EXPECT_EQ(info["last_kept_event_id"].get<uint64_t>(), last);
+  // A viewer from the start, or resuming from an id no longer kept, gets the
+  // five newest: the newest improvements and the final message.
+  for (const std::string& seen : {std::string("0"), std::string("1")}) {
+    auto stream = SseStream::Open((*small)->address(), EventsPath(id), {{"Last-Event-ID", seen}},
+                                  kDeadline);
+    ASSERT_TRUE(stream.ok());
+    ASSERT_TRUE((*stream)->ReadAll(kDeadline));
+    const std::vector<SseEvent>& events = (*stream)->events();
+    ASSERT_EQ(events.size(), 5u);
+    EXPECT_EQ(events.front().id, std::to_string(last - 4));
+    EXPECT_EQ(events.back().id, std::to_string(last));
+    EXPECT_EQ(events.back().type, "final");
+  }
+}
+
 TEST_F(GatewayTest, ServesThePageAndItsLibrariesFromDebian) {
   HttpResponse page = Call("GET", "/");
   EXPECT_EQ(page.status, 200);

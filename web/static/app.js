@@ -228,8 +228,26 @@ async function showRiskLayer() {
     '<div class="item"><span class="key" style="background:rgba(120,120,120,0.5)"></span>M not defined (impact outside the map)</div>');
 }
 
+// On a geo-referenced map, the WGS84 position of a local point, interpolated
+// bilinearly between the map's four corners as the server gave them: the
+// page links no projection, and over a map of kilometres the azimuthal
+// equidistant frame departs from that interpolation by centimetres. For
+// display only: requests stay in local metres, and the server converts.
+function approxWgs84(x, y) {
+  const info = rp.map;
+  const c = info.bounds_wgs84 && info.bounds_wgs84.corners;
+  if (!info.geo || !c || c.length !== 4) return null;
+  const u = (x - info.x0_m) / info.width_m, v = (y - info.y0_m) / info.height_m;
+  // South-west, south-east, north-east, north-west.
+  const mix = (k) => (1 - u) * (1 - v) * c[0][k] + u * (1 - v) * c[1][k] + u * v * c[2][k] + (1 - u) * v * c[3][k];
+  return { lat: mix('lat_deg'), lon: mix('lon_deg') };
+}
+
 map.on('mousemove', (e) => {
-  $('cursor').textContent = `x, y: ${e.latlng.lng.toFixed(0)}, ${e.latlng.lat.toFixed(0)} m`;
+  let text = `x, y: ${e.latlng.lng.toFixed(0)}, ${e.latlng.lat.toFixed(0)} m`;
+  const g = approxWgs84(e.latlng.lng, e.latlng.lat);
+  if (g) text += ` · ${g.lat.toFixed(5)}°, ${g.lon.toFixed(5)}°`;
+  $('cursor').textContent = text;
 });
 
 // ---------------------------------------------------------------------------
@@ -408,6 +426,9 @@ async function startPlan() {
       algorithm: $('algorithm').value,
       budget: { time_ms: String(Number($('budget-ms').value)), iterations: String(Number($('budget-iterations').value)) },
       seed: String(Number($('seed').value)),
+      // The server coalesces what it finds in between (newest wins): more
+      // than about 20 pictures a second is more than anyone can follow.
+      min_update_interval_ms: String(Number($('update-interval').value)),
     });
     rp.planId = r.id;
     watch(r.id);

@@ -13,7 +13,9 @@ test: it judges nothing, it prints figures.
            latency (reader's receipt minus the gateway's read) p50/p95/max,
            and the gateway's CPU and memory while it serves them.
 
-Usage: bench_web.py BIN_DIR latency [PLANS] | viewers N [N ...]
+  screenshot  the picture of docs/web.md.
+
+Usage: bench_web.py BIN_DIR latency [PLANS] | viewers N [N ...] | screenshot PNG
 """
 
 import http.client
@@ -75,7 +77,7 @@ def latency(bin_dir, plans):
         wf.wait_for(lambda: driver.execute_script("return window.rp && rp.ready === true"), 300,
                     "the page")
         for key, pose in (("start", START), ("goal", GOAL)):
-            driver.execute_script(f"rp.endpoints.{key} = arguments[0];", pose)
+            driver.execute_script(f"rp.setEndpoint('{key}', arguments[0]);", pose)
         driver.execute_script("document.getElementById('budget-ms').value = '5000';"
                               "document.getElementById('budget-iterations').value = '0';")
         samples, improvements = [], 0
@@ -93,6 +95,43 @@ def latency(bin_dir, plans):
             samples += lat
             print(f"plan {k + 1}: {len(lat)} improvements drawn, {summary(lat)}", flush=True)
         print(f"all: {improvements} improvements drawn over {plans} plans, {summary(samples)}")
+    finally:
+        wf.quit_chromium(driver)
+        gateway.stop()
+        server.stop()
+
+
+def screenshot(bin_dir, path):
+    """The picture of docs/web.md: a 5 s plan across the 8 km demo-city, placed
+    on WGS84, with the risk layer at 100 m, the plot and the final profile."""
+    maps = tempfile.mkdtemp(prefix="riskplan-bench-web-")
+    subprocess.run([os.path.join(bin_dir, "riskplan-tool"), "write-map",
+                    f"--out={maps}/demo-city-wgs84"], check=True, stdout=subprocess.DEVNULL)
+    manifest = os.path.join(maps, "demo-city-wgs84", "manifest.json")
+    m = json.load(open(manifest))
+    m["name"] = "demo-city-wgs84"
+    m["geo"] = {"origin_lat_deg": 49.58, "origin_lon_deg": 6.08, "crs": "demo placement"}
+    json.dump(m, open(manifest, "w"))
+    server = wf.start_server(bin_dir, maps)
+    gateway = wf.start_gateway(bin_dir, server.address)
+    driver = wf.chromium(width=1500, height=1180)
+    try:
+        driver.get(f"http://{gateway.address}/")
+        wf.wait_for(lambda: driver.execute_script("return window.rp && rp.ready === true"), 300,
+                    "the page")
+        driver.execute_script("document.getElementById('risk-show').click();")
+        wf.wait_for(lambda: driver.execute_script("return rp.layersDrawn['risk layer'] === true"),
+                    300, "the risk layer")
+        for key, pose in (("start", START), ("goal", GOAL)):
+            driver.execute_script(f"rp.setEndpoint('{key}', arguments[0]);", pose)
+        driver.execute_script("document.getElementById('budget-ms').value = '5000';"
+                              "document.getElementById('budget-iterations').value = '0';"
+                              "document.getElementById('plan').click();")
+        wf.wait_for(lambda: driver.execute_script("return rp.state") in ("finished", "failed"), 300,
+                    "the plan")
+        wf.wait_for(lambda: driver.execute_script("return rp.profile !== null"), 120, "the profile")
+        driver.save_screenshot(path)
+        print(f"wrote {path}")
     finally:
         wf.quit_chromium(driver)
         gateway.stop()
@@ -195,6 +234,8 @@ def main():
     bin_dir, what = sys.argv[1], sys.argv[2]
     if what == "latency":
         latency(bin_dir, int(sys.argv[3]) if len(sys.argv) > 3 else 5)
+    elif what == "screenshot":
+        screenshot(bin_dir, sys.argv[3])
     elif what == "viewers":
         viewers(bin_dir, [int(n) for n in sys.argv[3:]] or [50])
     else:

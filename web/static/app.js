@@ -275,6 +275,9 @@ function drawEndpoint(which) {
   $(which + '-text').textContent = which + ': ' + fmtPose(p);
 }
 
+// For scripts (the benchmark): a pose given exactly rather than by a click.
+rp.setEndpoint = (which, pose) => { endpoints[which] = pose; drawEndpoint(which); };
+
 function pick(which) {
   picking = which;
   map.dragging.disable();

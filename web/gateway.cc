@@ -422,7 +422,7 @@ void Gateway::Routes() {
           }
           std::string out;
           for (const PlanEvent& e : events) {
-            out += FormatSseEvent(e.id, e.type, e.data);
+            out += FormatSseEvent(e.id, e.type, *e.data);
             viewer->after = e.id;
           }
           // Nothing new: a comment, so that a viewer who left is found out.

@@ -83,15 +83,15 @@ void PlanSession::Run(v1::Planner::Stub* stub) {
 void PlanSession::Append(const std::string& type, std::string data, PlanState end_state) {
   absl::MutexLock lock(&mu_);
   if (state_ != PlanState::kRunning) return;  // nothing after the terminal event
-  PlanEvent event{++last_id_, type, std::move(data)};
-  bytes_ += event.data.size();
+  PlanEvent event{++last_id_, type, std::make_shared<const std::string>(std::move(data))};
+  bytes_ += event.data->size();
   events_.push_back(std::move(event));
   state_ = end_state;
   // Drop the oldest events beyond the bounds; never the newest (the best
   // trajectory, or the terminal event).
   while (events_.size() > 1 &&
          (events_.size() > limits_.max_events || bytes_ > limits_.max_bytes)) {
-    bytes_ -= events_.front().data.size();
+    bytes_ -= events_.front().data->size();
     events_.pop_front();
   }
 }
@@ -115,16 +115,25 @@ void PlanSession::Stop() {
 }
 
 bool PlanSession::WaitForEvents(uint64_t after_id, absl::Time deadline,
-                                std::vector<PlanEvent>* out) {
+                                std::vector<PlanEvent>* out, size_t max_bytes) {
   absl::MutexLock lock(&mu_);
   auto ready = [this, after_id]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     return last_id_ > after_id || state_ != PlanState::kRunning || stopped_;
   };
   mu_.AwaitWithDeadline(absl::Condition(&ready), deadline);
+  if (stopped_) return true;
+  size_t bytes = 0;
+  bool all = true;
   for (const PlanEvent& e : events_) {
-    if (e.id > after_id) out->push_back(e);
+    if (e.id <= after_id) continue;
+    if (bytes >= max_bytes) {
+      all = false;
+      break;
+    }
+    out->push_back(e);
+    bytes += e.data->size();
   }
-  return stopped_ || state_ != PlanState::kRunning;
+  return all && state_ != PlanState::kRunning;
 }
 
 PlanState PlanSession::state() const {

@@ -42,7 +42,9 @@ namespace riskplan::web {
 struct PlanEvent {
   uint64_t id = 0;  // 1, 2, 3, ... within the plan
   std::string type;
-  std::string data;  // JSON, one line
+  // JSON, one line. Shared, never copied: an event of a long trajectory is
+  // tens of kilobytes, and every viewer sends the same one.
+  std::shared_ptr<const std::string> data;
 };
 
 // Bounds of a session's memory.
@@ -76,10 +78,13 @@ class PlanSession {
 
   // Waits until there is an event with an id above `after_id`, the plan has
   // ended, Stop() was called, or `deadline` passes; then appends the kept
-  // events with ids above `after_id` to `*out`. Returns true when no event
-  // will ever come after those: the plan ended and `*out` holds its last
-  // event (or it ended before `after_id`), or the session is stopped.
-  bool WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out);
+  // events with ids above `after_id` to `*out`, oldest first, stopping once
+  // their data reach `max_bytes` (always at least one), so that a viewer
+  // catching up on a long plan sends it in pieces. Returns true when no
+  // event will ever come after those: the plan ended and `*out` ends with
+  // its last event (or it ended before `after_id`), or the session is stopped.
+  bool WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
+                     size_t max_bytes = size_t{256} << 10);
 
   // Wakes every waiting viewer for good (the gateway is shutting down) and
   // cancels the call.

@@ -16,7 +16,9 @@ ABSL_FLAG(std::string, listen, "127.0.0.1:8080",
           "HTTP address for browsers, HOST:PORT; port 0 picks a free port, and "
           "'riskplan-web listening on HOST:PORT' on stdout gives the real one");
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server's gRPC address, HOST:PORT");
-ABSL_FLAG(std::string, assets_dir, RISKPLAN_WEB_ASSETS_DIR, "Directory of the page's own files");
+ABSL_FLAG(std::string, assets_dir, "",
+          "Directory of the page's own files (empty: web/static of the source tree it was "
+          "built from)");
 ABSL_FLAG(std::string, leaflet_dir, "/usr/share/javascript/leaflet",
           "Directory of Leaflet (Debian's libjs-leaflet)");
 ABSL_FLAG(std::string, chartjs_dir, "/usr/share/javascript/chart.js",
@@ -40,6 +42,7 @@ int Run() {
   options.listen = absl::GetFlag(FLAGS_listen);
   options.server.address = absl::GetFlag(FLAGS_server);
   options.assets_dir = absl::GetFlag(FLAGS_assets_dir);
+  if (options.assets_dir.empty()) options.assets_dir = RISKPLAN_WEB_ASSETS_DIR;
   options.leaflet_dir = absl::GetFlag(FLAGS_leaflet_dir);
   options.chartjs_dir = absl::GetFlag(FLAGS_chartjs_dir);
   options.max_viewers = absl::GetFlag(FLAGS_max_viewers);
@@ -95,15 +98,15 @@ int main(int argc, char** argv) {
   riskplan::cmdline::ProgramHelp help;
   help.program = "riskplan-web";
   help.usage =
-      "the web view of riskplan: a gRPC client of riskplan-server and an HTTP server for\n"
-      "browsers, with a page that shows the maps and the risk layer, plans live (every\n"
-      "improvement as the server streams it), evaluates drawn polylines and downloads\n"
+      "the web view of riskplan: a gRPC client of riskplan-server and an HTTP server for "
+      "browsers, with a page that shows the maps and the risk layer, plans live (every "
+      "improvement as the server streams it), evaluates drawn polylines and downloads "
       "trajectories (GeoJSON, QGroundControl .plan, KML).\n"
       "\n"
       "  riskplan-web --listen=127.0.0.1:8080 --server=127.0.0.1:50051\n";
   help.footer =
-      "Prints 'riskplan-web listening on HOST:PORT' on stdout once it serves; SIGTERM or\n"
-      "SIGINT cancels the running plans, ends the event streams and exits 0. docs/web.md\n"
+      "Prints 'riskplan-web listening on HOST:PORT' on stdout once it serves; SIGTERM or "
+      "SIGINT cancels the running plans, ends the event streams and exits 0. docs/web.md "
       "lists the routes.";
   riskplan::cmdline::ParseCommandLine(argc, argv, help);
   return Run();

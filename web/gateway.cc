@@ -1,6 +1,7 @@
 #include "web/gateway.h"
 
 #include <httplib.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 
 #include <utility>
@@ -165,6 +166,14 @@ Gateway::Gateway(GatewayOptions options)
       static_cast<size_t>(options_.max_viewers) + static_cast<size_t>(options_.request_threads);
   http_->new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
   http_->set_payload_max_length(options_.max_body_bytes);
+  // cpp-httplib's default sets SO_REUSEPORT, with which a second gateway on
+  // the same port would start silently and take half the connections;
+  // SO_REUSEADDR only, and the listening socket is kept for Bind().
+  http_->set_socket_options([this](int sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+    listen_socket_ = sock;
+  });
   // An idle keep-alive connection holds a request thread; a browser keeps up
   // to six, so they are let go soon.
   http_->set_keep_alive_timeout(2);
@@ -188,15 +197,18 @@ absl::StatusOr<int> Gateway::Bind() {
   auto hp = SplitHostPort(options_.listen);
   if (!hp.ok()) return hp.status();
   const auto& [host, port] = *hp;
+  int bound = port;
   if (port == 0) {
-    const int bound = http_->bind_to_any_port(host);
+    bound = http_->bind_to_any_port(host);
     if (bound <= 0) return absl::UnavailableError(absl::StrCat("cannot bind ", options_.listen));
-    return bound;
-  }
-  if (!http_->bind_to_port(host, port)) {
+  } else if (!http_->bind_to_port(host, port)) {
     return absl::UnavailableError(absl::StrCat("cannot bind ", options_.listen));
   }
-  return port;
+  // cpp-httplib 0.11 listens with a backlog of 5: a page opening its event
+  // stream and its calls, or a few viewers arriving together, would wait for
+  // SYN retransmissions (1 s, then 3 s). Listening again sets the backlog.
+  if (listen_socket_ >= 0) ::listen(listen_socket_, kListenBacklog);
+  return bound;
 }
 
 void Gateway::Serve() { http_->listen_after_bind(); }

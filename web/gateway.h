@@ -74,6 +74,9 @@ class Gateway {
   client::RiskplanClient client_;
   PlanRegistry plans_;
   std::unique_ptr<httplib::Server> http_;
+  // The listening socket (set by cpp-httplib's socket-options callback).
+  int listen_socket_ = -1;
+  static constexpr int kListenBacklog = 1024;
   std::atomic<int> viewers_{0};
   std::atomic<bool> stopping_{false};
 };

@@ -38,7 +38,9 @@ namespace riskplan::web {
 // T is when the gateway read the message from the server, in milliseconds
 // since the Unix epoch (the page measures its drawing latency from it).
 // PlanUpdate is the API message in Protobuf's JSON form with the proto's
-// field names (docs/api.md; 64-bit integers are JSON strings).
+// field names (docs/api.md; 64-bit integers are JSON strings), its display
+// path (Trajectory.path, path_wgs84: for drawing only) rounded to the
+// centimetre, which halves an event; the waypoints keep every digit.
 struct PlanEvent {
   uint64_t id = 0;  // 1, 2, 3, ... within the plan
   std::string type;

@@ -44,6 +44,8 @@ def percentile(values, p):
 
 
 def summary(values):
+    if not values:
+        return "n=0"
     return (f"n={len(values)} p50={percentile(values, 50):.2f} ms "
             f"p95={percentile(values, 95):.2f} ms max={max(values):.2f} ms")
 
@@ -165,21 +167,32 @@ def viewers(bin_dir, counts):
                     "budget": {"time_ms": "15000"}, "seed": str(seed),
                     "min_update_interval_ms": "100"})["id"])
             socks, state = [], {}
+            start_wall = time.time()
             sel = selectors.DefaultSelector()
+            # Viewers join running plans as a reconnecting browser would, after
+            # the events already sent: what is measured is the fan-out of new
+            # improvements, not a catch-up on old ones.
+            seen = {}
+            for plan in ids:
+                c = http.client.HTTPConnection(host, int(port), timeout=60)
+                c.request("GET", f"/api/plans/{plan}")
+                seen[plan] = json.loads(c.getresponse().read())["last_event_id"]
+                c.close()
             for k in range(n):
                 s = socket.create_connection((host, int(port)), timeout=60)
-                s.sendall(f"GET /api/plans/{ids[k % 2]}/events HTTP/1.1\r\nHost: {host}\r\n"
-                          "Connection: close\r\n\r\n".encode())
+                plan = ids[k % 2]
+                s.sendall(f"GET /api/plans/{plan}/events HTTP/1.1\r\nHost: {host}\r\n"
+                          f"Last-Event-ID: {seen[plan]}\r\nConnection: close\r\n\r\n".encode())
                 s.setblocking(False)
                 sel.register(s, selectors.EVENT_READ, k)
                 socks.append(s)
                 state[k] = {"buf": bytearray(), "head": None, "events": [], "done": False}
-            # Delivery is timed only for events the gateway read after every
-            # viewer had connected: earlier ones are a catch-up, not a delivery.
-            connected_ms = time.time() * 1000
             cpu0, t0 = cpu_seconds(gateway.proc.pid), time.monotonic()
+            reader0 = time.process_time()
+            received = 0
             rss_max = 0.0
             latencies = []
+            timeline = []
             open_streams = n
             while open_streams and time.monotonic() - t0 < 120:
                 for key, _ in sel.select(timeout=1.0):
@@ -198,11 +211,13 @@ def viewers(bin_dir, counts):
                         continue
                     buf = st["buf"]
                     buf += data
+                    received += len(data)
                     if st["head"] is None:
                         h = buf.find(b"\r\n\r\n")
                         if h < 0:
                             continue
                         st["head"] = bytes(buf[:buf.find(b"\r\n")]).decode()
+                        st["head_ms"] = now
                         del buf[:h + 4]
                     # Events end with a blank line; the chunk framing lines in
                     # between hold neither pattern searched for. The type and
@@ -221,12 +236,22 @@ def viewers(bin_dir, counts):
                         j = head.find(b'"gateway_ms":')
                         if j >= 0:
                             sent = float(head[j + 13:head.find(b",", j)])
-                            if sent >= connected_ms:
-                                latencies.append(now - sent)
+                            timeline.append((sent, now - sent))
                         st["events"].append(kind)
                     del buf[:pos]
                 rss_max = max(rss_max, rss_mb(gateway.proc.pid))
             elapsed = time.monotonic() - t0
+            # Timed: the events the gateway read once it had answered every
+            # viewer's request (earlier ones are a catch-up, not a delivery).
+            joined_ms = max(state[k].get("head_ms", float("inf")) for k in state)
+            latencies = [l for t, l in timeline if t >= joined_ms]
+            timeline = [(t - joined_ms, l) for t, l in timeline if t >= joined_ms]
+            if os.environ.get("TIMELINE"):
+                for second in range(0, 20):
+                    lat = [l for t, l in timeline if second * 1000 <= t < (second + 1) * 1000]
+                    if lat:
+                        print(f"  events read by the gateway {second}-{second + 1} s after: {summary(lat)}")
+            connect_s = joined_ms / 1000 - start_wall
             cpu = cpu_seconds(gateway.proc.pid) - cpu0
             accepted = sum(1 for k in state if state[k]["head"] and " 200 " in state[k]["head"] + " ")
             per_plan = {}
@@ -237,9 +262,11 @@ def viewers(bin_dir, counts):
                 complete += bool(evs) and evs[-1] == "final"
             print(f"viewers={n}: accepted {accepted}/{n}, complete streams (ending with the final "
                   f"event) {complete}/{n}, events per stream by plan "
-                  f"{ {p[:6]: sorted(v) for p, v in per_plan.items()} }, delivery of the events read after all connected {summary(latencies)}, "
+                  f"{ {p[:6]: sorted(v) for p, v in per_plan.items()} }, delivery of the events read after every viewer was answered {summary(latencies)}, "
+                  f"of those read 2 s or more after {summary([l for t, l in timeline if t >= 2000])}, "
                   f"gateway CPU {100 * cpu / elapsed:.0f}% of one core over {elapsed:.1f} s, "
-                  f"RSS max {rss_max:.0f} MB", flush=True)
+                  f"RSS max {rss_max:.0f} MB; every viewer answered {connect_s:.2f} s after the first connect; the readers received {received / 1e6:.0f} MB using "
+                  f"{time.process_time() - reader0:.1f} s of CPU", flush=True)
     finally:
         gateway.stop()
         server.stop()

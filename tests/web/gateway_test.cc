@@ -5,6 +5,8 @@
 // reaching the server, bad requests, and the server's errors passed on as the
 // server wrote them. Plans use iteration budgets (reproducible) or are
 // cancelled; deadlines are generous and nothing is timed.
+#include <signal.h>
+
 #include <map>
 #include <memory>
 #include <string>
@@ -375,6 +377,30 @@ TEST_F(GatewayTest, APlanKeepsItsNewestEventsWithinItsBound) {
     EXPECT_EQ(events.back().id, std::to_string(last));
     EXPECT_EQ(events.back().type, "final");
   }
+}
+
+TEST_F(GatewayTest, SigtermEndsOpenStreamsCancelsPlansAndExitsZero) {
+  auto own = ServerProcess::StartWeb(server_->address(), {"--heartbeat_ms=60000"});
+  ASSERT_TRUE(own.ok()) << own.status();
+  auto r = HttpRequest((*own)->address(), "POST", "/api/plans", PlanBody(0, 600000).dump(), {},
+                       kDeadline);
+  ASSERT_TRUE(r.ok());
+  ASSERT_EQ(r->status, 201);
+  const std::string id = Json::parse(r->body)["id"].get<std::string>();
+  // Two viewers waiting on the plan (the heartbeat would not wake them).
+  std::vector<std::unique_ptr<SseStream>> viewers;
+  for (int k = 0; k < 2; ++k) {
+    auto stream = SseStream::Open((*own)->address(), EventsPath(id), {}, kDeadline);
+    ASSERT_TRUE(stream.ok());
+    ASSERT_TRUE((*stream)->ReadEvents(1, kDeadline));
+    viewers.push_back(std::move(*stream));
+  }
+  ASSERT_TRUE(Eventually([] { return RunningPlansOnServer() == 1; }));
+  (*own)->Signal(SIGTERM);
+  EXPECT_EQ((*own)->Wait(absl::Seconds(60)), 0);
+  for (auto& v : viewers) EXPECT_TRUE(v->ReadAll(kDeadline));
+  // The gateway cancelled its plan on the server before it exited.
+  EXPECT_TRUE(Eventually([] { return RunningPlansOnServer() == 0; }));
 }
 
 TEST_F(GatewayTest, ServesThePageAndItsLibrariesFromDebian) {

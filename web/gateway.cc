@@ -25,6 +25,8 @@ namespace {
 
 using Json = nlohmann::json;
 
+constexpr int kMaxLayerSideCells = 1024;
+
 // What the page sees of a failed request: the code, the message exactly as
 // its author wrote it, and who wrote it ("server" or "gateway").
 void SendError(httplib::Response& res, int http_status, const std::string& code,
@@ -263,7 +265,16 @@ void Gateway::Routes() {
         return SendError(res, 400, "INVALID_ARGUMENT",
                          "max_side_cells must be an integer", "gateway");
       }
-      request.set_max_side_cells(side);  // the server checks its range
+      // The server allows 4096 (16 Mi cells); as JSON for a browser that is
+      // some 200 MB on the gateway for one request.
+      if (side > kMaxLayerSideCells) {
+        return SendError(res, 400, "INVALID_ARGUMENT",
+                         absl::StrFormat("max_side_cells has value %d; this gateway serves "
+                                         "layers of at most %d cells a side",
+                                         side, kMaxLayerSideCells),
+                         "gateway");
+      }
+      request.set_max_side_cells(side);  // the server checks the rest of its range
     }
     v1::GetMapLayerResponse response;
     const grpc::Status status = client_.GetMapLayer(request, &response, options_.rpc_timeout);

@@ -318,6 +318,11 @@ TEST_F(GatewayTest, BadRequestsAreRefusedNamingWhatIsWrong) {
       {"GET", "/api/layer?map=demo-city&layer=LAVA", "", 400, "layer has value 'LAVA'"},
       {"GET", "/api/layer?map=demo-city&layer=TERRAIN&max_side_cells=big", "", 400,
        "max_side_cells must be an integer"},
+      {"GET", "/api/layer?map=demo-city&layer=TERRAIN&max_side_cells=4096", "", 400,
+       "max_side_cells has value 4096; this gateway serves layers of at most 1024 cells a side"},
+      // The server's own range check, passed on.
+      {"GET", "/api/layer?map=demo-city&layer=TERRAIN&max_side_cells=-3", "", 400,
+       "max_side_cells"},
       {"GET", "/api/plans/0123abcd-ff/events", "", 404, "no plan '0123abcd-ff' on this gateway"},
       {"POST", "/api/plans/0123abcd-ff/cancel", "", 404, "no plan '0123abcd-ff'"},
       {"POST", "/api/export?format=docx", "{}", 400, "format has value 'docx'"},

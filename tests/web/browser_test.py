@@ -19,16 +19,21 @@ In order, each step checking behaviour and numbers, never speed:
      the server's riskplan_running_plans gauge goes from 1 back to 0;
   6. a start below the terrain: the page shows the server's error exactly as
      the riskplan CLI prints it;
-  7. a screenshot, checked not to be blank.
+  7. a screenshot, checked not to be blank;
+  8. on a gateway whose one viewer slot another viewer holds, the page shows
+     the gateway's refusal (--max_viewers) when its plan's stream is refused.
 
 Usage: browser_test.py BIN_DIR OUT_DIR
 """
 
 import glob
+import http.client
 import json
 import math
 import os
+import socket
 import struct
+import threading
 import subprocess
 import sys
 import tempfile
@@ -306,6 +311,53 @@ def main():
         check(len(colours) > 100 and non_white > 0.3 * total,
               f"the screenshot {shot} ({width}x{height}) is not blank: {len(colours)} colours, "
               f"{100 * non_white / total:.0f}% not white")
+        # 8. A gateway whose one viewer slot is taken: the page says so.
+        full = wf.start_gateway(bin_dir, server.address, ["--max_viewers=1"])
+        try:
+            host, port = full.address.rsplit(":", 1)
+
+            def post(path, body):  # a connection each: idle ones close after 2 s
+                c = http.client.HTTPConnection(host, int(port), timeout=60)
+                c.request("POST", path, body)
+                data = c.getresponse().read()
+                c.close()
+                return data
+            body = {"map": map_name, "budget": {"time_ms": "600000"},
+                    "start": dict(zip("xyzt", wf.SMALL_CITY_START)),
+                    "goal": dict(zip("xyzt", wf.SMALL_CITY_GOAL))}
+            for key in ("start", "goal"):
+                body[key]["theta"] = body[key].pop("t")
+            held = json.loads(post("/api/plans", json.dumps(body)))["id"]
+            viewer = socket.create_connection((host, int(port)), timeout=60)
+            viewer.sendall(f"GET /api/plans/{held}/events HTTP/1.1\r\nHost: {host}\r\n\r\n"
+                           .encode())
+            check(viewer.recv(4096).startswith(b"HTTP/1.1 200"), "another viewer holds the one slot")
+            # It keeps reading, as a browser would: a viewer that stops reading
+            # is dropped once a write has waited 5 s.
+            def drain():
+                try:
+                    while viewer.recv(1 << 16):
+                        pass
+                except OSError:
+                    pass  # closed by this test
+            threading.Thread(target=drain, daemon=True).start()
+            driver.get(f"http://{full.address}/")
+            wf.wait_for(lambda: js(driver, "window.rp && window.rp.ready === true"), 120, "the page")
+            for key, pose in (("start", wf.SMALL_CITY_START), ("goal", wf.SMALL_CITY_GOAL)):
+                driver.execute_script(f"rp.setEndpoint('{key}', arguments[0]);",
+                                      dict(zip(("x", "y", "z", "theta"), pose)))
+            set_value(driver, "budget-ms", 60000)
+            click(driver, "plan")
+            wf.wait_for(lambda: js(driver, "rp.state") == "failed", 120, "the refusal")
+            shown = js(driver, "document.getElementById('error-message').textContent")
+            check(shown == "this gateway holds at most 1 event streams at once (--max_viewers) and "
+                           "all are open; try again when a viewer has closed",
+                  f"the page shows the viewer limit: {shown}")
+            post(f"/api/plans/{held}/cancel", "")
+            post(f"/api/plans/{js(driver, 'rp.planId')}/cancel", "")
+            viewer.close()
+        finally:
+            full.stop()
         print("PASS", flush=True)
     finally:
         if driver is not None:

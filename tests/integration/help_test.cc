@@ -196,6 +196,14 @@ TEST(HelpTest, RiskplanFpgaShim) {
               {}});
 }
 
+TEST(HelpTest, RiskplanWeb) {
+  ExpectHelp({"riskplan-web",
+              {"listen", "server", "assets_dir", "leaflet_dir", "chartjs_dir", "max_viewers",
+               "request_threads", "max_running_plans", "max_kept_plans", "max_events_per_plan",
+               "heartbeat_ms", "rpc_timeout_ms"},
+              {}});
+}
+
 // Benchmarks with Abseil flags share the programs' help.
 TEST(HelpTest, BenchPlannerAndCompareAndFingerprint) {
 #if !defined(HAVE_RISKPLAN_BENCH_PLANNER) || !defined(HAVE_RISKPLAN_BENCH_COMPARE) || \

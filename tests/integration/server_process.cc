@@ -54,6 +54,14 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartShim(
   return Spawn(std::move(args), "riskplan-fpga-shim listening on ", timeout);
 }
 
+absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartWeb(
+    const std::string& server_address, std::vector<std::string> flags, absl::Duration timeout) {
+  std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-web",
+                                   "--listen=127.0.0.1:0", "--server=" + server_address};
+  args.insert(args.end(), flags.begin(), flags.end());
+  return Spawn(std::move(args), "riskplan-web listening on ", timeout);
+}
+
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Spawn(std::vector<std::string> args,
                                                                     const std::string& ready_prefix,
                                                                     absl::Duration timeout,

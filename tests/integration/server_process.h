@@ -31,6 +31,12 @@ class ServerProcess {
   static absl::StatusOr<std::unique_ptr<ServerProcess>> StartShim(
       std::vector<std::string> flags, absl::Duration timeout = absl::Seconds(60));
 
+  // Starts RISKPLAN_BIN_DIR/riskplan-web --listen=127.0.0.1:0
+  // --server=`server_address` with `flags`, up to its readiness line.
+  static absl::StatusOr<std::unique_ptr<ServerProcess>> StartWeb(
+      const std::string& server_address, std::vector<std::string> flags = {},
+      absl::Duration timeout = absl::Seconds(60));
+
   // Kills the server (SIGKILL) if it still runs.
   ~ServerProcess();
 

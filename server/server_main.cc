@@ -22,7 +22,9 @@
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "accel/engine_metrics.h"
+#include "accel/net.h"
 #include "accel/risk_engine.h"
+#include "accel/tls_context.h"
 #include "cmdline/help.h"
 #include "core/planners/planner.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
@@ -125,6 +127,17 @@ ABSL_FLAG(std::string, fpga_shims, "",
           "Accelerator engine: riskplan-fpga-shim endpoints HOST:PORT,... (docs/shim-protocol.md); "
           "their workers' states are logged (event accel_worker) and exported as "
           "riskplan_accel_* metrics");
+ABSL_FLAG(std::string, fpga_tls_ca, "",
+          "Accelerator engine: TLS to the shims; the CA that signed their certificates (any "
+          "--fpga_tls_* flag turns TLS on; plaintext to a shim that is not on loopback needs "
+          "--allow_plaintext)");
+ABSL_FLAG(std::string, fpga_tls_cert, "",
+          "Accelerator engine: this server's client certificate for the shims (PEM; they "
+          "require one)");
+ABSL_FLAG(std::string, fpga_tls_key, "", "Accelerator engine: the private key of --fpga_tls_cert");
+ABSL_FLAG(std::string, fpga_tls_server_name, "",
+          "Accelerator engine: the name the shims' certificates must carry (default: each "
+          "endpoint's host)");
 ABSL_FLAG(bool, accel_caller_runs, true,
           "Accelerator engine: callers compute chunks of their own batches too (false: every "
           "chunk goes to the workers and boards)");
@@ -342,6 +355,28 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(accel::KernelPreci
   for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
     engine_options.fpga_shims.emplace_back(s);
   }
+  const accel::TlsFiles shim_tls{.cert = absl::GetFlag(FLAGS_fpga_tls_cert),
+                                 .key = absl::GetFlag(FLAGS_fpga_tls_key),
+                                 .ca = absl::GetFlag(FLAGS_fpga_tls_ca),
+                                 .crl = "",
+                                 .flag_prefix = "fpga_"};
+  if (shim_tls.enabled() || !absl::GetFlag(FLAGS_fpga_tls_server_name).empty()) {
+    absl::StatusOr<std::shared_ptr<accel::TlsContext>> tls = accel::TlsContext::ForClient(shim_tls);
+    if (!tls.ok()) return tls.status();
+    engine_options.fpga.client.tls = *std::move(tls);
+    engine_options.fpga.client.tls_server_name = absl::GetFlag(FLAGS_fpga_tls_server_name);
+  } else if (!absl::GetFlag(FLAGS_allow_plaintext)) {
+    for (const std::string& endpoint : engine_options.fpga_shims) {
+      std::string host;
+      int port = 0;
+      if (accel::SplitHostPort(endpoint, &host, &port).ok() && !accel::IsLoopbackHost(host)) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "--fpga_shims: %s is not on loopback and no --fpga_tls_* flags were given: "
+            "plaintext to it needs --allow_plaintext (docs/security.md)",
+            endpoint));
+      }
+    }
+  }
   // Worker state changes (a board going down, coming back) go to the same
   // structured log as the RPCs, so one stream tells what happened when.
   engine_options.on_worker_event = [](const accel::WorkerEvent& e) {
@@ -351,9 +386,10 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(accel::KernelPreci
       accel::RiskEngine::Create(engine_options);
   if (!engine.ok()) return engine.status();
   LogEvent("accel_engine",
-           absl::StrFormat("cpu_workers=%d fpga_shims=[%s] caller_runs=%d cpu_kernel=%s",
-                           engine_options.cpu_workers, shims, engine_options.caller_runs,
-                           accel::KernelPrecisionName(cpu_kernel)));
+           absl::StrFormat("cpu_workers=%d fpga_shims=[%s] fpga_tls=%s caller_runs=%d cpu_kernel=%s",
+                           engine_options.cpu_workers, shims,
+                           engine_options.fpga.client.tls != nullptr ? "on" : "off",
+                           engine_options.caller_runs, accel::KernelPrecisionName(cpu_kernel)));
   return engine;
 }
 

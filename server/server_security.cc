@@ -1,28 +1,16 @@
 #include "server/server_security.h"
 
-#include <arpa/inet.h>
-
 #include <utility>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "accel/net.h"
 #include "accel/tls_files.h"
 #include "grpcpp/security/tls_certificate_provider.h"
 #include "grpcpp/security/tls_credentials_options.h"
 
 namespace riskplan::server {
-
-bool IsLoopbackHost(const std::string& host) {
-  std::string h = host;
-  if (h.size() >= 2 && h.front() == '[' && h.back() == ']') h = h.substr(1, h.size() - 2);
-  if (h == "localhost") return true;
-  in_addr v4{};
-  if (inet_pton(AF_INET, h.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
-  in6_addr v6{};
-  if (inet_pton(AF_INET6, h.c_str(), &v6) == 1) return IN6_IS_ADDR_LOOPBACK(&v6);
-  return false;
-}
 
 absl::StatusOr<ServerSecurity> MakeServerSecurity(const ServerSecurityOptions& o,
                                                   const std::string& listen_host) {
@@ -43,7 +31,7 @@ absl::StatusOr<ServerSecurity> MakeServerSecurity(const ServerSecurityOptions& o
       return absl::InvalidArgumentError(
           "--tls_client_ca and --tls_crl_dir need TLS: give --tls_cert and --tls_key too");
     }
-    if (!o.allow_plaintext && !IsLoopbackHost(listen_host)) {
+    if (!o.allow_plaintext && !accel::IsLoopbackHost(listen_host)) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "--listen=%s:... is not a loopback address and no --tls_cert/--tls_key were given: "
           "plaintext there needs --allow_plaintext (docs/security.md)",

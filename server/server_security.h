@@ -44,9 +44,6 @@ struct ServerSecurity {
   std::string summary;
 };
 
-// True for 127.0.0.0/8, ::1 and "localhost".
-bool IsLoopbackHost(const std::string& host);
-
 // Checks the options and their files and builds the port's credentials.
 // `listen_host` is --listen's host. Refuses: a key without a certificate or
 // the reverse, a client CA, CRL or reload interval without TLS, any bad file

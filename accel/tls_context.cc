@@ -7,6 +7,7 @@
 #include <openssl/x509v3.h>
 #include <sys/stat.h>
 
+#include <csignal>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -18,6 +19,18 @@ namespace riskplan::accel {
 namespace {
 
 constexpr absl::Duration kReloadCheckEvery = absl::Seconds(1);
+
+// OpenSSL writes to its socket with write(2), not send(MSG_NOSIGNAL) as
+// accel/net.cc does: a peer that has gone would kill the process with
+// SIGPIPE. A process that speaks TLS on the shim link ignores the signal, so
+// that a broken connection is the EPIPE error it should be.
+void IgnoreSigpipe() {
+  static const bool done = [] {
+    std::signal(SIGPIPE, SIG_IGN);
+    return true;
+  }();
+  (void)done;
+}
 
 std::string Errors() {
   std::string text;
@@ -93,6 +106,7 @@ std::vector<TlsContext::Stamp> TlsContext::Stamps() const {
 }
 
 absl::StatusOr<SSL_CTX*> TlsContext::Build() const {
+  IgnoreSigpipe();
   const TlsFiles& f = files_;
   if (!f.cert.empty()) {
     if (absl::Status s = CheckCertificateAndKey(Flag(f, "tls_cert", f.cert),

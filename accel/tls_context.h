@@ -14,6 +14,9 @@
 // session. A change that does not load (a half-done swap, a key that does not
 // match) is refused and the previous context stays; the next look retries.
 //
+// A process that builds a context ignores SIGPIPE from then on (OpenSSL
+// writes with write(2); see tls_context.cc).
+//
 // Thread-safe.
 #ifndef RISKPLAN_ACCEL_TLS_CONTEXT_H_
 #define RISKPLAN_ACCEL_TLS_CONTEXT_H_

@@ -612,8 +612,17 @@ int RunLoad(const CliOptions& o, RiskplanClient& client) {
     load.plan_request = *request;
   } else if (o.rpc == "ping") {
     load.rpc = LoadRpc::kPing;
+  } else if (o.rpc == "connect") {
+    if (o.mode != "closed") return Usage("--rpc=connect runs in closed loop only");
+    load.rpc = LoadRpc::kConnect;
+    load.new_channel = [&o] {
+      grpc::ChannelArguments own;
+      own.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+      // The files were read once already (main), so this cannot fail.
+      return *MakeChannel(o.server, o.connection, own);
+    };
   } else {
-    return Usage(absl::StrFormat("--rpc=%s: must be eval, plan or ping", o.rpc));
+    return Usage(absl::StrFormat("--rpc=%s: must be eval, plan, ping or connect", o.rpc));
   }
   if (o.mode != "closed" && o.mode != "open") {
     return Usage(absl::StrFormat("--mode=%s: must be closed or open", o.mode));

@@ -87,7 +87,9 @@ ABSL_FLAG(std::string, plan_firmware, "px4",
 ABSL_FLAG(double, target_level_of_safety, 1e-6,
           "plan, eval: target level of safety, expected casualties per flight hour (SORA: 1e-6); "
           "the risk per flight hour is compared with it");
-ABSL_FLAG(std::string, rpc, "eval", "load: the RPC to load, eval | plan | ping");
+ABSL_FLAG(std::string, rpc, "eval",
+          "load: the RPC to load, eval | plan | ping | connect (a new connection, TLS handshake "
+          "included, and one Ping on it, per call; closed loop only)");
 ABSL_FLAG(std::string, mode, "closed",
           "load: closed (--concurrency callers back to back) or open (--rate calls per second, "
           "latency from the intended send time)");

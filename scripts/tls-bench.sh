@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # What TLS costs on the gRPC port, measured in one run (docs/benchmarks.md,
-# "TLS"): two servers side by side on 127.0.0.1, one plaintext and one with
-# mutual TLS and a token file, loaded in turns with the same settings by
+# "TLS"): three servers side by side on 127.0.0.1, plaintext, mutual TLS, and
+# mutual TLS with a token file, loaded in turns with the same settings by
 # `riskplan load` (closed loop): Ping, EvaluateRisk, and Connect (a new
 # connection, TLS handshake included, and one Ping per call). Each pair of
 # phases runs REPEAT times, alternating, and the report gives the median of
@@ -54,10 +54,15 @@ start() {
 }
 start plain
 plain_port=$port
+start mtls --tls_cert="$work/server.pem" --tls_key="$work/server.key" \
+  --tls_client_ca="$work/ca-a.pem"
+mtls_port=$port
 start tls --tls_cert="$work/server.pem" --tls_key="$work/server.key" \
   --tls_client_ca="$work/ca-a.pem" --token_file="$work/tokens.txt"
 tls_port=$port
 plain=(--server=127.0.0.1:$plain_port)
+mtls=(--server=localhost:$mtls_port --tls_ca="$work/ca-a.pem" --tls_cert="$work/client.pem"
+  --tls_key="$work/client.key")
 tls=(--server=localhost:$tls_port --tls_ca="$work/ca-a.pem" --tls_cert="$work/client.pem"
   --tls_key="$work/client.key" --token_file="$work/operator.token")
 eval_flags=(--polyline='300,375,240; 1000,400,250; 1700,1625,250; 3000,3500,260')
@@ -72,6 +77,7 @@ phase() {
 for i in $(seq "$REPEAT"); do
   for rpc in ping eval connect; do
     phase "$rpc-plain-$i" "$rpc" "${plain[@]}"
+    phase "$rpc-mtls-$i" "$rpc" "${mtls[@]}"
     phase "$rpc-tls-$i" "$rpc" "${tls[@]}"
   done
 done
@@ -87,7 +93,7 @@ def med(values):
 print(f"{'rpc':8} {'link':6} {'ok calls/s':>12} {'p50 ms':>8} {'p99 ms':>8} {'errors':>7}")
 summary = {}
 for rpc in ("ping", "eval", "connect"):
-    for link in ("plain", "tls"):
+    for link in ("plain", "mtls", "tls"):
         runs = [load(f"{rpc}-{link}-{i}") for i in range(1, repeat + 1)]
         rps = med([r["ok_rps"] for r in runs])
         p50 = med([r["latency_ms"]["p50"] for r in runs])
@@ -95,7 +101,10 @@ for rpc in ("ping", "eval", "connect"):
         errors = sum(r["errors"] for r in runs)
         summary[(rpc, link)] = (rps, p50)
         print(f"{rpc:8} {link:6} {rps:12.1f} {p50:8.3f} {p99:8.3f} {errors:7d}")
+print("mtls: mutual TLS; tls: mutual TLS and tokens (what deploy/ runs)")
 for rpc in ("ping", "eval", "connect"):
-    (rp, lp), (rt, lt) = summary[(rpc, "plain")], summary[(rpc, "tls")]
-    print(f"{rpc}: TLS/plaintext throughput {rt / rp:.3f}, p50 latency {lt / lp:.3f}x")
+    rp, lp = summary[(rpc, "plain")]
+    for link in ("mtls", "tls"):
+        rt, lt = summary[(rpc, link)]
+        print(f"{rpc}: {link}/plaintext throughput {rt / rp:.3f}, p50 latency {lt / lp:.3f}x")
 EOF

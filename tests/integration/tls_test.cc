@@ -41,6 +41,9 @@ std::string Sha256Hex(const std::string& token) {
 class TlsTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
+    // These tests choose every server's security themselves: the suite-wide
+    // switch (tests/integration/server_process.h) would change their meaning.
+    unsetenv("RISKPLAN_TEST_SECURITY");
     absl::StatusOr<std::unique_ptr<TestPki>> pki = TestPki::Create();
     ASSERT_TRUE(pki.ok()) << pki.status();
     pki_ = pki->release();
@@ -422,6 +425,60 @@ TEST_F(TlsTest, HealthIsOpenOnItsPlaintextPortAndOnTheTlsPort) {
   client::RiskplanClient c = Client(*server, Mutual("client"));
   ASSERT_TRUE(c.CheckHealth("riskplan.v1.Planner", &status).ok());
   EXPECT_EQ(status, grpc::health::v1::HealthCheckResponse::SERVING);
+}
+
+// --- The shim link, end to end: the real riskplan-fpga-shim and server.
+
+TEST_F(TlsTest, ShimRefusesPlaintextOffLoopbackAndTlsWithoutAClientCa) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> plaintext =
+      ServerProcess::StartShim({"--device=model", "--listen=0.0.0.0:0"});
+  ASSERT_FALSE(plaintext.ok());
+  EXPECT_THAT(std::string(plaintext.status().message()),
+              HasSubstr("--listen is not a loopback address and no --tls_cert"));
+  absl::StatusOr<std::unique_ptr<ServerProcess>> one_way = ServerProcess::StartShim(
+      {"--device=model", "--tls_cert=" + P("server.pem"), "--tls_key=" + P("server.key")});
+  ASSERT_FALSE(one_way.ok());
+  EXPECT_THAT(std::string(one_way.status().message()),
+              HasSubstr("--tls_client_ca is required with TLS: the shim must authenticate the server"));
+  absl::StatusOr<std::unique_ptr<ServerProcess>> expired = ServerProcess::StartShim(
+      {"--device=model", "--tls_cert=" + P("expired.pem"), "--tls_key=" + P("expired.key"),
+       "--tls_client_ca=" + P("ca-a.pem")});
+  ASSERT_FALSE(expired.ok());
+  EXPECT_THAT(std::string(expired.status().message()),
+              HasSubstr("--tls_cert=" + P("expired.pem") + ": the certificate expired on"));
+}
+
+TEST_F(TlsTest, ServerEvaluatesThroughAShimOverMutualTlsAndTheShimRefusesAServerWithoutCertificate) {
+  // server.pem is for 127.0.0.1 too: it serves as the shim's certificate.
+  auto shim = ServerProcess::StartShim({"--device=model", "--tls_cert=" + P("server.pem"),
+                                        "--tls_key=" + P("server.key"),
+                                        "--tls_client_ca=" + P("ca-a.pem")});
+  ASSERT_TRUE(shim.ok()) << shim.status();
+  std::unique_ptr<ServerProcess> server =
+      Start({"--fpga_shims=" + (*shim)->address(), "--cpu_workers=0", "--accel_caller_runs=false",
+             "--fpga_tls_ca=" + P("ca-a.pem"), "--fpga_tls_cert=" + P("client.pem"),
+             "--fpga_tls_key=" + P("client.key")});
+  ASSERT_NE(server, nullptr);
+  // The worker's handshake and known-answer batch, over TLS.
+  const std::string up = "probing\\\",\\\"to\\\":\\\"up";
+  ASSERT_THAT(WaitForLog(*server, up), HasSubstr(up));
+  // Only the board computes (no CPU workers, callers do not run chunks).
+  client::RiskplanClient c = Client(*server, {});
+  v1::EvaluateRiskResponse response;
+  const grpc::Status status = c.EvaluateRisk(SmallCityPolyline(), &response, absl::Seconds(60));
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  EXPECT_GT(response.risk(), 0.0);
+
+  // A server with the shim's CA but no certificate of its own is refused by
+  // the shim, which says so; the server's worker says why.
+  std::unique_ptr<ServerProcess> anonymous =
+      Start({"--fpga_shims=" + (*shim)->address(), "--cpu_workers=0",
+             "--fpga_tls_ca=" + P("ca-a.pem")});
+  ASSERT_NE(anonymous, nullptr);
+  EXPECT_THAT(WaitForLog(*anonymous, "certificate required"),
+              HasSubstr("probe failed: shim " + (*shim)->address()));
+  EXPECT_THAT(WaitForLog(**shim, "peer did not return a certificate"),
+              HasSubstr("refused 127.0.0.1:"));
 }
 
 // --- Rotation.

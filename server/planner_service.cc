@@ -269,13 +269,17 @@ void PlannerService::StopEvaluations() {
 grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanTrajectory(
     grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* raw_request) {
   // Every check comes before admission, so a request that will fail never
-  // holds a slot: a draining server refuses first, then parsing, validation,
-  // the endpoints (when the model is ready), admission and the plan pool.
+  // holds a slot: the caller's token and role first (an unauthorised caller
+  // learns nothing of the server's state), then a draining server refuses,
+  // then parsing, validation, the endpoints (when the model is ready),
+  // admission and the plan pool.
   Caller caller;
   const grpc::Status authorized = authorizer_->Check(*ctx, "PlanTrajectory", &caller);
   v1::PlanRequest request;
   absl::Status parsed = authorized.ok() ? ParseRequest(*raw_request, &request) : absl::OkStatus();
   absl::StatusOr<PlanSpec> spec =
+      // Not parsed nor validated for a refused caller; `authorized` is the
+      // status the call ends with.
       !authorized.ok() ? absl::PermissionDeniedError("not authorized")
       : parsed.ok()    ? ValidatePlanRequest(request, maps_, options_.limits)
                        : parsed;

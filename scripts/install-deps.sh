@@ -11,6 +11,8 @@ PACKAGES=(
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   prometheus-cpp-dev
   libgdal-dev libproj-dev gdal-bin
+  # The TLS tests make their certificates with the openssl CLI.
+  openssl
 )
 # Extra packages a caller asks for (e.g. the benchmark script adds OMPL).
 PACKAGES+=("$@")

@@ -15,6 +15,8 @@ PACKAGES=(
   # that its test drives (headless, through selenium and chromedriver).
   libcpp-httplib-dev libjs-leaflet libjs-chart.js
   chromium chromium-driver python3-selenium
+  # The TLS tests make their certificates with the openssl CLI.
+  openssl
 )
 # Extra packages a caller asks for (e.g. the benchmark script adds OMPL).
 PACKAGES+=("$@")

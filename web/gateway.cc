@@ -4,6 +4,7 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -100,9 +101,8 @@ absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& add
   int port = -1;
   if (colon == std::string::npos || colon == 0 ||
       !absl::SimpleAtoi(address.substr(colon + 1), &port) || port < 0 || port > 65535) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("--listen has value '%s'; it must be HOST:PORT, port in [0, 65535]",
-                        address));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--listen has value '%s'; it must be HOST:PORT, port in [0, 65535]", address));
   }
   std::string host = address.substr(0, colon);
   if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
@@ -145,10 +145,10 @@ absl::Status CheckGatewayOptions(const GatewayOptions& o) {
   if (o.heartbeat < absl::Milliseconds(10) || o.heartbeat > absl::Minutes(5)) {
     return absl::InvalidArgumentError("--heartbeat_ms must be in [10, 300000]");
   }
-  for (const auto& [flag, dir] : {std::pair<const char*, const std::string*>{"assets_dir",
-                                                                             &o.assets_dir},
-                                  {"leaflet_dir", &o.leaflet_dir},
-                                  {"chartjs_dir", &o.chartjs_dir}}) {
+  for (const auto& [flag, dir] :
+       {std::pair<const char*, const std::string*>{"assets_dir", &o.assets_dir},
+        {"leaflet_dir", &o.leaflet_dir},
+        {"chartjs_dir", &o.chartjs_dir}}) {
     if (!IsDirectory(*dir)) {
       return absl::InvalidArgumentError(
           absl::StrFormat("--%s has value '%s', which is not a directory", flag, *dir));
@@ -157,9 +157,9 @@ absl::Status CheckGatewayOptions(const GatewayOptions& o) {
   return absl::OkStatus();
 }
 
-Gateway::Gateway(GatewayOptions options)
+Gateway::Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel)
     : options_(std::move(options)),
-      client_(MakeServerChannel(options_.server)),
+      client_(std::move(channel)),
       plans_(&client_.stub(), options_.plans),
       http_(std::make_unique<httplib::Server>()) {
   // One thread per connection for as long as it lives: event streams hold
@@ -262,8 +262,8 @@ void Gateway::Routes() {
     if (req.has_param("max_side_cells")) {
       int side = 0;
       if (!absl::SimpleAtoi(req.get_param_value("max_side_cells"), &side)) {
-        return SendError(res, 400, "INVALID_ARGUMENT",
-                         "max_side_cells must be an integer", "gateway");
+        return SendError(res, 400, "INVALID_ARGUMENT", "max_side_cells must be an integer",
+                         "gateway");
       }
       // The server allows 4096 (16 Mi cells); as JSON for a browser that is
       // some 200 MB on the gateway for one request.
@@ -306,10 +306,10 @@ void Gateway::Routes() {
   http_->Post("/api/export", [this](const Request& req, Response& res) {
     const std::string format = req.get_param_value("format");
     if (format != "geojson" && format != "plan" && format != "kml") {
-      return SendError(res, 400, "INVALID_ARGUMENT",
-                       absl::StrFormat("format has value '%s'; it must be geojson, plan or kml",
-                                       format),
-                       "gateway");
+      return SendError(
+          res, 400, "INVALID_ARGUMENT",
+          absl::StrFormat("format has value '%s'; it must be geojson, plan or kml", format),
+          "gateway");
     }
     v1::EvaluateRiskRequest request;
     if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
@@ -334,9 +334,8 @@ void Gateway::Routes() {
       content_type = "application/vnd.google-earth.kml+xml";
     }
     if (!text.ok()) return SendGatewayError(res, text.status());
-    res.set_header("Content-Disposition",
-                   absl::StrFormat("attachment; filename=\"riskplan-%s.%s\"", request.map(),
-                                   format));
+    res.set_header("Content-Disposition", absl::StrFormat("attachment; filename=\"riskplan-%s.%s\"",
+                                                          request.map(), format));
     res.set_content(std::move(*text), content_type);
   });
 

@@ -32,13 +32,13 @@ namespace riskplan::web {
 
 struct GatewayOptions {
   std::string listen = "127.0.0.1:8080";  // HOST:PORT; port 0 picks a free one
-  ServerLinkOptions server;                // the gRPC link to riskplan-server
+  ServerLinkOptions server;               // the gRPC link to riskplan-server
   // Directories served as /, /lib/leaflet/ and /lib/chart.js/.
   std::string assets_dir;
   std::string leaflet_dir = "/usr/share/javascript/leaflet";
   std::string chartjs_dir = "/usr/share/javascript/chart.js";
-  int max_viewers = 64;      // event streams open at once
-  int request_threads = 16;  // threads for everything else
+  int max_viewers = 64;                         // event streams open at once
+  int request_threads = 16;                     // threads for everything else
   absl::Duration heartbeat = absl::Seconds(5);  // comment on an idle event stream
   int retry_ms = 1000;                          // the browsers' reconnection delay
   PlanRegistryLimits plans;
@@ -51,7 +51,8 @@ absl::Status CheckGatewayOptions(const GatewayOptions& options);
 
 class Gateway {
  public:
-  explicit Gateway(GatewayOptions options);
+  // A gateway to the server on `channel` (MakeServerChannel(options.server)).
+  Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel);
   ~Gateway();  // Stop()
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;

@@ -94,10 +94,10 @@ void PlanSession::Run(v1::Planner::Stub* stub) {
     cancelled = cancel_requested_;
   }
   if (cancelled && status.error_code() == grpc::StatusCode::CANCELLED) {
-    Append("cancelled",
-           nlohmann::json{{"message", "cancelled from the page; the server stopped the plan"}}
-               .dump(),
-           PlanState::kCancelled);
+    Append(
+        "cancelled",
+        nlohmann::json{{"message", "cancelled from the page; the server stopped the plan"}}.dump(),
+        PlanState::kCancelled);
     return;
   }
   // The server's own words, untouched: the page shows them as they are.
@@ -142,8 +142,8 @@ void PlanSession::Stop() {
   context_.TryCancel();
 }
 
-bool PlanSession::WaitForEvents(uint64_t after_id, absl::Time deadline,
-                                std::vector<PlanEvent>* out, size_t max_bytes) {
+bool PlanSession::WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
+                                size_t max_bytes) {
   absl::MutexLock lock(&mu_);
   auto ready = [this, after_id]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     return last_id_ > after_id || state_ != PlanState::kRunning || stopped_;

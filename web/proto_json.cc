@@ -20,8 +20,9 @@ absl::Status FromJson(absl::string_view json, google::protobuf::Message* message
   const auto status = google::protobuf::util::JsonStringToMessage(
       google::protobuf::StringPiece(json.data(), json.size()), message, options);
   if (!status.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "the body is not a ", message->GetDescriptor()->name(), " in JSON: ", std::string(status.message())));
+    return absl::InvalidArgumentError(absl::StrCat("the body is not a ",
+                                                   message->GetDescriptor()->name(),
+                                                   " in JSON: ", std::string(status.message())));
   }
   return absl::OkStatus();
 }

@@ -4,8 +4,8 @@
 
 namespace riskplan::web {
 
-std::shared_ptr<grpc::Channel> MakeServerChannel(const ServerLinkOptions& options) {
-  return client::MakeChannel(options.address);
+absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeServerChannel(const ServerLinkOptions& options) {
+  return client::MakeChannel(options.address, options.connection);
 }
 
 }  // namespace riskplan::web

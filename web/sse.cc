@@ -17,10 +17,10 @@ std::string FormatSseEvent(uint64_t id, absl::string_view type, absl::string_vie
   size_t start = 0;
   while (true) {
     const size_t end = data.find_first_of("\r\n", start);
-    absl::StrAppend(&out, "data: ", data.substr(start, end == absl::string_view::npos
-                                                            ? absl::string_view::npos
-                                                            : end - start),
-                    "\n");
+    absl::StrAppend(
+        &out, "data: ",
+        data.substr(start, end == absl::string_view::npos ? absl::string_view::npos : end - start),
+        "\n");
     if (end == absl::string_view::npos) break;
     start = end + 1;
     if (data[end] == '\r' && start < data.size() && data[start] == '\n') ++start;

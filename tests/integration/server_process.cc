@@ -134,6 +134,15 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartWeb(
     const std::string& server_address, std::vector<std::string> flags, absl::Duration timeout) {
   std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-web",
                                    "--listen=127.0.0.1:0", "--server=" + server_address};
+  // RISKPLAN_TEST_SECURITY=tls: the gateway is a client of a server that
+  // wants mutual TLS and a token, like the suite's other clients.
+  if (const TestSecurity* security = Security(); security != nullptr) {
+    const client::ConnectionOptions& c = security->connection;
+    for (std::string flag : {"--tls_ca=" + c.tls_ca, "--tls_cert=" + c.tls_cert,
+                             "--tls_key=" + c.tls_key, "--token_file=" + c.token_file}) {
+      args.push_back(std::move(flag));
+    }
+  }
   args.insert(args.end(), flags.begin(), flags.end());
   return Spawn(std::move(args), "riskplan-web listening on ", timeout);
 }

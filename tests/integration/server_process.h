@@ -40,7 +40,8 @@ class ServerProcess {
       std::vector<std::string> flags, absl::Duration timeout = absl::Seconds(60));
 
   // Starts RISKPLAN_BIN_DIR/riskplan-web --listen=127.0.0.1:0
-  // --server=`server_address` with `flags`, up to its readiness line.
+  // --server=`server_address` with `flags`, up to its readiness line (with
+  // RISKPLAN_TEST_SECURITY=tls, also the client's TLS and token flags).
   static absl::StatusOr<std::unique_ptr<ServerProcess>> StartWeb(
       const std::string& server_address, std::vector<std::string> flags = {},
       absl::Duration timeout = absl::Seconds(60));

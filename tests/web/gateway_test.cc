@@ -271,7 +271,7 @@ TEST_F(GatewayTest, TheServersRefusalArrivesAsTheServerWroteIt) {
     return p;
   }();
   request.mutable_budget()->set_iterations(10);
-  client::RiskplanClient direct(server_->address());
+  client::RiskplanClient direct(server_->Channel());  // TLS and token when the suite uses them
   const grpc::Status expected = direct.Plan(request, [](const v1::PlanUpdate&) { return true; });
   ASSERT_EQ(expected.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 

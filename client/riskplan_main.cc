@@ -9,18 +9,10 @@
 
 #include "absl/flags/flag.h"
 #include "client/commands.h"
+#include "client/connection_flags.h"
 #include "cmdline/help.h"
 
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server address, HOST:PORT");
-ABSL_FLAG(std::string, tls_ca, "",
-          "TLS: CA bundle (PEM) that signed the server's certificate; any --tls_* flag turns TLS "
-          "on (without --tls_ca the system's roots are trusted)");
-ABSL_FLAG(std::string, tls_cert, "", "Mutual TLS: this client's certificate chain (PEM)");
-ABSL_FLAG(std::string, tls_key, "", "Mutual TLS: the private key of --tls_cert (PEM)");
-ABSL_FLAG(std::string, tls_server_name, "",
-          "TLS: the name the server's certificate must carry, when it is not --server's host");
-ABSL_FLAG(std::string, token_file, "",
-          "File holding a bearer token, sent with every call (docs/security.md)");
 ABSL_FLAG(std::string, map, "demo-city", "Map name (see `riskplan maps`)");
 ABSL_FLAG(int64_t, timeout_ms, 0,
           "Deadline of each call, ms (0: 10 s for maps, 30 s for eval and load calls, none for "
@@ -129,9 +121,8 @@ riskplan::cmdline::ProgramHelp Help() {
     a.insert(a.end(), b.begin(), b.end());
     return a;
   };
-  const std::vector<std::string> connection = {"server",   "tls_ca",          "tls_cert",
-                                                "tls_key",  "tls_server_name", "token_file",
-                                                "timeout_ms"};
+  const std::vector<std::string> connection = {
+      "server", "tls_ca", "tls_cert", "tls_key", "tls_server_name", "token_file", "timeout_ms"};
   help.commands = {
       {"maps", "the server's maps", "  riskplan maps [--json]", join(connection, {"json"})},
       {"eval", "risk, length and admissibility of a trajectory",
@@ -182,7 +173,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "  riskplan load --rpc=eval --polyline='1000,1000,250;2000,1000,250' --concurrency=4 "
        "--ceiling",
        join(join(join(connection, {"map", "rpc", "mode", "concurrency", "rate", "duration_s",
-                  "max_outstanding", "ceiling", "report_json"}),
+                                   "max_outstanding", "ceiling", "report_json"}),
                  join(trajectory, join({"samples", "params"}, two_tier))),
             planning)},
   };
@@ -207,11 +198,7 @@ int main(int argc, char** argv) {
 
   riskplan::client::CliOptions o;
   o.server = absl::GetFlag(FLAGS_server);
-  o.connection.tls_ca = absl::GetFlag(FLAGS_tls_ca);
-  o.connection.tls_cert = absl::GetFlag(FLAGS_tls_cert);
-  o.connection.tls_key = absl::GetFlag(FLAGS_tls_key);
-  o.connection.tls_server_name = absl::GetFlag(FLAGS_tls_server_name);
-  o.connection.token_file = absl::GetFlag(FLAGS_token_file);
+  o.connection = riskplan::client::ConnectionOptionsFromFlags();
   o.map = absl::GetFlag(FLAGS_map);
   o.timeout = absl::Milliseconds(absl::GetFlag(FLAGS_timeout_ms));
   o.json = absl::GetFlag(FLAGS_json);

@@ -11,6 +11,7 @@
 #include "absl/flags/flag.h"
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "client/connection_flags.h"
 #include "cmdline/help.h"
 #include "web/gateway.h"
 
@@ -18,16 +19,6 @@ ABSL_FLAG(std::string, listen, "127.0.0.1:8080",
           "HTTP address for browsers, HOST:PORT; port 0 picks a free port, and "
           "'riskplan-web listening on HOST:PORT' on stdout gives the real one");
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server's gRPC address, HOST:PORT");
-ABSL_FLAG(std::string, tls_ca, "",
-          "TLS to the server: CA bundle (PEM) that signed its certificate; any --tls_* flag turns "
-          "TLS on (without --tls_ca the system's roots are trusted)");
-ABSL_FLAG(std::string, tls_cert, "", "Mutual TLS: the gateway's certificate chain (PEM)");
-ABSL_FLAG(std::string, tls_key, "", "Mutual TLS: the private key of --tls_cert (PEM)");
-ABSL_FLAG(std::string, tls_server_name, "",
-          "TLS: the name the server's certificate must carry, when it is not --server's host");
-ABSL_FLAG(std::string, token_file, "",
-          "File holding the bearer token the gateway sends with every call to the server "
-          "(docs/security.md); every viewer acts with its identity and role");
 ABSL_FLAG(std::string, assets_dir, "",
           "Directory of the page's own files (empty: web/static of the source tree it was "
           "built from)");
@@ -53,11 +44,7 @@ int Run() {
   riskplan::web::GatewayOptions options;
   options.listen = absl::GetFlag(FLAGS_listen);
   options.server.address = absl::GetFlag(FLAGS_server);
-  options.server.connection.tls_ca = absl::GetFlag(FLAGS_tls_ca);
-  options.server.connection.tls_cert = absl::GetFlag(FLAGS_tls_cert);
-  options.server.connection.tls_key = absl::GetFlag(FLAGS_tls_key);
-  options.server.connection.tls_server_name = absl::GetFlag(FLAGS_tls_server_name);
-  options.server.connection.token_file = absl::GetFlag(FLAGS_token_file);
+  options.server.connection = riskplan::client::ConnectionOptionsFromFlags();
   options.assets_dir = absl::GetFlag(FLAGS_assets_dir);
   if (options.assets_dir.empty()) options.assets_dir = RISKPLAN_WEB_ASSETS_DIR;
   options.leaflet_dir = absl::GetFlag(FLAGS_leaflet_dir);

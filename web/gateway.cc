@@ -12,6 +12,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/time/clock.h"
 #include "client/exports.h"
 #include "geo/export/geojson.h"
@@ -155,6 +156,16 @@ absl::Status CheckGatewayOptions(const GatewayOptions& o) {
     }
   }
   return absl::OkStatus();
+}
+
+absl::StatusOr<std::string> FindAssetsDir(const std::vector<std::string>& candidates) {
+  for (const std::string& dir : candidates) {
+    struct stat st;
+    if (stat((dir + "/index.html").c_str(), &st) == 0 && S_ISREG(st.st_mode)) return dir;
+  }
+  return absl::NotFoundError(absl::StrCat("the page's files (index.html) are in none of ",
+                                          absl::StrJoin(candidates, ", "),
+                                          "; give their directory with --assets_dir"));
 }
 
 Gateway::Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel)

@@ -16,6 +16,7 @@
 #include <atomic>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -48,6 +49,12 @@ struct GatewayOptions {
 
 // InvalidArgument naming the option when `options` cannot work.
 absl::Status CheckGatewayOptions(const GatewayOptions& options);
+
+// The page's directory when --assets_dir is not given: the first of
+// `candidates` that holds index.html (riskplan-web tries the source tree's
+// web/static, then share/riskplan/web beside its own bin/, then the install
+// prefix's); NotFound naming every candidate when none does.
+absl::StatusOr<std::string> FindAssetsDir(const std::vector<std::string>& candidates);
 
 class Gateway {
  public:

@@ -4,9 +4,12 @@
 #include <signal.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <system_error>
 #include <thread>
+#include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/status/statusor.h"
@@ -21,7 +24,7 @@ ABSL_FLAG(std::string, listen, "127.0.0.1:8080",
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server's gRPC address, HOST:PORT");
 ABSL_FLAG(std::string, assets_dir, "",
           "Directory of the page's own files (empty: web/static of the source tree it was "
-          "built from)");
+          "built from, else the installed share/riskplan/web)");
 ABSL_FLAG(std::string, leaflet_dir, "/usr/share/javascript/leaflet",
           "Directory of Leaflet (Debian's libjs-leaflet)");
 ABSL_FLAG(std::string, chartjs_dir, "/usr/share/javascript/chart.js",
@@ -40,13 +43,37 @@ ABSL_FLAG(int, rpc_timeout_ms, 60000, "Deadline of the unary calls to the server
 
 namespace {
 
+// Where the page's files may be, in order: the source tree this program was
+// built from, then where `cmake --install` puts them: share/riskplan/web
+// beside the program's bin/ (wherever the installed tree was moved), then
+// the configured install prefix.
+std::vector<std::string> AssetsDirCandidates() {
+  std::vector<std::string> dirs = {RISKPLAN_WEB_ASSETS_DIR};
+  std::error_code error;
+  const std::filesystem::path program = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    dirs.push_back((program.parent_path() / RISKPLAN_WEB_INSTALLED_ASSETS_FROM_BIN)
+                       .lexically_normal()
+                       .string());
+  }
+  dirs.push_back(RISKPLAN_WEB_INSTALLED_ASSETS_DIR);
+  return dirs;
+}
+
 int Run() {
   riskplan::web::GatewayOptions options;
   options.listen = absl::GetFlag(FLAGS_listen);
   options.server.address = absl::GetFlag(FLAGS_server);
   options.server.connection = riskplan::client::ConnectionOptionsFromFlags();
   options.assets_dir = absl::GetFlag(FLAGS_assets_dir);
-  if (options.assets_dir.empty()) options.assets_dir = RISKPLAN_WEB_ASSETS_DIR;
+  if (options.assets_dir.empty()) {
+    absl::StatusOr<std::string> found = riskplan::web::FindAssetsDir(AssetsDirCandidates());
+    if (!found.ok()) {
+      std::fprintf(stderr, "riskplan-web: %s\n", std::string(found.status().message()).c_str());
+      return 2;
+    }
+    options.assets_dir = *std::move(found);
+  }
   options.leaflet_dir = absl::GetFlag(FLAGS_leaflet_dir);
   options.chartjs_dir = absl::GetFlag(FLAGS_chartjs_dir);
   options.max_viewers = absl::GetFlag(FLAGS_max_viewers);
@@ -92,8 +119,8 @@ int Run() {
   const std::string host = options.listen.substr(0, options.listen.rfind(':'));
   std::printf("riskplan-web listening on %s:%d\n", host.c_str(), *port);
   std::fflush(stdout);
-  std::fprintf(stderr, "riskplan-web: serving the page for riskplan-server at %s\n",
-               options.server.address.c_str());
+  std::fprintf(stderr, "riskplan-web: serving the page from %s for riskplan-server at %s\n",
+               options.assets_dir.c_str(), options.server.address.c_str());
 
   int signal_number = 0;
   sigwait(&stop, &signal_number);

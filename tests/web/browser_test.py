@@ -1,26 +1,35 @@
 #!/usr/bin/env python3
 """The page in a real browser: Debian's Chromium, headless, driven by
 selenium through chromedriver, against the real riskplan-server (a 2 km
-demo-city placed on WGS84) and the real riskplan-web, both on port 0.
+demo-city in local metres, and the same placed on WGS84) and the real
+riskplan-web, both on port 0.
 
 In order, each step checking behaviour and numbers, never speed:
-  1. the page loads and draws every layer (hillshade, density, shelter, no-fly,
-     landing sites: one marker per site the server lists), the legend and the
-     scale bar; the risk layer at a chosen height is drawn too;
+  1. the page loads the local map in Leaflet's CRS.Simple and draws every
+     layer (hillshade, density, shelter, no-fly, landing sites: one marker per
+     site the server lists), the legend and the scale bar (in the map's
+     metres); the risk layer at a chosen height is drawn too;
   2. start and goal are set by clicks on the map, with a drag for the heading;
-     the cursor's readout shows WGS84 on this geo-referenced map;
+     the cursor's readout shows the local position;
   3. a plan with an iteration budget streams: at least two improvements are
      drawn, their risks never increase, the plot holds one point per
      improvement, the iteration count reaches the budget, and the final
      trajectory's risk profile (EvaluateRisk per sample) gives the plan's risk;
-  4. the trajectory downloads as GeoJSON, in WGS84 near the map's origin; a
-     polyline drawn by three clicks is evaluated (its length, its profile);
+  4. a polyline drawn by three clicks is evaluated (its length, its profile);
   5. a second plan (ten minutes of budget) is cancelled from the page, and
      the server's riskplan_running_plans gauge goes from 1 back to 0;
   6. a start below the terrain: the page shows the server's error exactly as
      the riskplan CLI prints it;
   7. a screenshot, checked not to be blank;
-  8. on a gateway whose one viewer slot another viewer holds, the page shows
+  8. the geo-referenced map, chosen in the page's selector, is shown in WGS84
+     (Leaflet's EPSG:3857): every layer image (and the risk layer) placed at
+     the server's WGS84 corners to 1e-6 degrees, the landing sites at their
+     WGS84 positions, a scale bar in true metres, start and goal by clicks
+     sent as start_wgs84 and goal_wgs84, a plan whose improvements never
+     increase in risk and whose drawn trajectory starts and ends within a few
+     metres of them, its GeoJSON download, a polyline drawn by clicks; then
+     the local map again, in CRS.Simple;
+  9. on a gateway whose one viewer slot another viewer holds, the page shows
      the gateway's refusal (--max_viewers) when its plan's stream is refused.
 
 Usage: browser_test.py BIN_DIR OUT_DIR
@@ -92,14 +101,14 @@ def png_pixels(data):
     return width, height, bpp, rows
 
 
-def click_drag(driver, x_m, y_m, drag_px):
-    """Presses the map at local (x_m, y_m), drags by drag_px = (right, up)
-    pixels and releases."""
+def click_drag(driver, at, drag_px):
+    """Presses the map at the page position at = (lat, lng) (on a local map
+    (y, x) in metres), drags by drag_px = (right, up) pixels and releases."""
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
 
     element = driver.find_element(By.ID, "map")
-    point = js(driver, f"(() => {{ const p = rp.leaflet.latLngToContainerPoint([{y_m}, {x_m}]); "
+    point = js(driver, f"(() => {{ const p = rp.leaflet.latLngToContainerPoint([{at[0]!r}, {at[1]!r}]); "
                        "return [p.x, p.y]; })()")
     size = element.size
     # Selenium 4 offsets from the element's centre.
@@ -121,13 +130,56 @@ def click(driver, element_id):
     driver.find_element(By.ID, element_id).click()
 
 
-def set_endpoint(driver, which, pose):
-    x, y, z, _ = pose
+def set_endpoint(driver, which, at, z):
+    """Sets the start or goal by a click at the page position `at` (lat, lng)."""
+    driver.execute_script(f"rp.endpoints.{which} = null;")
     set_value(driver, "altitude", z)
     click(driver, f"set-{which}")
     # 40 px right and 40 px up: a heading of 45 degrees (north-east).
-    click_drag(driver, x, y, (40, 40))
+    click_drag(driver, at, (40, 40))
     return wf.wait_for(lambda: js(driver, f"rp.endpoints.{which}"), 30, f"the {which} to be set")
+
+
+def local_at(pose):
+    """The page position of a local (x, y, ...) on a map in CRS.Simple."""
+    return (pose[1], pose[0])
+
+
+def select_map(driver, name):
+    driver.execute_script("const s = document.getElementById('map-select'); s.value = arguments[0];"
+                          " s.dispatchEvent(new Event('change'));", name)
+    wf.wait_for(lambda: js(driver, f"rp.map && rp.map.name === {name!r} && "
+                                   "rp.layersDrawn['landing sites'] === true"), 120,
+                f"the page to show map {name}")
+    check(js(driver, "document.getElementById('error').hidden"), f"map {name} shown without error")
+
+
+def scale_metres_per_px(driver):
+    """What the scale bar says: metres per pixel."""
+    scale = js(driver, "(() => { const e = document.querySelector('.leaflet-control-scale-line');"
+                       " return [e.textContent, e.getBoundingClientRect().width]; })()")
+    value, unit = scale[0].split()
+    return float(value) * (1000 if unit == "km" else 1) / scale[1], scale[0]
+
+
+def plan_and_check(driver, iterations):
+    """Plans with an iteration budget; checks the stream was drawn with risk
+    never increasing. The improvements' risks."""
+    set_value(driver, "budget-ms", 0)
+    set_value(driver, "budget-iterations", iterations)
+    driver.execute_script("rp.profile = null;")
+    click(driver, "plan")
+    wf.wait_for(lambda: js(driver, "rp.state") in ("finished", "failed"), 300,
+                "the plan to finish")
+    error_text = js(driver, "document.getElementById('error').hidden ? '' : "
+                            "document.getElementById('error').textContent")
+    check(js(driver, "rp.state") == "finished", f"the plan finished (page error: {error_text!r})")
+    improvements = js(driver, "rp.improvements")
+    risks = [i["risk"] for i in improvements]
+    check(len(improvements) >= 2, f"{len(improvements)} improvements drawn as they arrived")
+    check(all(b <= a for a, b in zip(risks, risks[1:])),
+          f"risk never increases: {risks[0]:.4e} ... {risks[-1]:.4e}")
+    return risks
 
 
 def main():
@@ -135,7 +187,8 @@ def main():
     os.makedirs(out_dir, exist_ok=True)
     work = tempfile.mkdtemp(prefix="riskplan-browser-test-")
     maps_dir = os.path.join(work, "maps")
-    map_name = wf.write_geo_city(bin_dir, maps_dir)
+    map_name = wf.write_local_city(bin_dir, maps_dir)
+    geo_name = wf.write_geo_city(bin_dir, maps_dir)
     server = wf.start_server(bin_dir, maps_dir)
     gateway = wf.start_gateway(bin_dir, server.address, ["--heartbeat_ms=500"])
     downloads = os.path.join(work, "downloads")
@@ -148,6 +201,9 @@ def main():
         wf.wait_for(lambda: js(driver, "window.rp && window.rp.ready === true"), 120,
                     "the page to load its map and layers")
         check(js(driver, "document.getElementById('error').hidden"), "the page loaded without error")
+        check(js(driver, "rp.map.name") == map_name and js(driver, "rp.crs") == "Simple" and
+              js(driver, "rp.leaflet.options.crs === L.CRS.Simple"),
+              f"the local map {map_name} is shown in Leaflet's CRS.Simple")
 
         # 1. Layers, legend, scale bar.
         drawn = js(driver, "rp.layersDrawn")
@@ -160,7 +216,10 @@ def main():
         maps = json.loads(subprocess.run(
             ["curl", "-sf", f"http://{gateway.address}/api/maps"], check=True,
             capture_output=True).stdout)["maps"]
-        sites = len(maps[0]["landing_sites"])
+        local_map = next(m for m in maps if m["name"] == map_name)
+        check(not local_map.get("geo") and not local_map.get("bounds_wgs84"),
+              f"{map_name} has no geo-reference")
+        sites = len(local_map["landing_sites"])
         markers = js(driver, "document.querySelectorAll('path.landing-site').length")
         check(sites > 0 and markers == sites, f"{markers} landing-site markers for {sites} sites")
         legend = js(driver, "document.getElementById('legend').textContent")
@@ -168,6 +227,13 @@ def main():
               "the legend names density, no-fly zones and landing sites")
         scale = js(driver, "document.querySelector('.leaflet-control-scale-line').textContent")
         check(scale.endswith(" m") or scale.endswith(" km"), f"a scale bar of '{scale}'")
+        bar_m_per_px, scale = scale_metres_per_px(driver)
+        map_m_per_px = wf.SMALL_CITY_SIZE_M / js(
+            driver, f"rp.leaflet.latLngToContainerPoint([0, {wf.SMALL_CITY_SIZE_M}]).x - "
+                    "rp.leaflet.latLngToContainerPoint([0, 0]).x")
+        check(abs(bar_m_per_px / map_m_per_px - 1) < 0.02,
+              f"the scale bar '{scale}' measures the map's metres ({bar_m_per_px:.3f} m per pixel, "
+              f"the map {map_m_per_px:.3f})")
         set_value(driver, "risk-height", 120)
         click(driver, "risk-show")
         wf.wait_for(lambda: js(driver, "rp.layersDrawn['risk layer'] === true"), 120,
@@ -179,8 +245,8 @@ def main():
         metres_per_px = js(driver, "(() => { const a = rp.leaflet.containerPointToLatLng([0, 0]),"
                                    " b = rp.leaflet.containerPointToLatLng([1, 0]);"
                                    " return b.lng - a.lng; })()")
-        start = set_endpoint(driver, "start", wf.SMALL_CITY_START)
-        goal = set_endpoint(driver, "goal", wf.SMALL_CITY_GOAL)
+        start = set_endpoint(driver, "start", local_at(wf.SMALL_CITY_START), wf.SMALL_CITY_START[2])
+        goal = set_endpoint(driver, "goal", local_at(wf.SMALL_CITY_GOAL), wf.SMALL_CITY_GOAL[2])
         for name, pose, want in (("start", start, wf.SMALL_CITY_START),
                                  ("goal", goal, wf.SMALL_CITY_GOAL)):
             check(abs(pose["x"] - want[0]) <= 2 * metres_per_px and
@@ -191,24 +257,17 @@ def main():
                   f"{name} heading {pose['theta']:.3f} rad from the drag (north-east)")
 
         cursor = js(driver, "document.getElementById('cursor').textContent")
-        check("°" in cursor, f"the cursor shows local and WGS84 positions: {cursor}")
+        check(cursor.startswith("x, y: ") and "°" not in cursor,
+              f"the cursor shows the local position: {cursor}")
 
         # 3. A plan with an iteration budget: improvements arrive and are drawn.
         iterations = 3000
-        set_value(driver, "budget-ms", 0)
-        set_value(driver, "budget-iterations", iterations)
-        click(driver, "plan")
-        wf.wait_for(lambda: js(driver, "rp.state") in ("finished", "failed"), 300,
-                    "the plan to finish")
-        error_text = js(driver, "document.getElementById('error').textContent")
-        check(js(driver, "rp.state") == "finished", f"the plan finished (page error: {error_text!r})")
-        improvements = js(driver, "rp.improvements")
-        risks = [i["risk"] for i in improvements]
-        check(len(improvements) >= 2, f"{len(improvements)} improvements drawn as they arrived")
-        check(all(b <= a for a, b in zip(risks, risks[1:])),
-              f"risk never increases: {risks[0]:.4e} ... {risks[-1]:.4e}")
+        risks = plan_and_check(driver, iterations)
+        check("start" in js(driver, "rp.lastPlanRequest") and
+              "start_wgs84" not in js(driver, "rp.lastPlanRequest"),
+              "the plan's start and goal were sent in local metres")
         points = js(driver, "Chart.getChart('risk-chart').data.datasets[0].data.length")
-        check(points == len(improvements), f"the plot holds {points} points, one per improvement")
+        check(points == len(risks), f"the plot holds {points} points, one per improvement")
         check(js(driver, "document.getElementById('iterations').textContent") == str(iterations),
               f"the iteration count reached {iterations}")
         check(js(driver, "document.querySelectorAll('path.best-trajectory').length") == 1,
@@ -223,28 +282,13 @@ def main():
               f"EvaluateRisk of the final waypoints gives the plan's risk {final_risk:.6e}")
         check(final_risk == risks[-1], "the final risk is the last improvement's")
 
-        # 4. Download the trajectory as GeoJSON.
-        click(driver, "download-geojson")
-        path = wf.wait_for(lambda: [p for p in glob.glob(os.path.join(downloads, "*.geojson"))],
-                           60, "the GeoJSON download")[0]
-        geojson = json.load(open(path))
-        coords = []
-        for feature in geojson.get("features", []):
-            geometry = feature.get("geometry") or {}
-            if geometry.get("type") == "LineString":
-                coords += geometry["coordinates"]
-        check(len(coords) >= 2, f"the GeoJSON ({os.path.basename(path)}) holds a line of "
-                                f"{len(coords)} points")
-        check(all(abs(c[0] - wf.GEO_ORIGIN[1]) < 0.05 and abs(c[1] - wf.GEO_ORIGIN[0]) < 0.05
-                  for c in coords), "in WGS84, within the 2 km map placed at (49.6, 6.1)")
-
-        # A polyline drawn by clicks, evaluated.
+        # 4. A polyline drawn by clicks, evaluated.
         driver.execute_script("rp.profile = null; document.getElementById('evaluation').textContent = '';")
         click(driver, "draw-polyline")
-        corners = [(500.0, 500.0), (1000.0, 900.0), (1500.0, 1200.0)]
+        corners_m = [(500.0, 500.0), (1000.0, 900.0), (1500.0, 1200.0)]
         set_value(driver, "altitude", 250)
-        for x, y in corners:
-            click_drag(driver, x, y, (0, 0))
+        for x, y in corners_m:
+            click_drag(driver, (y, x), (0, 0))
         wf.wait_for(lambda: js(driver, "document.querySelectorAll('path.drawn-polyline').length") == 1,
                     30, "the drawn polyline")
         click(driver, "evaluate-polyline")
@@ -253,7 +297,7 @@ def main():
                                        ".includes('samples')"), 120, "the polyline's evaluation")
         evaluation = js(driver, "document.getElementById('evaluation').textContent")
         length = js(driver, "rp.profile.length_m")
-        want = sum(math.dist(a, b) for a, b in zip(corners, corners[1:]))
+        want = sum(math.dist(a, b) for a, b in zip(corners_m, corners_m[1:]))
         check(abs(length - want) < 4 * 2 * metres_per_px,
               f"a 3-point polyline evaluated: {evaluation}")
 
@@ -278,7 +322,7 @@ def main():
 
         # 6. The server's error, verbatim.
         bad = (wf.SMALL_CITY_START[0], wf.SMALL_CITY_START[1], 100.0, 0.785)
-        start = set_endpoint(driver, "start", bad)
+        start = set_endpoint(driver, "start", local_at(bad), bad[2])
         set_value(driver, "budget-ms", 1000)
         click(driver, "plan")
         wf.wait_for(lambda: js(driver, "rp.state") == "failed", 60, "the plan to be refused")
@@ -311,7 +355,141 @@ def main():
         check(len(colours) > 100 and non_white > 0.3 * total,
               f"the screenshot {shot} ({width}x{height}) is not blank: {len(colours)} colours, "
               f"{100 * non_white / total:.0f}% not white")
-        # 8. A gateway whose one viewer slot is taken: the page says so.
+        # 8. The geo-referenced map, in WGS84: Leaflet's default CRS (EPSG:3857).
+        select_map(driver, geo_name)
+        check(js(driver, "rp.crs") == "EPSG:3857" and
+              js(driver, "rp.leaflet.options.crs === L.CRS.EPSG3857"),
+              f"the geo-referenced map {geo_name} is shown in EPSG:3857, a new Leaflet map")
+        geo = next(m for m in maps if m["name"] == geo_name)
+        corners = [(c["lat_deg"], c["lon_deg"]) for c in geo["bounds_wgs84"]["corners"]]
+
+        def box(c):
+            """The latitude/longitude box the page places a layer image on:
+            each edge at the mean of its two corners (SW, SE, NE, NW)."""
+            return [(c[0][0] + c[1][0]) / 2, (c[0][1] + c[3][1]) / 2,
+                    (c[2][0] + c[3][0]) / 2, (c[1][1] + c[2][1]) / 2]
+
+        def image_bounds():
+            return js(driver, "Object.fromEntries(Object.entries(rp.overlays)"
+                              ".filter(([n, l]) => l instanceof L.ImageOverlay).map(([n, l]) => {"
+                              " const b = l.getBounds();"
+                              " return [n, [b.getSouth(), b.getWest(), b.getNorth(), b.getEast()]]; }))")
+        want = box(corners)
+        # Each corner of the map lies within a metre of the box's (the local
+        # grid's edges are not quite parallels and meridians).
+        for c, b in zip(corners, [(want[0], want[1]), (want[0], want[3]), (want[2], want[3]),
+                                  (want[2], want[1])]):
+            check(wf.ground_distance_m(c, b) < 1.0,
+                  f"corner {c} within {wf.ground_distance_m(c, b):.2f} m of the layers' box")
+        bounds = image_bounds()
+        for name in ("terrain (hillshade)", "population density", "shelter", "no-fly zones"):
+            error = max(abs(a - b) for a, b in zip(bounds[name], want))
+            check(error <= 1e-6, f"layer '{name}' at the map's bounds_wgs84 (off by {error:.1e} deg)")
+        markers = js(driver, "rp.overlays['landing sites'].getLayers()"
+                             ".map((m) => [m.getLatLng().lat, m.getLatLng().lng])")
+        sites = [(s["wgs84"]["lat_deg"], s["wgs84"]["lon_deg"]) for s in geo["landing_sites"]]
+        check(len(markers) == len(sites) and
+              all(abs(a[0] - b[0]) < 1e-9 and abs(a[1] - b[1]) < 1e-9 for a, b in zip(markers, sites)),
+              f"{len(markers)} landing sites at their WGS84 positions")
+        bar_m_per_px, scale = scale_metres_per_px(driver)
+        # The map's 2 km south edge on the screen: true metres on the ground.
+        edge_px = js(driver, f"rp.leaflet.latLngToContainerPoint({list(corners[0])})"
+                             f".distanceTo(rp.leaflet.latLngToContainerPoint({list(corners[1])}))")
+        map_m_per_px = wf.SMALL_CITY_SIZE_M / edge_px
+        check(abs(bar_m_per_px / map_m_per_px - 1) < 0.02,
+              f"the scale bar '{scale}' gives true metres ({bar_m_per_px:.3f} m per pixel; the "
+              f"map's 2 km edge {map_m_per_px:.3f})")
+        set_value(driver, "risk-height", 120)
+        click(driver, "risk-show")
+        wf.wait_for(lambda: js(driver, "rp.layersDrawn['risk layer'] === true"), 120,
+                    "the risk layer on the geo-referenced map")
+        stride = max(1, math.ceil(max(geo["nx"], geo["ny"]) / 120))
+        risk_layer = json.loads(subprocess.run(
+            ["curl", "-sf", "-H", "Content-Type: application/json", "--data",
+             json.dumps({"map": geo_name, "stride": stride, "height_agl_m": 120,
+                         "max_over_headings": True}),
+             f"http://{gateway.address}/api/risk_layer"], check=True, capture_output=True).stdout)
+        want = box([(c["lat_deg"], c["lon_deg"]) for c in risk_layer["bounds_wgs84"]["corners"]])
+        error = max(abs(a - b) for a, b in zip(image_bounds()["risk layer"], want))
+        check(error <= 1e-6, f"the risk layer at its bounds_wgs84 (off by {error:.1e} deg)")
+
+        m_per_px = map_m_per_px
+        ends = {}
+        for which, pose in (("start", wf.SMALL_CITY_START), ("goal", wf.SMALL_CITY_GOAL)):
+            at = wf.bilinear_wgs84(corners, pose[0], pose[1])
+            got = set_endpoint(driver, which, at, pose[2])
+            off = wf.ground_distance_m(at, (got["lat_deg"], got["lon_deg"]))
+            check(off <= 2 * m_per_px and got["alt_m"] == pose[2],
+                  f"{which} at ({got['lat_deg']:.6f}, {got['lon_deg']:.6f}, {got['alt_m']}) by a "
+                  f"click, {off:.1f} m from the wanted point ({m_per_px:.2f} m per pixel)")
+            check(abs(got["heading_deg"] - 45) < 3,
+                  f"{which} heading {got['heading_deg']:.2f} deg from north, from the drag")
+            ends[which] = (got["lat_deg"], got["lon_deg"])
+        cursor = js(driver, "document.getElementById('cursor').textContent")
+        # The mouse was released 40 px east and 40 px north of the goal.
+        local = [float(v) for v in cursor.split("x, y: ")[1].rstrip(" m").split(",")]
+        want_xy = (wf.SMALL_CITY_GOAL[0] + 40 * m_per_px, wf.SMALL_CITY_GOAL[1] + 40 * m_per_px)
+        check("°" in cursor and math.dist(local, want_xy) < 3 * m_per_px + 1,
+              f"the cursor shows WGS84 and the local position: {cursor} (about {want_xy[0]:.0f}, "
+              f"{want_xy[1]:.0f} expected)")
+
+        risks = plan_and_check(driver, 3000)
+        request = js(driver, "rp.lastPlanRequest")
+        check("start_wgs84" in request and "goal_wgs84" in request and "start" not in request and
+              "goal" not in request, "the plan's start and goal were sent as start_wgs84 and goal_wgs84")
+        path = js(driver, "rp.bestPath.map((p) => [p.lat, p.lng])")
+        first, last = wf.ground_distance_m(path[0], ends["start"]), wf.ground_distance_m(path[-1], ends["goal"])
+        check(first < 3 and last < 3,
+              f"the drawn trajectory starts {first:.3f} m from the requested start and ends "
+              f"{last:.3f} m from the goal ({len(path)} points)")
+        server_path = js(driver, "rp.finalTrajectory.path_wgs84.map((g) => [g.lat_deg, g.lon_deg])")
+        check(path == server_path, "the trajectory is drawn from the server's path_wgs84")
+        check(js(driver, "rp.finalTrajectory.risk") == risks[-1], "the final risk is the last improvement's")
+        wf.wait_for(lambda: js(driver, "rp.profile !== null"), 120, "the final risk profile")
+        check(abs(js(driver, "rp.profile.risk") - risks[-1]) <= 1e-9 * risks[-1],
+              "EvaluateRisk of the final waypoints gives the plan's risk")
+
+        # Its GeoJSON download.
+        click(driver, "download-geojson")
+        path = wf.wait_for(lambda: [p for p in glob.glob(os.path.join(downloads, "*.geojson"))],
+                           60, "the GeoJSON download")[0]
+        geojson = json.load(open(path))
+        coords = []
+        for feature in geojson.get("features", []):
+            geometry = feature.get("geometry") or {}
+            if geometry.get("type") == "LineString":
+                coords += geometry["coordinates"]
+        check(len(coords) >= 2, f"the GeoJSON ({os.path.basename(path)}) holds a line of "
+                                f"{len(coords)} points")
+        check(all(abs(c[0] - wf.GEO_ORIGIN[1]) < 0.05 and abs(c[1] - wf.GEO_ORIGIN[0]) < 0.05
+                  for c in coords), "in WGS84, within the 2 km map placed at (49.6, 6.1)")
+
+        check(wf.ground_distance_m((coords[0][1], coords[0][0]), ends["start"]) < 3,
+              "the GeoJSON starts at the requested start")
+
+        # A polyline drawn by clicks on the geo-referenced map, sent in WGS84.
+        driver.execute_script("rp.profile = null; document.getElementById('evaluation').textContent = '';")
+        click(driver, "draw-polyline")
+        for x, y in corners_m:
+            click_drag(driver, wf.bilinear_wgs84(corners, x, y), (0, 0))
+        wf.wait_for(lambda: js(driver, "document.querySelectorAll('path.drawn-polyline').length") == 1,
+                    30, "the drawn polyline")
+        click(driver, "evaluate-polyline")
+        wf.wait_for(lambda: js(driver, "rp.profile && rp.profile.samples.length > 0 && "
+                                       "document.getElementById('evaluation').textContent"
+                                       ".includes('samples')"), 120, "the polyline's evaluation")
+        length = js(driver, "rp.profile.length_m")
+        want = sum(math.dist(a, b) for a, b in zip(corners_m, corners_m[1:]))
+        check(abs(length - want) < 4 * 2 * m_per_px,
+              f"a 3-point polyline evaluated: {length:.1f} m (about {want:.1f} m)")
+
+        # And back to the local map: CRS.Simple again.
+        select_map(driver, map_name)
+        check(js(driver, "rp.crs") == "Simple" and js(driver, "rp.leaflet.options.crs === L.CRS.Simple")
+              and js(driver, "rp.endpoints.start") is None,
+              f"the local map {map_name} is shown in CRS.Simple again, its start cleared")
+
+        # 9. A gateway whose one viewer slot is taken: the page says so.
         full = wf.start_gateway(bin_dir, server.address, ["--max_viewers=1"])
         try:
             host, port = full.address.rsplit(":", 1)

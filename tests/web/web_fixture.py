@@ -1,6 +1,6 @@
 """What the browser test and the web benchmark share: the real riskplan-server
-and riskplan-web started on port 0 (their readiness lines give the ports), a
-geo-referenced 2 km demo-city written with riskplan-tool, and Debian's
+and riskplan-web started on port 0 (their readiness lines give the ports), the
+2 km demo-city written with riskplan-tool (local, and placed on WGS84), and Debian's
 Chromium driven headless by Debian's chromedriver.
 
 Nothing here sleeps to synchronise: every wait polls a condition up to a
@@ -8,6 +8,7 @@ generous deadline, so a loaded 2-core machine is slower but not wrong.
 """
 
 import json
+import math
 import os
 import select
 import shutil
@@ -72,6 +73,32 @@ class Process:
                 self.proc.kill()
                 self.proc.wait()
         self.log.close()
+
+
+def write_local_city(bin_dir, maps_dir):
+    """The 2 km demo-city in its local metres only (no geo-reference)."""
+    subprocess.run([os.path.join(bin_dir, "riskplan-tool"), "write-map",
+                    f"--out={os.path.join(maps_dir, 'demo-city')}", f"--size_m={SMALL_CITY_SIZE_M}"],
+                   check=True, stdout=subprocess.DEVNULL)
+    return "demo-city"
+
+
+def bilinear_wgs84(corners, x, y, size_m=SMALL_CITY_SIZE_M):
+    """(lat, lon) of the local point (x, y) of a map at (0, 0) of size_m a side,
+    interpolated between its WGS84 corners (south-west, south-east, north-east,
+    north-west; ListMaps' bounds_wgs84): within centimetres on a 2 km map."""
+    u, v = x / size_m, y / size_m
+    w = ((1 - u) * (1 - v), u * (1 - v), u * v, (1 - u) * v)
+    return (sum(k * c[0] for k, c in zip(w, corners)), sum(k * c[1] for k, c in zip(w, corners)))
+
+
+def ground_distance_m(a, b):
+    """Great-circle distance between two (lat, lon) in degrees, m (a sphere:
+    good to a few millimetres over metres)."""
+    p1, p2 = math.radians(a[0]), math.radians(b[0])
+    dp, dl = p2 - p1, math.radians(b[1] - a[1])
+    h = math.sin(dp / 2) ** 2 + math.cos(p1) * math.cos(p2) * math.sin(dl / 2) ** 2
+    return 2 * 6371008.8 * math.asin(math.sqrt(h))
 
 
 def write_geo_city(bin_dir, maps_dir, name="lux-demo"):

@@ -1,12 +1,16 @@
 // riskplan-web's page. Talks only to the gateway (same origin): /api/... for
 // the calls (JSON forms of riskplan.v1's messages, docs/api.md) and
-// /api/plans/ID/events for a plan's Server-Sent Events. Coordinates are the
-// map's local metres (Leaflet's CRS.Simple: lat = y north, lng = x east).
+// /api/plans/ID/events for a plan's Server-Sent Events. A local map is shown
+// in its metres (Leaflet's CRS.Simple), a geo-referenced one in WGS84
+// (Leaflet's default EPSG:3857): see "Frames" below.
 'use strict';
 
 // What the tests and the latency measurement read.
 const rp = window.rp = {
   map: null,            // the MapInfo shown
+  crs: null,            // 'Simple' (local metres) or 'EPSG:3857' (WGS84)
+  leaflet: null,        // the L.map, made anew when the CRS changes
+  overlays: {},         // layer name -> Leaflet layer
   layersDrawn: {},      // layer name -> true once its image is on the map
   planId: null,
   state: 'idle',        // idle, starting, running, finished, failed, cancelled
@@ -14,6 +18,8 @@ const rp = window.rp = {
   latencies: [],        // ms from the gateway reading an update to the page drawing it
   finalTrajectory: null,
   profile: null,        // the last EvaluateRisk response drawn as a profile
+  bestPath: null,       // the newest trajectory as drawn: [lat, lng] per point
+  lastPlanRequest: null,
   downloads: [],        // file names saved
 };
 
@@ -103,18 +109,176 @@ function decades(values) {
 }
 
 // ---------------------------------------------------------------------------
-// The map
+// Frames: the one place where the page's positions (Leaflet LatLngs) meet the
+// API's. A map without geo-reference is shown in Leaflet's CRS.Simple in its
+// local metres (lat = y north, lng = x east), so a scale bar in metres is
+// exact; its requests are local. A geo-referenced map is shown in Leaflet's
+// default CRS (EPSG:3857) in WGS84 latitudes and longitudes, and its requests
+// carry the API's *_wgs84 fields: the server, which owns the projection,
+// converts them; trajectories are drawn from its path_wgs84.
 
-const map = L.map('map', { crs: L.CRS.Simple, minZoom: -8, maxZoom: 4, zoomSnap: 0.25, attributionControl: false });
-rp.leaflet = map;
-L.control.scale({ imperial: false, maxWidth: 160, position: 'bottomleft' }).addTo(map);
-const layerControl = L.control.layers(null, null, { collapsed: false, position: 'topright' }).addTo(map);
-const overlays = {};       // name -> Leaflet layer
-const legends = {};        // name -> HTML
-const legend = L.control({ position: 'bottomright' });
-legend.onAdd = () => { const d = L.DomUtil.create('div', 'legend'); d.id = 'legend'; return d; };
-legend.addTo(map);
-map.on('overlayadd overlayremove', drawLegend);
+const DEG = Math.PI / 180;
+const EARTH_RADIUS_M = 6371008.8;  // for a heading's arrow and a drag's direction only
+const turn = (a, full) => ((a % full) + full) % full;
+// The request field for a pose or point in either of the API's forms: a
+// GeoPose or GeoPoint3 goes in the *_wgs84 twin ('start_wgs84').
+const isWgs84 = (v) => v.lat_deg !== undefined;
+const apiField = (name, value) => (isWgs84(value) ? name + '_wgs84' : name);
+
+function frameFor(info) {
+  const c = info.geo && info.bounds_wgs84 && info.bounds_wgs84.corners;
+  return c && c.length === 4 ? geoFrame(info, c) : localFrame(info);
+}
+
+// Every frame has the same members:
+//   crs, leafletCrs, mapOptions  what the L.map is made with
+//   rect(x0, y0, w, h, geoBounds)  a local rectangle as LatLngBounds (geoBounds:
+//                                  the server's WGS84 corners of it, when given)
+//   pathOf(trajectory), sampleAt(sample), siteAt(landingSite): LatLngs to draw
+//   pose(at, to, z)      the API's pose pressed at `at` (LatLng) heading towards
+//                        `to` (null: north-east), at z m AMSL: a Pose, or a
+//                        GeoPose on a geo-referenced map
+//   poseAt(pose), poseBearing(pose)  where a pose is, and its direction of
+//                        flight in radians clockwise from the screen's up (on a
+//                        geo-referenced map a Pose too, as scripts may give one)
+//   point(at, z)         the API's polyline point (Point3, GeoPoint3)
+//   ahead(at, bearing, m)  the LatLng m metres from `at` in that direction
+//   poseText(pose), cursorText(at)
+
+function localFrame(info) {
+  return {
+    crs: 'Simple',
+    leafletCrs: L.CRS.Simple,
+    mapOptions: { minZoom: -8, maxZoom: 4 },
+    rect: (x0, y0, w, h) => L.latLngBounds([y0, x0], [y0 + h, x0 + w]),
+    pathOf: (t) => t.path.map((p) => [p.y, p.x]),
+    sampleAt: (s) => [s.y, s.x],
+    siteAt: (s) => [s.y, s.x],
+    pose: (at, to, z) => ({
+      x: at.lng, y: at.lat, z,
+      theta: to ? turn(Math.atan2(to.lat - at.lat, to.lng - at.lng), 2 * Math.PI) : Math.PI / 4,
+    }),
+    poseAt: (p) => L.latLng(p.y, p.x),
+    poseBearing: (p) => Math.PI / 2 - p.theta,
+    point: (at, z) => ({ x: at.lng, y: at.lat, z }),
+    ahead: (at, bearing, m) => L.latLng(at.lat + m * Math.cos(bearing), at.lng + m * Math.sin(bearing)),
+    poseText: (p) => `(${p.x.toFixed(1)}, ${p.y.toFixed(1)}, ${p.z.toFixed(1)}) m, heading ${(p.theta * 180 / Math.PI).toFixed(0)}°`,
+    cursorText: (at) => `x, y: ${at.lng.toFixed(0)}, ${at.lat.toFixed(0)} m`,
+  };
+}
+
+// corners: the map's WGS84 corners as ListMaps gives them, south-west,
+// south-east, north-east, north-west.
+function geoFrame(info, corners) {
+  const lat = corners.map((g) => g.lat_deg), lon = corners.map((g) => g.lon_deg);
+  // The WGS84 position of a local point, interpolated bilinearly between the
+  // four corners (the page links no projection: over a map of kilometres the
+  // azimuthal equidistant frame departs from it by centimetres). For what
+  // has no WGS84 form from the server: the cursor's local readout, a layer
+  // grid larger than the map.
+  const mix = (v, u, w) => (1 - u) * (1 - w) * v[0] + u * (1 - w) * v[1] + u * w * v[2] + (1 - u) * w * v[3];
+  const toLatLng = (x, y) => {
+    const u = (x - info.x0_m) / info.width_m, w = (y - info.y0_m) / info.height_m;
+    return L.latLng(mix(lat, u, w), mix(lon, u, w));
+  };
+  // Its exact inverse: Newton's method on the same bilinear form (nearly
+  // affine, so two or three steps reach the last digit).
+  const toLocal = (at) => {
+    let u = 0.5, w = 0.5;
+    for (let k = 0; k < 50; k++) {
+      const fa = mix(lat, u, w) - at.lat, fo = mix(lon, u, w) - at.lng;
+      const au = (1 - w) * (lat[1] - lat[0]) + w * (lat[2] - lat[3]);
+      const aw = (1 - u) * (lat[3] - lat[0]) + u * (lat[2] - lat[1]);
+      const ou = (1 - w) * (lon[1] - lon[0]) + w * (lon[2] - lon[3]);
+      const ow = (1 - u) * (lon[3] - lon[0]) + u * (lon[2] - lon[1]);
+      const det = au * ow - aw * ou;
+      const du = (fa * ow - fo * aw) / det, dw = (au * fo - ou * fa) / det;
+      u -= du; w -= dw;
+      if (Math.abs(du) + Math.abs(dw) < 1e-14) break;
+    }
+    return { x: info.x0_m + u * info.width_m, y: info.y0_m + w * info.height_m };
+  };
+  // Leaflet places an image on a latitude/longitude box; a local rectangle's
+  // edges are not quite parallels and meridians (the grid converges), so the
+  // box takes each edge at the mean of its two corners.
+  const box = (c) => L.latLngBounds(
+    [(c[0].lat + c[1].lat) / 2, (c[0].lng + c[3].lng) / 2],
+    [(c[2].lat + c[3].lat) / 2, (c[1].lng + c[2].lng) / 2]);
+  const ofGeo = (g) => L.latLng(g.lat_deg, g.lon_deg);
+  const same = (a, b) => Math.abs(a - b) < 1e-6;
+  return {
+    crs: 'EPSG:3857',
+    leafletCrs: L.CRS.EPSG3857,
+    mapOptions: { minZoom: 3, maxZoom: 22 },
+    rect: (x0, y0, w, h, geoBounds) => {
+      if (geoBounds && geoBounds.corners && geoBounds.corners.length === 4) return box(geoBounds.corners.map(ofGeo));
+      if (same(x0, info.x0_m) && same(y0, info.y0_m) && same(w, info.width_m) && same(h, info.height_m)) {
+        return box(corners.map(ofGeo));
+      }
+      return box([toLatLng(x0, y0), toLatLng(x0 + w, y0), toLatLng(x0 + w, y0 + h), toLatLng(x0, y0 + h)]);
+    },
+    pathOf: (t) => (t.path_wgs84 && t.path_wgs84.length ? t.path_wgs84.map(ofGeo) : t.path.map((p) => toLatLng(p.x, p.y))),
+    sampleAt: (s) => (s.wgs84 ? ofGeo(s.wgs84) : toLatLng(s.x, s.y)),
+    siteAt: (s) => (s.wgs84 ? ofGeo(s.wgs84) : toLatLng(s.x, s.y)),
+    // Directions on the ground (Leaflet's Mercator shows them as they are):
+    // north and east metres on a sphere, exact enough for a drag.
+    pose: (at, to, z) => ({
+      lat_deg: at.lat, lon_deg: at.lng, alt_m: z,
+      heading_deg: to ? turn(Math.atan2((to.lng - at.lng) * Math.cos(at.lat * DEG), to.lat - at.lat) / DEG, 360) : 45,
+    }),
+    poseAt: (p) => (isWgs84(p) ? ofGeo(p) : toLatLng(p.x, p.y)),
+    // A local theta is drawn as if grid north were true north (they differ
+    // by the grid convergence, hundredths of a degree on a city's map).
+    poseBearing: (p) => (isWgs84(p) ? p.heading_deg * DEG : Math.PI / 2 - p.theta),
+    point: (at, z) => ({ lat_deg: at.lat, lon_deg: at.lng, alt_m: z }),
+    ahead: (at, bearing, m) => L.latLng(at.lat + m * Math.cos(bearing) / EARTH_RADIUS_M / DEG,
+      at.lng + m * Math.sin(bearing) / (EARTH_RADIUS_M * Math.cos(at.lat * DEG)) / DEG),
+    poseText: (p) => (isWgs84(p)
+      ? `${p.lat_deg.toFixed(6)}°, ${p.lon_deg.toFixed(6)}°, ${p.alt_m.toFixed(1)} m AMSL, heading ${p.heading_deg.toFixed(0)}° from north`
+      : localFrame(info).poseText(p)),
+    cursorText: (at) => {
+      const p = toLocal(at);
+      return `${at.lat.toFixed(6)}°, ${at.lng.toFixed(6)}° · x, y: ${p.x.toFixed(0)}, ${p.y.toFixed(0)} m`;
+    },
+    toLatLng, toLocal,
+  };
+}
+
+// ---------------------------------------------------------------------------
+// The map. Leaflet cannot change the CRS of a live map: a map of the other
+// kind gets a new L.map, with its controls and layer groups.
+
+let frame = null;
+let map = null;
+let layerControl = null;
+const overlays = rp.overlays;  // name -> Leaflet layer
+const legends = {};            // name -> HTML
+// Layer groups of the live map.
+let endpointLayers = null, trajectories = null, bestLayer = null, polylineLayer = null;
+
+function makeMap() {
+  if (map) map.remove();  // and every layer on it
+  for (const name of Object.keys(overlays)) delete overlays[name];
+  for (const name of Object.keys(legends)) delete legends[name];
+  map = L.map('map', Object.assign({ crs: frame.leafletCrs, zoomSnap: 0.25, attributionControl: false }, frame.mapOptions));
+  rp.leaflet = map;
+  rp.crs = frame.crs;
+  L.control.scale({ imperial: false, maxWidth: 160, position: 'bottomleft' }).addTo(map);
+  layerControl = L.control.layers(null, null, { collapsed: false, position: 'topright' }).addTo(map);
+  const legend = L.control({ position: 'bottomright' });
+  legend.onAdd = () => { const d = L.DomUtil.create('div', 'legend'); d.id = 'legend'; return d; };
+  legend.addTo(map);
+  endpointLayers = { start: L.layerGroup().addTo(map), goal: L.layerGroup().addTo(map) };
+  trajectories = L.layerGroup().addTo(map);   // earlier improvements, faded
+  bestLayer = L.layerGroup().addTo(map);      // the newest
+  polylineLayer = L.layerGroup().addTo(map);  // a drawn polyline
+  map.on('overlayadd overlayremove', drawLegend);
+  map.on('mousemove', (e) => { $('cursor').textContent = frame.cursorText(e.latlng); });
+  map.on('mousedown', pressEndpoint);
+  map.on('mousemove', dragEndpoint);
+  map.on('mouseup', releaseEndpoint);
+  map.on('click', addPolylinePoint);
+}
 
 function drawLegend() {
   const parts = [];
@@ -130,20 +294,27 @@ function scaleLegend(title, stops, ticks) {
 }
 
 function addOverlay(name, layer, shown, legendHtml) {
-  if (overlays[name]) { layerControl.removeLayer(overlays[name]); map.removeLayer(overlays[name]); }
+  removeOverlay(name);
   overlays[name] = layer;
-  if (legendHtml) legends[name] = legendHtml; else delete legends[name];
+  if (legendHtml) legends[name] = legendHtml;
   layerControl.addOverlay(layer, name);
   if (shown) layer.addTo(map);
   rp.layersDrawn[name] = true;
   drawLegend();
 }
 
-function boundsOf(x0, y0, w, h) { return L.latLngBounds([y0, x0], [y0 + h, x0 + w]); }
+function removeOverlay(name) {
+  if (!overlays[name]) return;
+  layerControl.removeLayer(overlays[name]);
+  map.removeLayer(overlays[name]);
+  delete overlays[name];
+  delete legends[name];
+}
 
+// A grid layer (GetMapLayer, GetRiskLayer) as an image at its place.
 function rasterOverlay(layer, url) {
-  return L.imageOverlay(url, boundsOf(layer.x0_m, layer.y0_m, layer.nx * layer.cell_m, layer.ny * layer.cell_m),
-    { className: 'raster', opacity: 1 });
+  return L.imageOverlay(url, frame.rect(layer.x0_m, layer.y0_m, layer.nx * layer.cell_m, layer.ny * layer.cell_m,
+    layer.bounds_wgs84), { className: 'raster', opacity: 1 });
 }
 
 async function fetchLayer(name) {
@@ -167,9 +338,22 @@ function hillshade(layer) {
 }
 
 async function loadMap(info) {
+  const next = frameFor(info);
+  const remake = !frame || next.crs !== frame.crs;
+  frame = next;
+  if (remake) {
+    makeMap();
+    // A pick or a polyline under way belonged to the other frame.
+    picking = null; pressed = null; dragLine = null; drawing = null;
+    $('evaluate-polyline').disabled = true;
+    $('map').style.cursor = '';
+  }
   rp.map = info;
   rp.layersDrawn = {};
-  const b = boundsOf(info.x0_m, info.y0_m, info.width_m, info.height_m);
+  endpoints.start = endpoints.goal = null;
+  drawEndpoint('start'); drawEndpoint('goal');
+  removeOverlay('risk layer');
+  const b = frame.rect(info.x0_m, info.y0_m, info.width_m, info.height_m, info.bounds_wgs84);
   map.setMaxBounds(b.pad(0.5));
   map.fitBounds(b);
   const [density, shelter, terrain, nofly] = await Promise.all(
@@ -196,7 +380,7 @@ async function loadMap(info) {
     '<div class="item"><span class="key" style="background:rgba(220,0,0,0.6)"></span>no-fly zone</div>');
 
   const sites = L.layerGroup(info.landing_sites.map((s) =>
-    L.circleMarker([s.y, s.x], { radius: 5, color: '#064', fillColor: '#2c2', fillOpacity: 0.9, className: 'landing-site' })
+    L.circleMarker(frame.siteAt(s), { radius: 5, color: '#064', fillColor: '#2c2', fillOpacity: 0.9, className: 'landing-site' })
       .bindTooltip(`${s.name || 'landing site'} (${s.x.toFixed(0)}, ${s.y.toFixed(0)}) m, terrain ${s.terrain_m.toFixed(0)} m`)));
   addOverlay('landing sites', sites, true,
     '<div class="item"><span class="key" style="background:#2c2;border-radius:6px"></span>landing site</div>');
@@ -220,62 +404,40 @@ async function showRiskLayer() {
     const c = ramp(HOT, (Math.log10(v) - lo) / (hi - lo));
     return [c[0], c[1], c[2], 190];
   });
-  const overlay = L.imageOverlay(url, boundsOf(layer.x0_m, layer.y0_m, layer.nx * layer.cell_m, layer.ny * layer.cell_m),
-    { className: 'raster' });
-  addOverlay('risk layer', overlay, true,
+  addOverlay('risk layer', rasterOverlay(layer, url), true,
     scaleLegend(`risk M at ${layer.height_agl_m} m above ground${layer.max_over_headings ? ' (max over headings)' : ''}, casualties per failure`,
       HOT, Array.from({ length: hi - lo + 1 }, (_, k) => `1e${lo + k}`)) +
     '<div class="item"><span class="key" style="background:rgba(120,120,120,0.5)"></span>M not defined (impact outside the map)</div>');
 }
 
-// On a geo-referenced map, the WGS84 position of a local point, interpolated
-// bilinearly between the map's four corners as the server gave them: the
-// page links no projection, and over a map of kilometres the azimuthal
-// equidistant frame departs from that interpolation by centimetres. For
-// display only: requests stay in local metres, and the server converts.
-function approxWgs84(x, y) {
-  const info = rp.map;
-  const c = info.bounds_wgs84 && info.bounds_wgs84.corners;
-  if (!info.geo || !c || c.length !== 4) return null;
-  const u = (x - info.x0_m) / info.width_m, v = (y - info.y0_m) / info.height_m;
-  // South-west, south-east, north-east, north-west.
-  const mix = (k) => (1 - u) * (1 - v) * c[0][k] + u * (1 - v) * c[1][k] + u * v * c[2][k] + (1 - u) * v * c[3][k];
-  return { lat: mix('lat_deg'), lon: mix('lon_deg') };
-}
-
-map.on('mousemove', (e) => {
-  let text = `x, y: ${e.latlng.lng.toFixed(0)}, ${e.latlng.lat.toFixed(0)} m`;
-  const g = approxWgs84(e.latlng.lng, e.latlng.lat);
-  if (g) text += ` · ${g.lat.toFixed(5)}°, ${g.lon.toFixed(5)}°`;
-  $('cursor').textContent = text;
-});
-
 // ---------------------------------------------------------------------------
-// Start and goal: press, drag for the heading, release.
+// Start and goal: press, drag for the heading, release. Each is kept as the
+// API's pose that the request carries (a Pose, or a GeoPose on a
+// geo-referenced map).
 
 const endpoints = { start: null, goal: null };
 rp.endpoints = endpoints;
-const endpointLayers = { start: L.layerGroup().addTo(map), goal: L.layerGroup().addTo(map) };
 let picking = null;  // 'start' | 'goal' | null
 let pressed = null;  // the point pressed, while dragging
 let dragLine = null;
-
-function fmtPose(p) { return `(${p.x.toFixed(1)}, ${p.y.toFixed(1)}, ${p.z.toFixed(1)}) m, heading ${(p.theta * 180 / Math.PI).toFixed(0)}°`; }
 
 function drawEndpoint(which) {
   const p = endpoints[which];
   const g = endpointLayers[which];
   g.clearLayers();
-  if (!p) return;
+  if (!p) { $(which + '-text').textContent = which + ': –'; return; }
   const colour = which === 'start' ? '#06c' : '#a0a';
   const len = Math.max(rp.map.width_m, rp.map.height_m) / 30;
-  L.circleMarker([p.y, p.x], { radius: 7, color: colour, fillOpacity: 0.8, className: 'endpoint-' + which })
-    .bindTooltip(which + ' ' + fmtPose(p)).addTo(g);
-  L.polyline([[p.y, p.x], [p.y + len * Math.sin(p.theta), p.x + len * Math.cos(p.theta)]], { color: colour, weight: 3 }).addTo(g);
-  $(which + '-text').textContent = which + ': ' + fmtPose(p);
+  const at = frame.poseAt(p);
+  L.circleMarker(at, { radius: 7, color: colour, fillOpacity: 0.8, className: 'endpoint-' + which })
+    .bindTooltip(which + ' ' + frame.poseText(p)).addTo(g);
+  L.polyline([at, frame.ahead(at, frame.poseBearing(p), len)], { color: colour, weight: 3 }).addTo(g);
+  $(which + '-text').textContent = which + ': ' + frame.poseText(p);
 }
 
-// For scripts (the benchmark): a pose given exactly rather than by a click.
+// For scripts (the benchmark): a pose given exactly rather than by a click,
+// a Pose (local metres) or, on a geo-referenced map, a GeoPose; the request
+// carries it in its own form.
 rp.setEndpoint = (which, pose) => { endpoints[which] = pose; drawEndpoint(which); };
 
 function pick(which) {
@@ -284,33 +446,30 @@ function pick(which) {
   $('map').style.cursor = 'crosshair';
 }
 
-map.on('mousedown', (e) => {
+function pressEndpoint(e) {
   if (!picking) return;
   // With dragging off, the browser would select the page's text instead.
   L.DomEvent.preventDefault(e.originalEvent);
   pressed = e.latlng;
   dragLine = L.polyline([pressed, pressed], { color: '#333', dashArray: '4 4' }).addTo(map);
-});
-map.on('mousemove', (e) => { if (pressed && dragLine) dragLine.setLatLngs([pressed, e.latlng]); });
-map.on('mouseup', (e) => {
+}
+function dragEndpoint(e) { if (pressed && dragLine) dragLine.setLatLngs([pressed, e.latlng]); }
+function releaseEndpoint(e) {
   if (!picking || !pressed) return;
   const p0 = map.latLngToContainerPoint(pressed), p1 = map.latLngToContainerPoint(e.latlng);
-  const dx = e.latlng.lng - pressed.lng, dy = e.latlng.lat - pressed.lat;
   // A click without a drag keeps the heading north-east.
-  const theta = p0.distanceTo(p1) >= 5 ? (Math.atan2(dy, dx) + 2 * Math.PI) % (2 * Math.PI) : Math.PI / 4;
-  endpoints[picking] = { x: pressed.lng, y: pressed.lat, z: Number($('altitude').value), theta };
+  const to = p0.distanceTo(p1) >= 5 ? e.latlng : null;
+  endpoints[picking] = frame.pose(pressed, to, Number($('altitude').value));
   drawEndpoint(picking);
   if (dragLine) map.removeLayer(dragLine);
   dragLine = null; pressed = null; picking = null;
   map.dragging.enable();
   $('map').style.cursor = '';
-});
+}
 
 // ---------------------------------------------------------------------------
 // Plans: the live view
 
-const trajectories = L.layerGroup().addTo(map);   // earlier improvements, faded
-const bestLayer = L.layerGroup().addTo(map);      // the newest
 let source = null;
 let lastSeenId = 0;
 
@@ -336,7 +495,8 @@ function setState(s) {
 }
 
 function drawTrajectory(t) {
-  const path = t.path.map((p) => [p.y, p.x]);
+  const path = frame.pathOf(t);
+  rp.bestPath = path;
   bestLayer.eachLayer((l) => { l.setStyle({ color: '#888', weight: 1, opacity: 0.5 }); trajectories.addLayer(l); });
   bestLayer.clearLayers();
   // Keep the picture (and the page's memory) bounded.
@@ -423,16 +583,18 @@ async function startPlan() {
   $('iterations').textContent = '0'; $('improvements').textContent = '0'; $('risk').textContent = '–';
   setState('starting');
   try {
-    const r = await api('POST', '/api/plans', {
+    const request = {
       map: rp.map.name,
-      start: endpoints.start, goal: endpoints.goal,
+      [apiField('start', endpoints.start)]: endpoints.start, [apiField('goal', endpoints.goal)]: endpoints.goal,
       algorithm: $('algorithm').value,
       budget: { time_ms: String(Number($('budget-ms').value)), iterations: String(Number($('budget-iterations').value)) },
       seed: String(Number($('seed').value)),
       // The server coalesces what it finds in between (newest wins): more
       // than about 20 pictures a second is more than anyone can follow.
       min_update_interval_ms: String(Number($('update-interval').value)),
-    });
+    };
+    rp.lastPlanRequest = request;
+    const r = await api('POST', '/api/plans', request);
     rp.planId = r.id;
     watch(r.id);
   } catch (err) { setState('failed'); throw err; }
@@ -463,7 +625,7 @@ const profileChart = new Chart($('profile-chart'), {
     onHover: (e, items) => {
       if (!items.length || !rp.profile) return;
       const s = rp.profile.samples[items[0].index];
-      profileMarker.setLatLng([s.y, s.x]).addTo(map);
+      profileMarker.setLatLng(frame.sampleAt(s)).addTo(map);
       $('sample').textContent = sampleText(s);
     },
   },
@@ -488,8 +650,7 @@ async function evaluate(trajectory) {
   return r;
 }
 
-const polylineLayer = L.layerGroup().addTo(map);
-let drawing = null;  // points of the polyline being drawn
+let drawing = null;  // the polyline being drawn: {at (LatLng), z} per point
 
 function startPolyline() {
   drawing = [];
@@ -498,13 +659,13 @@ function startPolyline() {
   $('evaluate-polyline').disabled = false;
   $('map').style.cursor = 'crosshair';
 }
-map.on('click', (e) => {
+function addPolylinePoint(e) {
   if (!drawing) return;
-  drawing.push({ x: e.latlng.lng, y: e.latlng.lat, z: Number($('altitude').value) });
+  drawing.push({ at: e.latlng, z: Number($('altitude').value) });
   polylineLayer.clearLayers();
-  L.polyline(drawing.map((p) => [p.y, p.x]), { color: '#06f', weight: 3, dashArray: '6 4', className: 'drawn-polyline' }).addTo(polylineLayer);
-  for (const p of drawing) L.circleMarker([p.y, p.x], { radius: 3, color: '#06f' }).addTo(polylineLayer);
-});
+  L.polyline(drawing.map((p) => p.at), { color: '#06f', weight: 3, dashArray: '6 4', className: 'drawn-polyline' }).addTo(polylineLayer);
+  for (const p of drawing) L.circleMarker(p.at, { radius: 3, color: '#06f' }).addTo(polylineLayer);
+}
 async function evaluatePolyline() {
   const points = drawing || [];
   drawing = null;
@@ -512,7 +673,8 @@ async function evaluatePolyline() {
   $('map').style.cursor = '';
   $('evaluate-polyline').disabled = true;
   if (points.length < 2) throw new ApiError('INVALID_ARGUMENT', 'a polyline needs at least 2 points', 'page');
-  await evaluate({ polyline: { points } });
+  const apiPoints = points.map((p) => frame.point(p.at, p.z));
+  await evaluate({ [apiField('polyline', apiPoints[0])]: { points: apiPoints } });
 }
 
 // ---------------------------------------------------------------------------
@@ -547,12 +709,7 @@ async function init() {
   for (const m of maps) select.add(new Option(`${m.name}${m.geo ? ' (WGS84)' : ''}`, m.name));
   const wanted = new URLSearchParams(location.search).get('map');
   if (wanted && maps.some((m) => m.name === wanted)) select.value = wanted;
-  const show = () => guarded(async () => {
-    endpoints.start = endpoints.goal = null;
-    drawEndpoint('start'); drawEndpoint('goal');
-    if (overlays['risk layer']) { layerControl.removeLayer(overlays['risk layer']); map.removeLayer(overlays['risk layer']); delete overlays['risk layer']; delete legends['risk layer']; }
-    await loadMap(maps.find((m) => m.name === select.value));
-  });
+  const show = () => guarded(() => loadMap(maps.find((m) => m.name === select.value)));
   select.addEventListener('change', show);
   $('risk-show').onclick = () => guarded(showRiskLayer);
   $('set-start').onclick = () => pick('start');

@@ -50,14 +50,7 @@ absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::ForListener(const TlsFil
         "--%stls_cert and --%stls_key are both needed for TLS", files.flag_prefix,
         files.flag_prefix));
   }
-  std::shared_ptr<TlsContext> context(new TlsContext(files, /*listener=*/true));
-  absl::StatusOr<SSL_CTX*> ctx = context->Build();
-  if (!ctx.ok()) return ctx.status();
-  absl::MutexLock lock(&context->mu_);
-  context->ctx_ = *ctx;
-  context->stamps_ = context->Stamps();
-  context->last_check_ = absl::Now();
-  return context;
+  return Make(files, /*listener=*/true);
 }
 
 absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::ForClient(const TlsFiles& files) {
@@ -65,7 +58,11 @@ absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::ForClient(const TlsFiles
     return absl::InvalidArgumentError(absl::StrFormat("--%stls_cert and --%stls_key go together",
                                                       files.flag_prefix, files.flag_prefix));
   }
-  std::shared_ptr<TlsContext> context(new TlsContext(files, /*listener=*/false));
+  return Make(files, /*listener=*/false);
+}
+
+absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::Make(const TlsFiles& files, bool listener) {
+  std::shared_ptr<TlsContext> context(new TlsContext(files, listener));
   absl::StatusOr<SSL_CTX*> ctx = context->Build();
   if (!ctx.ok()) return ctx.status();
   absl::MutexLock lock(&context->mu_);

@@ -32,17 +32,6 @@ void IgnoreSigpipe() {
   (void)done;
 }
 
-std::string Errors() {
-  std::string text;
-  while (unsigned long e = ERR_get_error()) {
-    char buffer[256];
-    ERR_error_string_n(e, buffer, sizeof(buffer));
-    if (!text.empty()) text += "; ";
-    text += buffer;
-  }
-  return text;
-}
-
 FlagFile Flag(const TlsFiles& f, const char* name, const std::string& path) {
   return {absl::StrCat(f.flag_prefix, name), path};
 }
@@ -61,14 +50,7 @@ absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::ForListener(const TlsFil
         "--%stls_cert and --%stls_key are both needed for TLS", files.flag_prefix,
         files.flag_prefix));
   }
-  std::shared_ptr<TlsContext> context(new TlsContext(files, /*listener=*/true));
-  absl::StatusOr<SSL_CTX*> ctx = context->Build();
-  if (!ctx.ok()) return ctx.status();
-  absl::MutexLock lock(&context->mu_);
-  context->ctx_ = *ctx;
-  context->stamps_ = context->Stamps();
-  context->last_check_ = absl::Now();
-  return context;
+  return Make(files, /*listener=*/true);
 }
 
 absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::ForClient(const TlsFiles& files) {
@@ -76,7 +58,11 @@ absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::ForClient(const TlsFiles
     return absl::InvalidArgumentError(absl::StrFormat("--%stls_cert and --%stls_key go together",
                                                       files.flag_prefix, files.flag_prefix));
   }
-  std::shared_ptr<TlsContext> context(new TlsContext(files, /*listener=*/false));
+  return Make(files, /*listener=*/false);
+}
+
+absl::StatusOr<std::shared_ptr<TlsContext>> TlsContext::Make(const TlsFiles& files, bool listener) {
+  std::shared_ptr<TlsContext> context(new TlsContext(files, listener));
   absl::StatusOr<SSL_CTX*> ctx = context->Build();
   if (!ctx.ok()) return ctx.status();
   absl::MutexLock lock(&context->mu_);
@@ -126,10 +112,10 @@ absl::StatusOr<SSL_CTX*> TlsContext::Build() const {
   }
   ERR_clear_error();
   SSL_CTX* ctx = SSL_CTX_new(listener_ ? TLS_server_method() : TLS_client_method());
-  if (ctx == nullptr) return absl::InternalError(absl::StrCat("SSL_CTX_new: ", Errors()));
+  if (ctx == nullptr) return absl::InternalError(absl::StrCat("SSL_CTX_new: ", OpenSslErrors()));
   auto fail = [ctx](const std::string& what) {
     SSL_CTX_free(ctx);
-    return absl::InvalidArgumentError(absl::StrCat(what, ": ", Errors()));
+    return absl::InvalidArgumentError(absl::StrCat(what, ": ", OpenSslErrors()));
   };
   SSL_CTX_set_min_proto_version(ctx, TLS1_2_VERSION);
   SSL_CTX_set_mode(ctx, SSL_MODE_ACCEPT_MOVING_WRITE_BUFFER);
@@ -211,7 +197,7 @@ absl::Status Handshake(Socket* socket, SSL* ssl, absl::Time deadline, const char
       if (absl::Status s = WaitAsAsked(*socket, e, deadline, "TLS handshake"); !s.ok()) return s;
       continue;
     }
-    std::string reason = Errors();
+    std::string reason = OpenSslErrors();
     const long verify = SSL_get_verify_result(ssl);
     if (verify != X509_V_OK) {
       reason = absl::StrCat(X509_verify_cert_error_string(verify), " (X509 code ", verify, "); ",
@@ -228,7 +214,7 @@ absl::Status TlsContext::Accept(Socket* socket, absl::Time deadline) {
   SSL_CTX* ctx = Current();
   SSL* ssl = SSL_new(ctx);
   SSL_CTX_free(ctx);  // the SSL holds its own reference
-  if (ssl == nullptr) return absl::InternalError(absl::StrCat("SSL_new: ", Errors()));
+  if (ssl == nullptr) return absl::InternalError(absl::StrCat("SSL_new: ", OpenSslErrors()));
   SSL_set_fd(ssl, socket->fd());
   SSL_set_accept_state(ssl);
   socket->AttachTls(ssl);  // freed with the socket
@@ -240,7 +226,7 @@ absl::Status TlsContext::Connect(Socket* socket, const std::string& server_name,
   SSL_CTX* ctx = Current();
   SSL* ssl = SSL_new(ctx);
   SSL_CTX_free(ctx);
-  if (ssl == nullptr) return absl::InternalError(absl::StrCat("SSL_new: ", Errors()));
+  if (ssl == nullptr) return absl::InternalError(absl::StrCat("SSL_new: ", OpenSslErrors()));
   socket->AttachTls(ssl);
   SSL_set_fd(ssl, socket->fd());
   SSL_set_connect_state(ssl);

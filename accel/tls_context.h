@@ -76,6 +76,9 @@ class TlsContext {
     bool operator==(const Stamp&) const = default;
   };
   TlsContext(TlsFiles files, bool listener) : files_(std::move(files)), listener_(listener) {}
+  // The end ForListener and ForClient share once each has checked which files
+  // it was given: builds the context (Build) and takes the files' stamps.
+  static absl::StatusOr<std::shared_ptr<TlsContext>> Make(const TlsFiles& files, bool listener);
   absl::StatusOr<SSL_CTX*> Build() const;
   std::vector<Stamp> Stamps() const;
   // The context for a new connection, reloaded first if the files changed.

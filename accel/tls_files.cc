@@ -38,18 +38,6 @@ using Cert = std::unique_ptr<X509, X509Free>;
 
 std::string Where(const FlagFile& f) { return absl::StrCat("--", f.flag, "=", f.path); }
 
-// OpenSSL's queued errors as one line (and the queue emptied).
-std::string OpenSslErrors() {
-  std::string text;
-  while (unsigned long e = ERR_get_error()) {
-    char buffer[256];
-    ERR_error_string_n(e, buffer, sizeof(buffer));
-    if (!text.empty()) text += "; ";
-    text += buffer;
-  }
-  return text.empty() ? "no PEM data" : text;
-}
-
 Bio MemoryBio(const std::string& bytes) {
   return Bio(BIO_new_mem_buf(bytes.data(), static_cast<int>(bytes.size())));
 }
@@ -80,6 +68,17 @@ absl::Status CheckValidity(const FlagFile& file, X509* cert, absl::Time now, con
 }
 
 }  // namespace
+
+std::string OpenSslErrors(const char* if_none) {
+  std::string text;
+  while (unsigned long e = ERR_get_error()) {
+    char buffer[256];
+    ERR_error_string_n(e, buffer, sizeof(buffer));
+    if (!text.empty()) text += "; ";
+    text += buffer;
+  }
+  return text.empty() ? if_none : text;
+}
 
 absl::StatusOr<std::string> ReadFlagFile(const FlagFile& file) {
   struct stat st {};
@@ -115,14 +114,15 @@ absl::Status CheckCertificateAndKey(const FlagFile& cert_file, const FlagFile& k
   std::unique_ptr<EVP_PKEY, PkeyFree> key(
       PEM_read_bio_PrivateKey(key_bio.get(), nullptr, nullptr, nullptr));
   if (key == nullptr) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "%s: not a PEM private key (or an encrypted one): %s", Where(key_file), OpenSslErrors()));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s: not a PEM private key (or an encrypted one): %s", Where(key_file),
+                        OpenSslErrors("no PEM data")));
   }
   Bio cert_bio = MemoryBio(*cert_pem);
   Cert cert(PEM_read_bio_X509(cert_bio.get(), nullptr, nullptr, nullptr));
   if (cert == nullptr) {
-    return absl::InvalidArgumentError(absl::StrFormat("%s: not a PEM certificate: %s",
-                                                      Where(cert_file), OpenSslErrors()));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s: not a PEM certificate: %s", Where(cert_file), OpenSslErrors("no PEM data")));
   }
   if (X509_check_private_key(cert.get(), key.get()) != 1) {
     ERR_clear_error();

@@ -49,6 +49,10 @@ absl::Status CheckCrl(const FlagFile& crl);
 // logs). Empty if it does not parse.
 std::string CertificateSubject(const std::string& pem);
 
+// OpenSSL's queued errors of this thread as one line, "; " between them, and
+// the queue emptied. `if_none` when there was none.
+std::string OpenSslErrors(const char* if_none = "");
+
 }  // namespace riskplan::accel
 
 #endif  // RISKPLAN_ACCEL_TLS_FILES_H_

@@ -7,6 +7,7 @@
 # (e.g. --budget_ms=20000 --tree --picture=out/plan.png).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/lib.sh
 bash scripts/build.sh >&2
 BIN=${BUILD_DIR:-build}/bin
 OUT=${OUT_DIR:-out}
@@ -29,19 +30,8 @@ cleanup() {
 }
 trap cleanup EXIT
 
-# The server prints one readiness line on stdout once it serves; read it
-# through a FIFO kept open for the server's lifetime.
-mkfifo "$workdir/ready"
-"$BIN/riskplan-server" --listen=127.0.0.1:0 --rpc_log=false 2>"$OUT/demo-server.log" \
-  >"$workdir/ready" &
-server_pid=$!
-exec 3<"$workdir/ready"
-if ! read -r -t 120 line <&3 || [[ "$line" != "riskplan-server listening on "* ]]; then
-  echo "run-demo: riskplan-server did not start; its log:" >&2
-  cat "$OUT/demo-server.log" >&2
-  exit 1
-fi
-ADDRESS=${line#riskplan-server listening on }
+start_and_wait server_pid ADDRESS "$workdir" "$OUT/demo-server.log" 120 \
+  "$BIN/riskplan-server" --listen=127.0.0.1:0 --rpc_log=false
 echo "== riskplan-server on demo-city at $ADDRESS =="
 "$BIN/riskplan" --server="$ADDRESS" maps
 
@@ -60,7 +50,6 @@ echo "${evaluation%%$'\n'*}"
 kill -TERM "$server_pid"
 wait "$server_pid"
 server_pid=""
-exec 3<&-
 echo
 echo "picture: $OUT/demo-plan.svg (population density, no-fly zones in violet, landing sites,"
 echo "         every streamed improvement from light to dark blue, start green, goal magenta)"

@@ -8,6 +8,7 @@
 #   BUILD_DIR, OUT_DIR as for run-demo.sh; extra arguments go to riskplan-web.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/lib.sh
 bash scripts/build.sh >&2
 BIN=${BUILD_DIR:-build}/bin
 OUT=${OUT_DIR:-out}
@@ -50,30 +51,10 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 0' INT TERM
 
-# Each program prints one readiness line on stdout once it serves; read it
-# through a FIFO kept open for the program's lifetime.
-mkfifo "$workdir/server" "$workdir/web"
-"$BIN/riskplan-server" --listen=127.0.0.1:0 --maps="$MAPS" --rpc_log=false \
-  2>"$OUT/web-server.log" >"$workdir/server" &
-server_pid=$!
-exec 3<"$workdir/server"
-if ! read -r -t 120 line <&3 || [[ "$line" != "riskplan-server listening on "* ]]; then
-  echo "run-web: riskplan-server did not start; its log:" >&2
-  cat "$OUT/web-server.log" >&2
-  exit 1
-fi
-SERVER=${line#riskplan-server listening on }
-
-"$BIN/riskplan-web" --listen="$LISTEN" --server="$SERVER" "$@" \
-  2>"$OUT/web-gateway.log" >"$workdir/web" &
-web_pid=$!
-exec 4<"$workdir/web"
-if ! read -r -t 60 line <&4 || [[ "$line" != "riskplan-web listening on "* ]]; then
-  echo "run-web: riskplan-web did not start; its log:" >&2
-  cat "$OUT/web-gateway.log" >&2
-  exit 1
-fi
-WEB=${line#riskplan-web listening on }
+start_and_wait server_pid SERVER "$workdir" "$OUT/web-server.log" 120 \
+  "$BIN/riskplan-server" --listen=127.0.0.1:0 --maps="$MAPS" --rpc_log=false
+start_and_wait web_pid WEB "$workdir" "$OUT/web-gateway.log" 60 \
+  "$BIN/riskplan-web" --listen="$LISTEN" --server="$SERVER" "$@"
 echo "riskplan-server on demo-city and demo-city-wgs84 at $SERVER (log: $OUT/web-server.log)"
 echo "riskplan-web at $WEB (log: $OUT/web-gateway.log)"
 echo

@@ -203,6 +203,11 @@ int Fail(int code, absl::string_view message) {
 struct ServerConfig {
   ServiceOptions options;  // `engine` is set once the engine exists
   ServerSecurityOptions security;
+  // --listen (HOST:PORT) and its HOST; --health_listen (empty: off).
+  std::string listen, listen_host, health_listen;
+  // TLS to the FPGA shims (--fpga_tls_*).
+  accel::TlsFiles shim_tls;
+  std::string shim_tls_server_name;
   int64_t grace_ms = 0;
   accel::KernelPrecision cpu_kernel = accel::KernelPrecision::kExact;
 };
@@ -293,6 +298,15 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
                                           .tls_reload_s = absl::GetFlag(FLAGS_tls_reload_s),
                                           .token_file = absl::GetFlag(FLAGS_token_file),
                                           .allow_plaintext = absl::GetFlag(FLAGS_allow_plaintext)};
+  config.listen = absl::GetFlag(FLAGS_listen);
+  config.listen_host = config.listen.substr(0, config.listen.rfind(':'));
+  config.health_listen = absl::GetFlag(FLAGS_health_listen);
+  config.shim_tls = accel::TlsFiles{.cert = absl::GetFlag(FLAGS_fpga_tls_cert),
+                                    .key = absl::GetFlag(FLAGS_fpga_tls_key),
+                                    .ca = absl::GetFlag(FLAGS_fpga_tls_ca),
+                                    .crl = "",
+                                    .flag_prefix = "fpga_"};
+  config.shim_tls_server_name = absl::GetFlag(FLAGS_fpga_tls_server_name);
   return config;
 }
 
@@ -336,7 +350,8 @@ absl::StatusOr<LoadedMaps> LoadMaps(const RequestLimits& limits) {
 
 // The accelerator engine, only when a flag asks for one (null otherwise:
 // every plan and evaluation computes its own risks, as without an engine).
-absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(accel::KernelPrecision cpu_kernel) {
+absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(const ServerConfig& config) {
+  const accel::KernelPrecision cpu_kernel = config.cpu_kernel;
   const std::string shims = absl::GetFlag(FLAGS_fpga_shims);
   if (absl::GetFlag(FLAGS_cpu_workers) <= 0 && shims.empty() &&
       cpu_kernel == accel::KernelPrecision::kExact) {
@@ -355,17 +370,13 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(accel::KernelPreci
   for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
     engine_options.fpga_shims.emplace_back(s);
   }
-  const accel::TlsFiles shim_tls{.cert = absl::GetFlag(FLAGS_fpga_tls_cert),
-                                 .key = absl::GetFlag(FLAGS_fpga_tls_key),
-                                 .ca = absl::GetFlag(FLAGS_fpga_tls_ca),
-                                 .crl = "",
-                                 .flag_prefix = "fpga_"};
-  if (shim_tls.enabled() || !absl::GetFlag(FLAGS_fpga_tls_server_name).empty()) {
-    absl::StatusOr<std::shared_ptr<accel::TlsContext>> tls = accel::TlsContext::ForClient(shim_tls);
+  if (config.shim_tls.enabled() || !config.shim_tls_server_name.empty()) {
+    absl::StatusOr<std::shared_ptr<accel::TlsContext>> tls =
+        accel::TlsContext::ForClient(config.shim_tls);
     if (!tls.ok()) return tls.status();
     engine_options.fpga.client.tls = *std::move(tls);
-    engine_options.fpga.client.tls_server_name = absl::GetFlag(FLAGS_fpga_tls_server_name);
-  } else if (!absl::GetFlag(FLAGS_allow_plaintext)) {
+    engine_options.fpga.client.tls_server_name = config.shim_tls_server_name;
+  } else if (!config.security.allow_plaintext) {
     for (const std::string& endpoint : engine_options.fpga_shims) {
       std::string host;
       int port = 0;
@@ -445,9 +456,9 @@ absl::StatusOr<std::unique_ptr<grpc::Server>> StartHealthServer(const std::strin
   return server;
 }
 
-absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& metrics,
-                                      const ServerSecurity& security) {
-  const std::string listen = absl::GetFlag(FLAGS_listen);
+absl::StatusOr<Serving> BuildAndStart(const ServerConfig& config, PlannerService& service,
+                                      ServerMetrics& metrics, const ServerSecurity& security) {
+  const std::string& listen = config.listen;
   absl::StatusOr<std::unique_ptr<ConnectionAcceptor>> acceptor = ConnectionAcceptor::Listen(listen);
   if (!acceptor.ok()) {
     return absl::UnavailableError(absl::StrFormat("cannot start: cannot listen on --listen=%s: %s",
@@ -478,13 +489,14 @@ absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& me
   }
   serving.acceptor = *std::move(acceptor);
   serving.acceptor->Start(std::move(connections), [&metrics] { metrics.RecordAcceptError(); });
-  if (const std::string health = absl::GetFlag(FLAGS_health_listen); !health.empty()) {
-    absl::StatusOr<std::unique_ptr<grpc::Server>> health_server = StartHealthServer(health);
+  if (!config.health_listen.empty()) {
+    absl::StatusOr<std::unique_ptr<grpc::Server>> health_server =
+        StartHealthServer(config.health_listen);
     if (!health_server.ok()) return health_server.status();
     serving.health_server = *std::move(health_server);
   }
   SetHealth(serving, true);
-  serving.host = listen.substr(0, listen.rfind(':'));
+  serving.host = config.listen_host;
   serving.port = serving.acceptor->port();
   return serving;
 }
@@ -568,9 +580,8 @@ int Main() {
   const sigset_t stop_signals = BlockStopSignals();
   // Before the maps load (seconds): a bad certificate, key or token file
   // stops start-up at once, naming the file.
-  const std::string listen = absl::GetFlag(FLAGS_listen);
   absl::StatusOr<ServerSecurity> security =
-      MakeServerSecurity(config->security, listen.substr(0, listen.rfind(':')));
+      MakeServerSecurity(config->security, config->listen_host);
   if (!security.ok()) {
     return Fail(1, absl::StrFormat("cannot start: %s", security.status().message()));
   }
@@ -579,7 +590,7 @@ int Main() {
 
   absl::StatusOr<LoadedMaps> maps = LoadMaps(config->options.limits);
   if (!maps.ok()) return Fail(1, absl::StrFormat("cannot start: %s", maps.status().message()));
-  absl::StatusOr<std::unique_ptr<accel::RiskEngine>> engine = MakeEngine(config->cpu_kernel);
+  absl::StatusOr<std::unique_ptr<accel::RiskEngine>> engine = MakeEngine(*config);
   if (!engine.ok()) {
     return Fail(1,
                 absl::StrFormat("cannot start: accelerator engine: %s", engine.status().message()));
@@ -592,7 +603,7 @@ int Main() {
   metrics.AddCollectable(std::make_shared<CacheMetrics>(
       maps->models.get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
       service.checkers()));
-  absl::StatusOr<Serving> serving = BuildAndStart(service, metrics, *security);
+  absl::StatusOr<Serving> serving = BuildAndStart(*config, service, metrics, *security);
   if (!serving.ok()) return Fail(1, serving.status().message());
   AnnounceServing(*serving, config->options);
   WaitAndDrain(stop_signals, service, *serving, config->grace_ms);

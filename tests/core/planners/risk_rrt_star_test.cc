@@ -12,8 +12,8 @@ namespace riskplan {
 namespace {
 
 using testing_planner::DemoCityModel;
-using testing_planner::DemoCityScenarios;
 using testing_planner::FlyablePose;
+using testing_planner::ReEvaluate;
 using testing_planner::Scenario;
 
 constexpr int64_t kIterations = 2500;
@@ -40,26 +40,7 @@ Outcome RunPlanner(const std::shared_ptr<const RiskModel>& model, const Pose& st
   return out;
 }
 
-double ReEvaluate(const RiskModel& model, const std::vector<Pose>& waypoints, bool* admissible) {
-  auto pieces = PiecesFromWaypoints(waypoints, model.params());
-  EXPECT_TRUE(pieces.ok());
-  auto eval = EvaluateTrajectory(model, *pieces);
-  EXPECT_TRUE(eval.ok());
-  *admissible = eval->admissible;
-  return eval->risk;
-}
-
-class RiskRrtStarScenarioTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    model_ = DemoCityModel();
-    scenarios_ = DemoCityScenarios(*model_);
-  }
-  static std::shared_ptr<const RiskModel> model_;
-  static std::vector<Scenario> scenarios_;
-};
-std::shared_ptr<const RiskModel> RiskRrtStarScenarioTest::model_;
-std::vector<Scenario> RiskRrtStarScenarioTest::scenarios_;
+class RiskRrtStarScenarioTest : public testing_planner::DemoCityPlannerTest {};
 
 TEST_F(RiskRrtStarScenarioTest, EveryScenarioGivesAnAdmissibleImprovingTrajectory) {
   ASSERT_GE(scenarios_.size(), 20u);

@@ -8,8 +8,6 @@
 #include <utility>
 #include <vector>
 
-#include "core/flight/piece_risk.h"
-#include "core/flight/trajectory.h"
 #include "core/map/demo_city.h"
 #include "gtest/gtest.h"
 #include "tests/core/planner_test_util.h"
@@ -17,8 +15,8 @@
 namespace riskplan {
 namespace {
 
-using testing_planner::DemoCityModel;
 using testing_planner::FindFlyablePose;
+using testing_planner::ReEvaluate;
 using testing_planner::Scenario;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -63,15 +61,6 @@ FleetOutcome RunFleet(const SharedTreeProblem& problem, uint64_t seed,
   return out;
 }
 
-double ReEvaluate(const RiskModel& model, const std::vector<Pose>& waypoints, bool* admissible) {
-  auto pieces = PiecesFromWaypoints(waypoints, model.params());
-  EXPECT_TRUE(pieces.ok());
-  auto eval = EvaluateTrajectory(model, *pieces);
-  EXPECT_TRUE(eval.ok());
-  *admissible = eval->admissible;
-  return eval->risk;
-}
-
 void ExpectSamePoses(const std::vector<Pose>& a, const std::vector<Pose>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
@@ -84,10 +73,10 @@ void ExpectSamePoses(const std::vector<Pose>& a, const std::vector<Pose>& b) {
 
 // A depot in demo-city's south-east suburbs and starts scattered around the
 // city, most of them across the centre from it.
-class SharedGoalTreeTest : public ::testing::Test {
+class SharedGoalTreeTest : public testing_planner::DemoCityPlannerTest {
  protected:
   static void SetUpTestSuite() {
-    model_ = DemoCityModel();
+    DemoCityPlannerTest::SetUpTestSuite();
     depot_ = *FindFlyablePose(*model_, 6500, 1500, kPi / 2);
     const double spots[][3] = {{1200, 6500, 0.0}, {1500, 2500, 0.5}, {4000, 7000, 4.7},
                                {7000, 6500, 4.0}, {2500, 4200, 1.0}, {5200, 5200, 5.5},
@@ -103,11 +92,9 @@ class SharedGoalTreeTest : public ::testing::Test {
     }
     return p;
   }
-  static std::shared_ptr<const RiskModel> model_;
   static Pose depot_;
   static std::vector<Pose> starts_;
 };
-std::shared_ptr<const RiskModel> SharedGoalTreeTest::model_;
 Pose SharedGoalTreeTest::depot_;
 std::vector<Pose> SharedGoalTreeTest::starts_;
 
@@ -184,13 +171,12 @@ TEST_F(SharedGoalTreeTest, SameMissionsAndSeedGiveTheSameTrajectoriesBitForBit) 
 // same improvements and result bit for bit, with and without the guide and
 // the refinement.
 TEST_F(SharedGoalTreeTest, OneMissionIsRiskRrtStarBitForBit) {
-  const std::vector<Scenario> scenarios = testing_planner::DemoCityScenarios(*model_);
   const std::map<std::string, double> variants[] = {
       {}, {{"guide_cell_m", 0.0}, {"refine_edits", 0.0}}, {{"batch_chunk", 0.0}}};
   int compared = 0;
-  for (size_t k = 0; k < scenarios.size(); k += 8) {
+  for (size_t k = 0; k < scenarios_.size(); k += 8) {
     for (const auto& params : variants) {
-      const Scenario& sc = scenarios[k];
+      const Scenario& sc = scenarios_[k];
       SCOPED_TRACE(testing::Message() << sc.name << " with " << params.size() << " parameters");
       auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar);
       ASSERT_TRUE(planner.ok());
@@ -441,39 +427,17 @@ TEST(SharedGoalTreeSmallMapTest, EveryImpactWindowStaysInsideTheMap) {
   }
   FleetOutcome out = RunFleet(problem, 11);
   ASSERT_TRUE(out.results.ok()) << out.results.status();
-  const RiskMap& m = model->map();
-  const ImpactTable& t = model->table();
   int64_t samples = 0;
-  const auto expect_inside = [&](const std::vector<Pose>& waypoints) {
-    auto pieces = PiecesFromWaypoints(waypoints, model->params());
-    ASSERT_TRUE(pieces.ok());
-    for (const TrajectoryPiece& piece : *pieces) {
-      const PieceRisk rule(piece, model->params().sample_step_m, model->params());
-      for (int64_t s = 0; s < rule.admissibility_samples(); ++s) {
-        const Pose q = rule.AdmissibilitySample(s);
-        int i = 0, j = 0;
-        ASSERT_TRUE(m.CellOf(q.x, q.y, &i, &j));
-        const double h = q.z - m.terrain(i, j);
-        ASSERT_GT(h, 0.0);
-        const ImpactKernel& k = t.kernel(t.HeightBinOf(h), t.HeadingBinOf(q.theta));
-        const int ci = static_cast<int>(std::floor((q.x + k.offset_x_m - m.x0()) / m.res()));
-        const int cj = static_cast<int>(std::floor((q.y + k.offset_y_m - m.y0()) / m.res()));
-        ASSERT_GE(ci - k.half_width, 0) << "sample at " << q.x << ", " << q.y;
-        ASSERT_GE(cj - k.half_width, 0) << "sample at " << q.x << ", " << q.y;
-        ASSERT_LT(ci + k.half_width, m.nx()) << "sample at " << q.x << ", " << q.y;
-        ASSERT_LT(cj + k.half_width, m.ny()) << "sample at " << q.x << ", " << q.y;
-        ++samples;
-      }
-    }
-  };
   int solved = 0;
   for (const auto& r : *out.results) {
     ASSERT_TRUE(r.ok()) << r.status();
     if (!r->best.has_value()) continue;
-    expect_inside(r->best->waypoints);
+    testing_planner::ExpectImpactWindowsInside(*model, r->best->waypoints, &samples);
     ++solved;
   }
-  for (const auto& [mission, i] : out.improvements) expect_inside(i.waypoints);
+  for (const auto& [mission, i] : out.improvements) {
+    testing_planner::ExpectImpactWindowsInside(*model, i.waypoints, &samples);
+  }
   EXPECT_GE(solved, 5);
   EXPECT_GT(samples, 1000);
 }

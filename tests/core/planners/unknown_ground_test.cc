@@ -6,7 +6,6 @@
 #include <random>
 #include <vector>
 
-#include "core/flight/piece_risk.h"
 #include "core/flight/trajectory.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
@@ -66,31 +65,10 @@ std::shared_ptr<const RiskModel> ModelOf(std::shared_ptr<const RiskMap> map) {
 }
 
 // Every admissibility sample of every piece has its impact window wholly
-// inside the map, computed here from the table and the map alone.
+// inside the map.
 void ExpectWindowsInside(const RiskModel& model, const std::vector<Pose>& waypoints) {
-  auto pieces = PiecesFromWaypoints(waypoints, model.params());
-  ASSERT_TRUE(pieces.ok());
-  const RiskMap& map = model.map();
-  const ImpactTable& t = model.table();
   int64_t samples = 0;
-  for (const TrajectoryPiece& piece : *pieces) {
-    const PieceRisk rule(piece, model.params().sample_step_m, model.params());
-    for (int64_t s = 0; s < rule.admissibility_samples(); ++s) {
-      const Pose q = rule.AdmissibilitySample(s);
-      int i = 0, j = 0;
-      ASSERT_TRUE(map.CellOf(q.x, q.y, &i, &j));
-      const double h = q.z - map.terrain(i, j);
-      ASSERT_GT(h, 0.0);
-      const ImpactKernel& k = t.kernel(t.HeightBinOf(h), t.HeadingBinOf(q.theta));
-      const int ci = static_cast<int>(std::floor((q.x + k.offset_x_m - map.x0()) / map.res()));
-      const int cj = static_cast<int>(std::floor((q.y + k.offset_y_m - map.y0()) / map.res()));
-      ASSERT_GE(ci - k.half_width, 0) << "sample at " << q.x << ", " << q.y;
-      ASSERT_GE(cj - k.half_width, 0) << "sample at " << q.x << ", " << q.y;
-      ASSERT_LT(ci + k.half_width, map.nx()) << "sample at " << q.x << ", " << q.y;
-      ASSERT_LT(cj + k.half_width, map.ny()) << "sample at " << q.x << ", " << q.y;
-      ++samples;
-    }
-  }
+  ASSERT_NO_FATAL_FAILURE(testing_planner::ExpectImpactWindowsInside(model, waypoints, &samples));
   EXPECT_GT(samples, 100);
 }
 

@@ -20,6 +20,7 @@ void FleetQueue::Unadmit(int64_t missions) {
 void FleetQueue::Push(uint64_t id, const std::string& identity, int priority, int64_t missions) {
   RISKPLAN_DCHECK(!groups_.contains(id));
   groups_[id] = Group{.identity = identity, .priority = priority, .missions = missions};
+  ++groups_by_identity_[identity];
   arrival_[arrivals_++] = id;
   queued_missions_ += missions;
 }
@@ -29,10 +30,15 @@ std::optional<uint64_t> FleetQueue::Next() const {
   // A scan of the waiting groups: there are at most max_admitted_missions of
   // them (a thousand or so), and a slot frees only when a plan ends.
   std::optional<uint64_t> best;
-  std::tuple<int, int> best_key;  // (running of its identity, -priority); ties: earlier arrival
+  // (groups its identity is planning, when that identity last started one,
+  // -priority); ties: the earlier arrival, first in arrival_.
+  using Key = std::tuple<int, uint64_t, int>;
+  Key best_key;
   for (const auto& [arrival, id] : arrival_) {
     const Group& g = groups_.at(id);
-    const std::tuple<int, int> key{RunningOf(g.identity), -g.priority};
+    auto last = last_start_.find(g.identity);
+    const Key key{RunningOf(g.identity), last == last_start_.end() ? 0 : last->second,
+                  -g.priority};
     if (!best.has_value() || key < best_key) {
       best = id;
       best_key = key;
@@ -54,6 +60,7 @@ void FleetQueue::Start(uint64_t id) {
   g.running = true;
   ++running_groups_;
   ++running_by_identity_[g.identity];
+  last_start_[g.identity] = ++starts_;
   queued_missions_ -= g.missions;
   running_missions_ += g.missions;
 }
@@ -76,6 +83,10 @@ bool FleetQueue::Finish(uint64_t id) {
     queued_missions_ -= g.missions;
   }
   admitted_missions_ -= g.missions;
+  if (--groups_by_identity_[g.identity] == 0) {
+    groups_by_identity_.erase(g.identity);
+    last_start_.erase(g.identity);
+  }
   groups_.erase(it);
   return true;
 }

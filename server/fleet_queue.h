@@ -11,10 +11,13 @@
 // Which waiting group gets a free slot, in this order:
 //   1. fair share: the group of the identity (server/auth.h's caller
 //      identity, or the request's tenant) that has the fewest groups
-//      planning, so that a caller with many groups waiting cannot keep
-//      another one out of every slot: each freed slot goes to the caller
-//      holding the fewest;
+//      planning, and among those the one that started a group longest ago
+//      (or never): callers take turns, so that one with many groups waiting
+//      cannot keep another out of every slot, even of a single slot;
 //   2. priority: the highest FleetMission.priority of the group's missions;
+//      in effect it orders a caller's own groups (and those of callers
+//      served alike), never one caller before another that is owed a turn:
+//      a priority is the caller's own word;
 //   3. arrival: the group queued first.
 // A running group is never preempted.
 //
@@ -85,6 +88,12 @@ class FleetQueue {
   std::map<uint64_t, uint64_t> arrival_;  // arrival number -> queued id
   uint64_t arrivals_ = 0;
   absl::flat_hash_map<std::string, int> running_by_identity_;
+  // Per identity with a group queued or running: its groups, and when it
+  // last started one (a count of starts; 0: never). Forgotten once it has
+  // no group, so that the maps hold only the identities being served.
+  absl::flat_hash_map<std::string, int> groups_by_identity_;
+  absl::flat_hash_map<std::string, uint64_t> last_start_;
+  uint64_t starts_ = 0;
   int running_groups_ = 0;
   int64_t admitted_missions_ = 0;
   int64_t queued_missions_ = 0;

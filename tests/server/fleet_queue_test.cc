@@ -1,6 +1,6 @@
 // PlanFleet's admission and queue order (server/fleet_queue.h): missions
-// counted on admission, fair share between identities, then priority, then
-// arrival.
+// counted on admission, fair share between identities (fewest planning,
+// then turns), then priority, then arrival.
 #include "server/fleet_queue.h"
 
 #include <vector>
@@ -101,6 +101,27 @@ TEST(FleetQueueTest, AFreedSlotGoesToTheIdentityHoldingFewest) {
   EXPECT_EQ(q.RunningOf("a"), 1);
   EXPECT_EQ(q.RunningOf("b"), 1);
   EXPECT_EQ(q.RunningOf("c"), 1);
+}
+
+TEST(FleetQueueTest, CallersTakeTurnsForASingleSlotWhateverTheirPriorities) {
+  FleetQueue q(1, 100);
+  ASSERT_TRUE(q.TryAdmit(5));
+  q.Push(1, "a", 1000, 1);
+  q.Push(2, "a", 1000, 1);
+  q.Push(3, "a", 1000, 1);
+  ASSERT_EQ(q.Next(), 1u);
+  q.Start(1);
+  // "b" comes while "a" plans; a's priority does not keep it waiting.
+  q.Push(10, "b", 0, 1);
+  q.Push(11, "b", 0, 1);
+  std::vector<uint64_t> order = {1};
+  q.Finish(1);
+  while (std::optional<uint64_t> next = q.Next()) {
+    q.Start(*next);
+    order.push_back(*next);
+    q.Finish(*next);
+  }
+  EXPECT_EQ(order, (std::vector<uint64_t>{1, 10, 2, 11, 3}));
 }
 
 TEST(FleetQueueTest, AQueuedGroupRemovedFreesItsMissionsAndNeverRuns) {

@@ -174,7 +174,7 @@ void FleetCall::GroupEnded() {
 }
 
 void FleetCall::StopForShutdown() {
-  shutdown_.store(true);
+  MarkShutdown();
   cancel_.Cancel();
 }
 

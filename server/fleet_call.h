@@ -81,6 +81,9 @@ class FleetCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
   const CancellationToken& cancel_token() const { return cancel_; }
   // Stops every planner of the call; results end with SHUTDOWN.
   void StopForShutdown();
+  // Results cut short from now on end with SHUTDOWN, without stopping the
+  // planners (a group dropped by the drain while the others plan on).
+  void MarkShutdown() { shutdown_.store(true); }
   // Who called, and the fair-share identity (server/fleet_queue.h).
   const Caller& caller() const { return caller_; }
 

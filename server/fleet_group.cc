@@ -66,7 +66,8 @@ void FleetGroup::Run() {
 
 void FleetGroup::EndUnplanned() {
   reported_.assign(group_.missions.size(), false);
-  call_->StopForShutdown();
+  // The call's planning groups go on until the drain stops them.
+  call_->MarkShutdown();
   for (size_t m : group_.missions) Offer(m, Unplanned());
 }
 

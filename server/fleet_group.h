@@ -37,6 +37,7 @@ class FleetGroup final : public ActivePlan {
   void Run();
   // Offers a result without trajectory (end reason SHUTDOWN) for every
   // mission: the group was dropped by the server's drain before it planned.
+  // The call's other groups are not stopped.
   void EndUnplanned();
   // Stops the call's planners (ActivePlan).
   void StopForShutdown() override { call_->StopForShutdown(); }

@@ -2,11 +2,15 @@
 // mission's own error beside the others' results, risks that are exactly
 // EvaluateRisk's, the same trajectories for the same seed, a cancel that
 // stops every mission, and the request's bounds.
+#include <signal.h>
+
 #include <map>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "absl/strings/str_format.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -226,6 +230,113 @@ TEST_F(FleetTest, CancellingTheCallStopsEveryMission) {
   EXPECT_EQ(Metric("riskplan_fleet_missions{state=\"queued\"}"), 0);
   // And the server plans the next fleet.
   EXPECT_TRUE(RunFleet(*client_, MixedFleet()).status.ok());
+}
+
+// One plan slot, and room for four admitted missions: the queue's order and
+// the admission by missions can be seen from the outside.
+class FleetFairShareTest : public SharedServerTest<FleetFairShareTest> {
+ public:
+  static std::vector<std::string> ServerFlags() {
+    return {"--plan_threads=1", "--max_fleet_missions=4", "--max_admitted_missions=4",
+            "--metrics_listen=127.0.0.1:0"};
+  }
+
+ protected:
+  double Metric(const std::string& series) {
+    absl::StatusOr<std::string> text = HttpGet(MetricsAddress(server_->Stderr()), "/metrics");
+    if (!text.ok()) return -1;
+    return MetricValue(*text, series).value_or(-1);
+  }
+};
+
+// `n` missions of `tenant`, each to its own goal (a group each), at
+// `priority`.
+v1::FleetRequest TenantFleet(const std::string& tenant, int n, int priority) {
+  v1::FleetRequest r;
+  r.set_tenant(tenant);
+  for (int i = 0; i < n; ++i) {
+    v1::FleetMission m = Mission(absl::StrFormat("%s-%d", tenant, i), kStarts[i % 3], 300);
+    m.set_priority(priority);
+    m.mutable_request()->mutable_goal()->set_z(250 + i);
+    *r.add_missions() = m;
+  }
+  return r;
+}
+
+TEST_F(FleetFairShareTest, ATenantArrivingLaterGetsTheNextSlotAndAdmissionCountsMissions) {
+  absl::Mutex mu;
+  std::vector<std::string> ended;  // mission ids, in the order their finals arrived
+  const auto run = [&](const v1::FleetRequest& request) {
+    client::RiskplanClient c(server_->Channel());
+    return c.PlanFleet(request, [&](const v1::FleetUpdate& u) {
+      absl::MutexLock lock(&mu);
+      ended.push_back(u.mission_id());
+      return true;
+    });
+  };
+  // "big" queues three groups at the highest priority and takes the one slot.
+  grpc::Status big_status;
+  std::thread big([&] { big_status = run(TenantFleet("big", 3, 1000)); });
+  const absl::Time start = absl::Now();
+  while (Metric("riskplan_fleet_missions{state=\"queued\"}") != 2 &&
+         absl::Now() - start < absl::Seconds(60)) {
+    absl::SleepFor(absl::Milliseconds(5));
+  }
+  ASSERT_EQ(Metric("riskplan_fleet_missions{state=\"running\"}"), 1);
+  // Three of four admitted missions: a fleet of two does not fit, and is
+  // refused at once, whole.
+  v1::FleetRequest two = TenantFleet("other", 2, 0);
+  const grpc::Status refused = run(two);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_THAT(refused.error_message(),
+              HasSubstr("cannot admit this fleet's 2 missions: at most 4 fleet missions are "
+                        "admitted at once (--max_admitted_missions)"));
+  // "small" has one mission at priority 0: it plans as soon as the slot is
+  // free, before big's other two.
+  const grpc::Status small_status = run(TenantFleet("small", 1, 0));
+  big.join();
+  ASSERT_TRUE(big_status.ok()) << big_status.error_message();
+  ASSERT_TRUE(small_status.ok()) << small_status.error_message();
+  ASSERT_EQ(ended.size(), 4u);
+  EXPECT_EQ(ended[1], "small-0");
+  EXPECT_EQ(Metric("riskplan_fleet_missions_admitted_total"), 4);
+}
+
+TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
+  // One slot: one mission plans, the other waits, when SIGTERM comes.
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+      ServerProcess::Start({"--plan_threads=1", "--grace_period_ms=1000"});
+  ASSERT_TRUE(server.ok()) << server.status();
+  v1::FleetRequest request;
+  for (int i = 0; i < 2; ++i) {
+    v1::FleetMission m = Mission(absl::StrFormat("endless-%d", i), kStarts[i], 0);
+    m.mutable_request()->mutable_budget()->set_time_ms(600000);
+    m.mutable_request()->mutable_goal()->set_z(250 + i);
+    *request.add_missions() = m;
+  }
+  request.set_send_improvements(true);
+  client::RiskplanClient client((*server)->Channel());
+  std::vector<v1::FleetUpdate> finals;
+  bool signalled = false;
+  const grpc::Status status = client.PlanFleet(request, [&](const v1::FleetUpdate& u) {
+    // The first improvement says the first mission plans.
+    if (!signalled) {
+      (*server)->Signal(SIGTERM);
+      signalled = true;
+    }
+    if (u.update().final()) finals.push_back(u);
+    return true;
+  });
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(finals.size(), 2u);
+  // The waiting one ends at once, unplanned; the planning one at the end of
+  // the grace period, with its best trajectory.
+  EXPECT_EQ(finals[0].mission_id(), "endless-1");
+  EXPECT_FALSE(finals[0].update().has_trajectory());
+  EXPECT_EQ(finals[1].mission_id(), "endless-0");
+  EXPECT_TRUE(finals[1].update().has_trajectory());
+  for (const v1::FleetUpdate& u : finals) EXPECT_EQ(u.update().end_reason(), v1::SHUTDOWN);
+  EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0);
 }
 
 }  // namespace

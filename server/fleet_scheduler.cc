@@ -28,14 +28,26 @@ void FleetScheduler::Unadmit(int64_t missions) {
 void FleetScheduler::Enqueue(const std::shared_ptr<FleetCall>& call,
                              std::shared_ptr<const FleetSpec> spec,
                              const std::vector<MissionGroup>& groups, const std::string& identity) {
+  std::vector<std::shared_ptr<FleetGroup>> unplanned;
   {
     absl::MutexLock lock(&mu_);
     for (const MissionGroup& group : groups) {
       const uint64_t id = next_id_++;
-      groups_[id] = std::make_shared<FleetGroup>(id, call, spec, group, env_.models, env_.engine);
+      auto g = std::make_shared<FleetGroup>(id, call, spec, group, env_.models, env_.engine);
+      if (stopping_) {
+        // The drain began after the call was let in: nothing more plans.
+        queue_.Unadmit(static_cast<int64_t>(group.missions.size()));
+        unplanned.push_back(std::move(g));
+        continue;
+      }
+      groups_[id] = std::move(g);
       queue_.Push(id, identity, group.priority, static_cast<int64_t>(group.missions.size()));
     }
     UpdateGaugesLocked();
+  }
+  for (const std::shared_ptr<FleetGroup>& group : unplanned) {
+    group->EndUnplanned();
+    group->call()->GroupEnded();
   }
   // The client may have gone before its groups were queued (FleetCall's
   // cancel hook found none to drop).
@@ -114,6 +126,7 @@ void FleetScheduler::StopQueued() {
   std::vector<std::shared_ptr<FleetGroup>> dropped;
   {
     absl::MutexLock lock(&mu_);
+    stopping_ = true;
     dropped = TakeQueuedLocked(nullptr);
   }
   for (const std::shared_ptr<FleetGroup>& group : dropped) {

@@ -71,7 +71,8 @@ class FleetScheduler {
                const std::vector<MissionGroup>& groups, const std::string& identity);
   // Drops the waiting groups of `call` (its client went).
   void DropQueued(const FleetCall* call);
-  // Ends every waiting group with SHUTDOWN results (the server's drain).
+  // Ends every waiting group with SHUTDOWN results (the server's drain),
+  // and every group enqueued from now on, unplanned.
   void StopQueued();
   // Starts waiting groups while group and plan slots are free.
   void Pump();
@@ -91,6 +92,7 @@ class FleetScheduler {
   FleetQueue queue_ ABSL_GUARDED_BY(mu_);
   std::map<uint64_t, std::shared_ptr<FleetGroup>> groups_ ABSL_GUARDED_BY(mu_);  // queued, running
   uint64_t next_id_ ABSL_GUARDED_BY(mu_) = 1;
+  bool stopping_ ABSL_GUARDED_BY(mu_) = false;  // StopQueued was called
 };
 
 }  // namespace riskplan::server

@@ -186,6 +186,24 @@ grpc::Status RiskplanClient::Plan(const v1::PlanRequest& request,
   return reader->Finish();
 }
 
+grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
+                                       const FleetUpdateCallback& on_update,
+                                       absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> reader = stub_->PlanFleet(&context, request);
+  v1::FleetUpdate update;
+  bool cancelled = false;
+  // Read to the end after a cancel, as Plan does.
+  while (reader->Read(&update)) {
+    if (!cancelled && !on_update(update)) {
+      context.TryCancel();
+      cancelled = true;
+    }
+  }
+  return reader->Finish();
+}
+
 grpc::Status RiskplanClient::CheckHealth(
     const std::string& service, grpc::health::v1::HealthCheckResponse::ServingStatus* status,
     absl::Duration timeout) {

@@ -25,6 +25,9 @@ inline constexpr int kMaxReceiveBytes = 64 << 20;
 // Called for every PlanUpdate in order. Return false to cancel the call (the
 // plan then ends with status CANCELLED).
 using PlanUpdateCallback = std::function<bool(const v1::PlanUpdate&)>;
+// Called for every FleetUpdate in order; false cancels the call (every
+// mission stops; the call ends with CANCELLED).
+using FleetUpdateCallback = std::function<bool(const v1::FleetUpdate&)>;
 
 // How a client reaches the server (the `riskplan` flags of the same names,
 // and any other program built on this library, e.g. a gateway). Every field
@@ -93,6 +96,12 @@ class RiskplanClient {
   // returned false, DEADLINE_EXCEEDED past `timeout`, or the server's error.
   grpc::Status Plan(const v1::PlanRequest& request, const PlanUpdateCallback& on_update,
                     absl::Duration timeout = absl::InfiniteDuration());
+
+  // Runs a fleet to its end, passing every update to `on_update`: each
+  // mission's improvements (with send_improvements) and its one final
+  // message or error. The status as Plan's.
+  grpc::Status PlanFleet(const v1::FleetRequest& request, const FleetUpdateCallback& on_update,
+                         absl::Duration timeout = absl::InfiniteDuration());
 
   // grpc.health.v1.Health/Check of `service` ("" for the whole server);
   // `*status` is set when the call succeeds. REQUIRES: status != nullptr.

@@ -13,6 +13,7 @@
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_format.h"
+#include "client/fleet_file.h"
 #include "client/load_generator.h"
 #include "client/picture.h"
 #include "client/trajectory_text.h"
@@ -37,6 +38,8 @@ absl::Status InFlag(const char* flag, const absl::Status& status) {
   return absl::Status(status.code(), absl::StrFormat("%s: %s", flag, status.message()));
 }
 
+}  // namespace
+
 // The code by name, as docs/api.md lists the codes with their meaning and
 // whether a retry can help.
 // A failure to connect or a refusal comes with what it most likely means
@@ -47,6 +50,8 @@ int RpcError(const CliOptions& o, const char* method, const grpc::Status& status
                ExplainStatus(status, o.connection).c_str());
   return 1;
 }
+
+namespace {
 
 // The proto3 JSON mapping, with the proto's own field names (sample_count,
 // not sampleCount) so that --json output matches the proto and the docs.
@@ -295,6 +300,8 @@ absl::StatusOr<std::pair<v1::Pose, v1::Pose>> LocalEndpoints(RiskplanClient& cli
   return std::pair{request.start(), first};
 }
 
+}  // namespace
+
 // The map's landing sites and the picture's layers, fetched before the plan
 // so that a plan cut short by the server's end can still be drawn. The layers
 // are downsampled by the server to the picture's size: a full layer is 4
@@ -319,6 +326,8 @@ int FetchPictureLayers(const CliOptions& o, RiskplanClient& client, PictureInput
   }
   return 0;
 }
+
+namespace {
 
 // --trajectory_out: the waypoints of `best`; 0, or the exit code of a
 // failure.
@@ -402,6 +411,10 @@ int KeepWhatWasReceived(const CliOptions& o, RiskplanClient& client, const v1::P
 }
 
 }  // namespace
+
+absl::StatusOr<v1::PlanRequest> PlanRequestFromOptions(const CliOptions& o) {
+  return PlanRequest(o);
+}
 
 int RunMaps(const CliOptions& o, RiskplanClient& client) {
   v1::ListMapsResponse response;
@@ -610,6 +623,12 @@ int RunLoad(const CliOptions& o, RiskplanClient& client) {
     absl::StatusOr<v1::PlanRequest> request = PlanRequest(o);
     if (!request.ok()) return Usage(std::string(request.status().message()));
     load.plan_request = *request;
+  } else if (o.rpc == "fleet") {
+    load.rpc = LoadRpc::kPlanFleet;
+    if (o.missions.empty()) return Usage("--rpc=fleet needs --missions=FILE.json");
+    absl::StatusOr<v1::FleetRequest> request = ReadMissionsFile(o.missions, o);
+    if (!request.ok()) return Usage(std::string(request.status().message()));
+    load.fleet_request = *request;
   } else if (o.rpc == "ping") {
     load.rpc = LoadRpc::kPing;
   } else if (o.rpc == "connect") {
@@ -622,7 +641,7 @@ int RunLoad(const CliOptions& o, RiskplanClient& client) {
       return *MakeChannel(o.server, o.connection, own);
     };
   } else {
-    return Usage(absl::StrFormat("--rpc=%s: must be eval, plan, ping or connect", o.rpc));
+    return Usage(absl::StrFormat("--rpc=%s: must be eval, plan, fleet, ping or connect", o.rpc));
   }
   if (o.mode != "closed" && o.mode != "open") {
     return Usage(absl::StrFormat("--mode=%s: must be closed or open", o.mode));

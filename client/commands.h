@@ -5,16 +5,19 @@
 //   1  the RPC failed (the status code and message are printed; a `plan`
 //      whose stream broke still writes the best trajectory it received);
 //   2  bad command-line input;
-//   3  `plan` only: the plan ended without a trajectory (NO_SOLUTION, SHUTDOWN).
+//   3  `plan`: the plan ended without a trajectory (NO_SOLUTION, SHUTDOWN);
+//      `fleet`: a mission ended without a trajectory or with its own error.
 #ifndef RISKPLAN_CLIENT_COMMANDS_H_
 #define RISKPLAN_CLIENT_COMMANDS_H_
 
 #include <cstdint>
 #include <string>
 
+#include "absl/status/statusor.h"
 #include "absl/time/time.h"
 #include "client/client.h"
 #include "client/exports.h"
+#include "client/picture.h"
 
 namespace riskplan::client {
 
@@ -61,8 +64,11 @@ struct CliOptions {
   // Target level of safety, expected casualties per flight hour (plan, eval).
   double target_level_of_safety = 1e-6;
 
+  // Fleet (fleet, load --rpc=fleet): the missions file (client/fleet_file.h).
+  std::string missions;
+
   // Load.
-  std::string rpc = "eval";     // eval | plan | ping
+  std::string rpc = "eval";     // eval | plan | fleet | ping
   std::string mode = "closed";  // closed | open
   int concurrency = 8;
   double rate = 100.0;
@@ -76,6 +82,16 @@ int RunMaps(const CliOptions& options, RiskplanClient& client);
 int RunEval(const CliOptions& options, RiskplanClient& client);
 int RunPlan(const CliOptions& options, RiskplanClient& client);
 int RunLoad(const CliOptions& options, RiskplanClient& client);
+int RunFleet(const CliOptions& options, RiskplanClient& client);
+
+// Shared by the commands.
+// The PlanRequest of the plan flags (`riskplan plan`); errors name the flag.
+absl::StatusOr<v1::PlanRequest> PlanRequestFromOptions(const CliOptions& options);
+// The map's landing sites and density and no-fly layers at --picture_size,
+// into `picture`; 0, or the exit code of a failed call (printed).
+int FetchPictureLayers(const CliOptions& options, RiskplanClient& client, PictureInput* picture);
+// Prints "riskplan: METHOD failed: CODE: message (hint)"; returns 1.
+int RpcError(const CliOptions& options, const char* method, const grpc::Status& status);
 
 }  // namespace riskplan::client
 

@@ -30,7 +30,8 @@ class LoadRun {
   LoadReport Run(const LoadProgressCallback& progress);
 
  private:
-  class PlanReactor;
+  template <typename Update>
+  class StreamReactor;
 
   // Sends one call; `intended` is when it should have been sent.
   void IssueAsync(absl::Time intended);
@@ -59,24 +60,28 @@ class LoadRun {
   absl::Time last_done_ ABSL_GUARDED_BY(mu_);
 };
 
-// One streaming plan call, callback API. It owns itself: gRPC calls OnDone
-// last, after every other reaction, so that is where it is deleted. The run
-// outlives it, since Run waits until no call is outstanding.
-class LoadRun::PlanReactor final : public grpc::ClientReadReactor<v1::PlanUpdate> {
+// One streaming call (PlanTrajectory, PlanFleet), callback API. It owns
+// itself: gRPC calls OnDone last, after every other reaction, so that is
+// where it is deleted. The run outlives it, since Run waits until no call is
+// outstanding.
+template <typename Update>
+class LoadRun::StreamReactor final : public grpc::ClientReadReactor<Update> {
  public:
-  PlanReactor(LoadRun* run, absl::Time intended) : run_(run), intended_(intended) {
+  // `start(context, reactor)` begins the call (stub->async()->Method(...)).
+  template <typename Start>
+  StreamReactor(LoadRun* run, absl::Time intended, Start start) : run_(run), intended_(intended) {
     SetTimeout(&context_, run->options_.timeout);
-    run->stub_->async()->PlanTrajectory(&context_, &run->options_.plan_request, this);
+    start(&context_, this);
     // The first read is queued before the call starts, so no message can
     // arrive without a read waiting for it.
-    StartRead(&update_);
-    StartCall();
+    this->StartRead(&update_);
+    this->StartCall();
   }
   void OnReadDone(bool ok) override {
     // !ok: the stream has ended; OnDone follows with the status.
     if (!ok) return;
     if (updates_++ == 0) run_->RecordFirstUpdate(intended_, absl::Now());
-    StartRead(&update_);
+    this->StartRead(&update_);
   }
   void OnDone(const grpc::Status& status) override {
     {
@@ -91,7 +96,7 @@ class LoadRun::PlanReactor final : public grpc::ClientReadReactor<v1::PlanUpdate
   LoadRun* const run_;
   const absl::Time intended_;
   grpc::ClientContext context_;
-  v1::PlanUpdate update_;
+  Update update_;
   int64_t updates_ = 0;
 };
 
@@ -103,7 +108,18 @@ void LoadRun::IssueAsync(absl::Time intended) {
   }
   switch (options_.rpc) {
     case LoadRpc::kPlanTrajectory:
-      new PlanReactor(this, intended);
+      new StreamReactor<v1::PlanUpdate>(
+          this, intended,
+          [this](grpc::ClientContext* context, grpc::ClientReadReactor<v1::PlanUpdate>* reactor) {
+            stub_->async()->PlanTrajectory(context, &options_.plan_request, reactor);
+          });
+      return;
+    case LoadRpc::kPlanFleet:
+      new StreamReactor<v1::FleetUpdate>(
+          this, intended,
+          [this](grpc::ClientContext* context, grpc::ClientReadReactor<v1::FleetUpdate>* reactor) {
+            stub_->async()->PlanFleet(context, &options_.fleet_request, reactor);
+          });
       return;
     case LoadRpc::kEvaluateRisk: {
       // The callback API needs the context and the response to live until
@@ -151,6 +167,19 @@ void LoadRun::CallSync(absl::Time intended) {
       std::unique_ptr<grpc::ClientReader<v1::PlanUpdate>> reader =
           stub_->PlanTrajectory(&context, options_.plan_request);
       v1::PlanUpdate update;
+      int64_t updates = 0;
+      while (reader->Read(&update)) {
+        if (updates++ == 0) RecordFirstUpdate(intended, absl::Now());
+      }
+      status = reader->Finish();
+      absl::MutexLock lock(&mu_);
+      report_.plan_updates += updates;
+      break;
+    }
+    case LoadRpc::kPlanFleet: {
+      std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> reader =
+          stub_->PlanFleet(&context, options_.fleet_request);
+      v1::FleetUpdate update;
       int64_t updates = 0;
       while (reader->Read(&update)) {
         if (updates++ == 0) RecordFirstUpdate(intended, absl::Now());
@@ -324,7 +353,7 @@ nlohmann::json ReportJson(const LoadReport& r) {
   } else {
     j["rate_per_s"] = r.options.rate_per_s;
   }
-  if (r.options.rpc == LoadRpc::kPlanTrajectory) {
+  if (r.options.rpc == LoadRpc::kPlanTrajectory || r.options.rpc == LoadRpc::kPlanFleet) {
     j["first_update_ms"] = HistogramJson(r.first_update);
     j["plan_updates"] = r.plan_updates;
   }
@@ -344,7 +373,8 @@ std::string PhaseText(const LoadReport& r) {
       r.latency.Percentile(50) * 1e3, r.latency.Percentile(90) * 1e3,
       r.latency.Percentile(99) * 1e3, r.latency.Percentile(99.9) * 1e3, r.latency.min() * 1e3,
       r.latency.mean() * 1e3, r.latency.max() * 1e3);
-  if (r.options.rpc == LoadRpc::kPlanTrajectory && r.first_update.count() > 0) {
+  if ((r.options.rpc == LoadRpc::kPlanTrajectory || r.options.rpc == LoadRpc::kPlanFleet) &&
+      r.first_update.count() > 0) {
     absl::StrAppendFormat(&out, "  first update ms: p50 %.3f  p99 %.3f; %d updates received\n",
                           r.first_update.Percentile(50) * 1e3, r.first_update.Percentile(99) * 1e3,
                           r.plan_updates);
@@ -367,6 +397,8 @@ std::string LoadRpcName(LoadRpc rpc) {
       return "EvaluateRisk";
     case LoadRpc::kPlanTrajectory:
       return "PlanTrajectory";
+    case LoadRpc::kPlanFleet:
+      return "PlanFleet";
     case LoadRpc::kPing:
       return "Ping";
     case LoadRpc::kConnect:

@@ -27,10 +27,13 @@ namespace riskplan::client {
 
 // kConnect: every call opens a new connection (TCP, and the TLS handshake
 // when TLS is on) and sends one Ping on it: the cost of connecting.
-enum class LoadRpc { kEvaluateRisk, kPlanTrajectory, kPing, kConnect };
+// kPlanFleet: one call is one whole fleet (its latency: until every mission
+// has ended; plan_updates counts its FleetUpdates).
+enum class LoadRpc { kEvaluateRisk, kPlanTrajectory, kPing, kConnect, kPlanFleet };
 enum class LoadMode { kClosed, kOpen };
 
-// "EvaluateRisk", "PlanTrajectory", "Ping", "Connect"; "closed", "open".
+// "EvaluateRisk", "PlanTrajectory", "Ping", "Connect", "PlanFleet"; "closed",
+// "open".
 std::string LoadRpcName(LoadRpc rpc);
 std::string LoadModeName(LoadMode mode);
 
@@ -46,6 +49,7 @@ struct LoadOptions {
   int max_outstanding = 10000;
   v1::EvaluateRiskRequest eval_request;  // for kEvaluateRisk
   v1::PlanRequest plan_request;          // for kPlanTrajectory
+  v1::FleetRequest fleet_request;        // for kPlanFleet
   // For kConnect (closed loop only): a channel that shares no connection
   // with any other.
   std::function<std::shared_ptr<grpc::Channel>()> new_channel;
@@ -61,8 +65,8 @@ struct LoadReport {
   int64_t completed = 0;
   std::map<std::string, int64_t> codes;  // status code name -> calls
   LatencyHistogram latency;              // every completed call, whatever its code
-  LatencyHistogram first_update;         // plans: time to the first streamed message
-  int64_t plan_updates = 0;              // plans: messages received
+  LatencyHistogram first_update;         // plans, fleets: time to the first streamed message
+  int64_t plan_updates = 0;              // plans, fleets: messages received
 
   int64_t ok() const;
   int64_t errors() const { return completed - ok() + Overloaded(); }

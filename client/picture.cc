@@ -83,12 +83,43 @@ RgbaImage RenderMap(const PictureInput& in) {
     DrawPath(&img, pr, in.improvements[k], final ? kFinalWidth : kImprovementWidth,
              ImprovementColour(k, n), final ? 1.0 : kImprovementAlpha);
   }
+  for (const v1::Trajectory& t : in.fleet) {
+    DrawPath(&img, pr, t, kFinalWidth, ImprovementColour(1, 2), 1.0);
+  }
   for (const v1::LandingSite& site : in.map.landing_sites()) {
     DrawDisc(&img, pr.X(site.x()), pr.Y(site.y()), kLandingSiteRadius, kLandingSiteColour);
+  }
+  for (const v1::Pose& p : in.fleet_starts) {
+    DrawDisc(&img, pr.X(p.x()), pr.Y(p.y()), kEndpointRadius, kStartColour);
   }
   DrawDisc(&img, pr.X(in.start.x()), pr.Y(in.start.y()), kEndpointRadius, kStartColour);
   DrawDisc(&img, pr.X(in.goal.x()), pr.Y(in.goal.y()), kEndpointRadius, kGoalColour);
   return img;
+}
+
+// `text` with the characters XML gives a meaning escaped (a mission id is
+// the client's free text).
+std::string SvgText(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
 }
 
 std::string SvgPoints(const Projection& pr, const v1::Trajectory& t) {
@@ -235,6 +266,21 @@ std::string RenderSvg(const PictureInput& in) {
         SvgColour(ImprovementColour(k, n)), best ? 3.0 : 1.2, best ? 1.0 : kImprovementAlpha,
         SvgPoints(pr, in.improvements[k]), k + 1, in.improvements[k].risk(),
         in.improvements[k].length_m());
+  }
+  for (size_t k = 0; k < in.fleet.size(); ++k) {
+    absl::StrAppendFormat(
+        &svg,
+        "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"3.0\" points=\"%s\"><title>%s: "
+        "risk %.6g, length %.0f m</title></polyline>\n",
+        SvgColour(ImprovementColour(1, 2)), SvgPoints(pr, in.fleet[k]),
+        k < in.fleet_labels.size() ? SvgText(in.fleet_labels[k]) : "", in.fleet[k].risk(),
+        in.fleet[k].length_m());
+  }
+  for (const v1::Pose& p : in.fleet_starts) {
+    absl::StrAppendFormat(&svg,
+                          "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"5\" fill=\"%s\" "
+                          "stroke=\"white\" stroke-width=\"2\"/>\n",
+                          pr.X(p.x()), pr.Y(p.y()), SvgColour(kStartColour));
   }
   absl::StrAppendFormat(&svg,
                         "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"7\" fill=\"%s\" "

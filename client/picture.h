@@ -29,6 +29,12 @@ struct PictureInput {
   std::vector<v1::TreeEdge> tree;            // may be empty
   v1::Pose start;
   v1::Pose goal;
+  // A fleet (riskplan fleet): every mission's final trajectory, each drawn
+  // as a final one, with its label (the mission id) as its SVG tooltip, and
+  // every mission's start, drawn as `start` is. Empty for a single plan.
+  std::vector<v1::Trajectory> fleet;
+  std::vector<std::string> fleet_labels;  // one per fleet trajectory
+  std::vector<v1::Pose> fleet_starts;
   std::string caption;  // text above the map, word-wrapped to the picture's width
 };
 

@@ -79,9 +79,13 @@ ABSL_FLAG(std::string, plan_firmware, "px4",
 ABSL_FLAG(double, target_level_of_safety, 1e-6,
           "plan, eval: target level of safety, expected casualties per flight hour (SORA: 1e-6); "
           "the risk per flight hour is compared with it");
+ABSL_FLAG(std::string, missions, "",
+          "fleet, load --rpc=fleet: the missions file, JSON (docs/api.md, \"Missions files\"); "
+          "a mission's fields take the place of the plan flags of the same names");
 ABSL_FLAG(std::string, rpc, "eval",
-          "load: the RPC to load, eval | plan | ping | connect (a new connection, TLS handshake "
-          "included, and one Ping on it, per call; closed loop only)");
+          "load: the RPC to load, eval | plan | fleet (one call: the whole --missions fleet) | "
+          "ping | connect (a new connection, TLS handshake included, and one Ping on it, per "
+          "call; closed loop only)");
 ABSL_FLAG(std::string, mode, "closed",
           "load: closed (--concurrency callers back to back) or open (--rate calls per second, "
           "latency from the intended send time)");
@@ -164,16 +168,35 @@ riskplan::cmdline::ProgramHelp Help() {
        "--goal=wgs84:49.6301,6.1625,430,90 --plan_out=mission.plan",
        join(join(join(connection, {"map"}), planning),
             join({"params", "picture", "picture_size", "trajectory_out"}, exports))},
-      {"load", "load test of one RPC (eval, plan or ping), closed or open loop",
-       "  riskplan load [--rpc=eval|plan|ping] [--mode=closed|open] [flags]\n"
+      {"fleet", "plan many missions in one call (PlanFleet), with progress per mission",
+       "  riskplan fleet --missions=FILE.json [plan flags] [--picture=F.svg]\n"
        "\n"
-       "--rpc=eval sends the trajectory of eval's flags, --rpc=plan the plan of plan's.\n"
+       "FILE.json: {\"missions\": [{\"id\": \"m1\", \"start\": \"x,y,z,theta\", ...}, ...],\n"
+       "\"tenant\": \"...\", \"send_improvements\": true} (docs/api.md, \"Missions files\").\n"
+       "A mission's keys are the plan flags' names (start, goal, map, algorithm,\n"
+       "budget_ms, iterations, seed, params, planner_params, obstacles,\n"
+       "min_update_interval_ms, display_step_m, tree) plus id and priority; what a\n"
+       "mission does not give, the flag gives (e.g. one --goal for all).\n"
+       "Prints each mission's end as it comes, then a summary table; --picture draws\n"
+       "every mission's trajectory on --map. Exit code 3: some mission has no\n"
+       "trajectory (its own error, or NO_SOLUTION).\n"
+       "\n"
+       "Example:\n"
+       "  riskplan fleet --missions=fleet.json --goal=6800,6500,250,0.785 --iterations=2000 "
+       "--picture=fleet.svg",
+       join(join(join(connection, {"map", "missions"}), planning),
+            {"params", "picture", "picture_size"})},
+      {"load", "load test of one RPC (eval, plan, fleet or ping), closed or open loop",
+       "  riskplan load [--rpc=eval|plan|fleet|ping] [--mode=closed|open] [flags]\n"
+       "\n"
+       "--rpc=eval sends the trajectory of eval's flags, --rpc=plan the plan of plan's,\n"
+       "--rpc=fleet the fleet of --missions.\n"
        "\n"
        "Example:\n"
        "  riskplan load --rpc=eval --polyline='1000,1000,250;2000,1000,250' --concurrency=4 "
        "--ceiling",
-       join(join(join(connection, {"map", "rpc", "mode", "concurrency", "rate", "duration_s",
-                                   "max_outstanding", "ceiling", "report_json"}),
+       join(join(join(connection, {"map", "rpc", "missions", "mode", "concurrency", "rate",
+                                   "duration_s", "max_outstanding", "ceiling", "report_json"}),
                  join(trajectory, join({"samples", "params"}, two_tier))),
             planning)},
   };
@@ -232,6 +255,7 @@ int main(int argc, char** argv) {
   o.exports.spacing_m = absl::GetFlag(FLAGS_export_spacing_m);
   o.plan_firmware = absl::GetFlag(FLAGS_plan_firmware);
   o.target_level_of_safety = absl::GetFlag(FLAGS_target_level_of_safety);
+  o.missions = absl::GetFlag(FLAGS_missions);
   o.rpc = absl::GetFlag(FLAGS_rpc);
   o.mode = absl::GetFlag(FLAGS_mode);
   o.concurrency = absl::GetFlag(FLAGS_concurrency);
@@ -255,5 +279,6 @@ int main(int argc, char** argv) {
   if (command == "maps") return riskplan::client::RunMaps(o, client);
   if (command == "eval") return riskplan::client::RunEval(o, client);
   if (command == "plan") return riskplan::client::RunPlan(o, client);
+  if (command == "fleet") return riskplan::client::RunFleet(o, client);
   return riskplan::client::RunLoad(o, client);  // ParseCommand allows no other
 }

@@ -14,7 +14,7 @@
 //
 // Roles, each with everything of the ones before it:
 //   viewer    ListMaps, GetMapLayer, GetRiskLayer, EvaluateRisk, reflection
-//   planner   + PlanTrajectory
+//   planner   + PlanTrajectory, PlanFleet
 //   operator  + Ping (what `riskplan load` calls at rate)
 // grpc.health.v1.Health is open to everyone, with or without a token.
 //

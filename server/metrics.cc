@@ -53,6 +53,25 @@ ServerMetrics::ServerMetrics() : registry_(std::make_shared<prometheus::Registry
                      .Name("riskplan_map_memory_bytes")
                      .Help("Bytes held by each loaded map's layers")
                      .Register(*registry_);
+  fleet_admitted_ = &prometheus::BuildCounter()
+                         .Name("riskplan_fleet_missions_admitted_total")
+                         .Help(
+                             "PlanFleet missions admitted (queued to be planned or refused "
+                             "one by one)")
+                         .Register(*registry_)
+                         .Add({});
+  fleet_ended_ = &prometheus::BuildCounter()
+                      .Name("riskplan_fleet_missions_ended_total")
+                      .Help(
+                          "PlanFleet missions ended, by outcome: completed (a final "
+                          "PlanUpdate), failed (an error), cancelled (the client went)")
+                      .Register(*registry_);
+  fleet_missions_ = &prometheus::BuildGauge()
+                         .Name("riskplan_fleet_missions")
+                         .Help(
+                             "PlanFleet missions admitted and not ended, by state: queued "
+                             "(waiting for a plan slot) or running")
+                         .Register(*registry_);
   model_builds_ = &prometheus::BuildCounter()
                        .Name("riskplan_model_cache_builds_total")
                        .Help("Risk models built for overridden model parameters")
@@ -114,6 +133,17 @@ void ServerMetrics::RecordPlan(std::string_view end_reason, absl::Duration plann
 void ServerMetrics::RecordUpdates(int64_t sent, int64_t replaced) {
   plan_updates_->Add({{"kind", "sent"}}).Increment(static_cast<double>(sent));
   plan_updates_->Add({{"kind", "replaced"}}).Increment(static_cast<double>(replaced));
+}
+
+void ServerMetrics::RecordFleetMissionsEnded(int64_t completed, int64_t failed, int64_t cancelled) {
+  fleet_ended_->Add({{"outcome", "completed"}}).Increment(static_cast<double>(completed));
+  fleet_ended_->Add({{"outcome", "failed"}}).Increment(static_cast<double>(failed));
+  fleet_ended_->Add({{"outcome", "cancelled"}}).Increment(static_cast<double>(cancelled));
+}
+
+void ServerMetrics::SetFleetMissions(int64_t queued, int64_t running) {
+  fleet_missions_->Add({{"state", "queued"}}).Set(static_cast<double>(queued));
+  fleet_missions_->Add({{"state", "running"}}).Set(static_cast<double>(running));
 }
 
 void ServerMetrics::SetMapMemory(const std::string& map, double bytes) {

@@ -10,6 +10,11 @@
 //   riskplan_plan_duration_seconds{end_reason}     histogram (planner time of finished plans)
 //   riskplan_plan_updates_total{kind}              counter (kind: sent, replaced)
 //   riskplan_map_memory_bytes{map}                 gauge
+//   riskplan_fleet_missions_admitted_total         counter (PlanFleet missions admitted)
+//   riskplan_fleet_missions_ended_total{outcome}   counter (outcome: completed, with a final
+//                                                  PlanUpdate; failed, with an error; cancelled,
+//                                                  unreported because the client went)
+//   riskplan_fleet_missions{state}                 gauge (state: queued, running)
 //   riskplan_model_cache_builds_total              counter
 //   riskplan_accept_errors_total                   counter (failed accepts, ConnectionAcceptor)
 //
@@ -17,6 +22,7 @@
 #ifndef RISKPLAN_SERVER_METRICS_H_
 #define RISKPLAN_SERVER_METRICS_H_
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -54,6 +60,11 @@ class ServerMetrics {
   void RecordPlan(std::string_view end_reason, absl::Duration planner_time);
   void RecordUpdates(int64_t sent, int64_t replaced);
   void SetMapMemory(const std::string& map, double bytes);
+  void RecordFleetMissionsAdmitted(int64_t missions) {
+    fleet_admitted_->Increment(static_cast<double>(missions));
+  }
+  void RecordFleetMissionsEnded(int64_t completed, int64_t failed, int64_t cancelled);
+  void SetFleetMissions(int64_t queued, int64_t running);
   void RecordModelBuild() { model_builds_->Increment(); }
   void RecordAcceptError() { accept_errors_->Increment(); }
 
@@ -74,6 +85,9 @@ class ServerMetrics {
   prometheus::Family<prometheus::Histogram>* plan_duration_;
   prometheus::Family<prometheus::Counter>* plan_updates_;
   prometheus::Family<prometheus::Gauge>* map_memory_;
+  prometheus::Counter* fleet_admitted_;
+  prometheus::Family<prometheus::Counter>* fleet_ended_;
+  prometheus::Family<prometheus::Gauge>* fleet_missions_;
   prometheus::Counter* model_builds_;
   prometheus::Counter* accept_errors_;
 };

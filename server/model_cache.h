@@ -71,6 +71,9 @@ class RiskModelCache {
   };
   Stats stats() const;
 
+  // A string that is equal exactly when every parameter is equal, bit for bit.
+  static std::string Fingerprint(const ModelParams& params);
+
  private:
   struct Entry;
 
@@ -79,8 +82,6 @@ class RiskModelCache {
     limits_.stop = StopCondition(&stop_builds_);
   }
 
-  // A string that is equal exactly when every parameter is equal, bit for bit.
-  static std::string Fingerprint(const ModelParams& params);
   void TouchLocked(const std::string& key) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void EvictLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 

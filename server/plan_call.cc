@@ -18,29 +18,36 @@ namespace riskplan::server {
 // ---------------------------------------------------------------------------
 // ActivePlans
 
-bool ActivePlans::TryAdmit(const std::shared_ptr<PlanCall>& call) {
+bool ActivePlans::TryAdmit(const std::shared_ptr<ActivePlan>& plan) {
   absl::MutexLock lock(&mu_);
   if (static_cast<int>(calls_.size()) >= max_running_) return false;
-  calls_.insert(call);
+  calls_.insert(plan);
   return true;
 }
 
 // A linear search: the set holds at most --max_running_plans calls (a few
 // dozen), and a raw pointer cannot look up a set of shared_ptrs directly.
-void ActivePlans::Release(const PlanCall* call) {
-  absl::MutexLock lock(&mu_);
-  for (auto it = calls_.begin(); it != calls_.end(); ++it) {
-    if (it->get() == call) {
-      calls_.erase(it);
-      return;
+void ActivePlans::Release(const ActivePlan* plan) {
+  // The released plan is destroyed (if this was its last reference) outside
+  // mu_, and the listener runs outside it too: it may admit another plan.
+  std::shared_ptr<ActivePlan> released;
+  {
+    absl::MutexLock lock(&mu_);
+    for (auto it = calls_.begin(); it != calls_.end(); ++it) {
+      if (it->get() == plan) {
+        released = *it;
+        calls_.erase(it);
+        break;
+      }
     }
   }
+  if (released != nullptr && listener_) listener_();
 }
 
-bool ActivePlans::IsAdmitted(const PlanCall* call) const {
+bool ActivePlans::IsAdmitted(const ActivePlan* plan) const {
   absl::MutexLock lock(&mu_);
-  for (const std::shared_ptr<PlanCall>& admitted : calls_) {
-    if (admitted.get() == call) return true;
+  for (const std::shared_ptr<ActivePlan>& admitted : calls_) {
+    if (admitted.get() == plan) return true;
   }
   return false;
 }
@@ -49,12 +56,12 @@ void ActivePlans::StopAll() {
   // Stopped from a copy, outside mu_: the copy keeps each call alive while
   // it is stopped, no call's lock is taken under mu_, and a call releasing
   // its slot (Run, on a pool thread) does not wait for the whole loop.
-  std::set<std::shared_ptr<PlanCall>> calls;
+  std::set<std::shared_ptr<ActivePlan>> calls;
   {
     absl::MutexLock lock(&mu_);
     calls = calls_;
   }
-  for (const std::shared_ptr<PlanCall>& call : calls) call->StopForShutdown();
+  for (const std::shared_ptr<ActivePlan>& call : calls) call->StopForShutdown();
 }
 
 bool ActivePlans::WaitUntilIdle(absl::Time deadline) {

@@ -29,6 +29,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <set>
 #include <string>
@@ -53,19 +54,31 @@
 
 namespace riskplan::server {
 
-class PlanCall;
+// What holds a plan slot: a PlanTrajectory call, or a group of PlanFleet
+// missions planned together (server/fleet_scheduler.h).
+class ActivePlan {
+ public:
+  virtual ~ActivePlan() = default;
+  // Stops the planner; the plan ends with end reason SHUTDOWN and its best
+  // trajectory so far. Safe from any thread, at any time.
+  virtual void StopForShutdown() = 0;
+};
 
 // Admission control and the set of running plans (for shutdown). Thread-safe.
 class ActivePlans {
  public:
   explicit ActivePlans(int max_running) : max_running_(max_running) {}
 
-  // Admits `call` unless `max_running` plans are already admitted.
-  bool TryAdmit(const std::shared_ptr<PlanCall>& call);
-  // Frees the slot of an admitted call. Idempotent.
-  void Release(const PlanCall* call);
-  // Whether `call` holds a slot (admitted and not yet released).
-  bool IsAdmitted(const PlanCall* call) const;
+  // Admits `plan` unless `max_running` plans are already admitted.
+  bool TryAdmit(const std::shared_ptr<ActivePlan>& plan);
+  // Frees the slot of an admitted plan, then (outside the lock) calls the
+  // release listener. Idempotent.
+  void Release(const ActivePlan* plan);
+  // Whether `plan` holds a slot (admitted and not yet released).
+  bool IsAdmitted(const ActivePlan* plan) const;
+  // Called after every Release that freed a slot (the fleet scheduler starts
+  // its next group). Set once, before any plan is admitted.
+  void SetReleaseListener(std::function<void()> listener) { listener_ = std::move(listener); }
   // Cancels every admitted plan with end reason SHUTDOWN.
   void StopAll();
   // Waits until no plan is admitted or `deadline` passes; true when none is.
@@ -75,8 +88,9 @@ class ActivePlans {
 
  private:
   const int max_running_;
+  std::function<void()> listener_;
   mutable absl::Mutex mu_;
-  std::set<std::shared_ptr<PlanCall>> calls_ ABSL_GUARDED_BY(mu_);
+  std::set<std::shared_ptr<ActivePlan>> calls_ ABSL_GUARDED_BY(mu_);
 };
 
 // What a PlanCall needs from the server; every pointer outlives the calls.
@@ -92,6 +106,7 @@ struct PlanCallEnv {
 // Writes each PlanUpdate serialised by the service itself (the method is
 // raw, see server/message_codec.h).
 class PlanCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
+                       public ActivePlan,
                        public std::enable_shared_from_this<PlanCall> {
  public:
   // A call for a validated request. Call Start() next.
@@ -118,7 +133,7 @@ class PlanCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
 
   // Cancels the planner; the plan ends with end reason SHUTDOWN and its best
   // trajectory so far. Safe from any thread, at any time.
-  void StopForShutdown();
+  void StopForShutdown() override;
 
   // grpc::ServerWriteReactor.
   void OnWriteDone(bool ok) override;

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "accel/kernel_evaluator.h"
@@ -245,8 +246,17 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
                                                 : std::make_shared<Authorizer>(nullptr)),
       checkers_(std::make_shared<FeasibilityCache>(options.max_cached_checkers)),
       active_(options.max_running_plans),
+      fleet_(FleetEnv{.models = &models_,
+                      .metrics = &metrics_,
+                      .active = &active_,
+                      .pool = &plan_pool_,
+                      .engine = options.engine},
+             options.fleet_plan_slots, options.max_admitted_missions),
       eval_pool_(options.eval_threads, options.max_queued_evals),
       plan_pool_(options.plan_threads) {
+  // Every plan slot freed (a plan's or a fleet group's) may start a waiting
+  // fleet group.
+  active_.SetReleaseListener([this] { fleet_.Pump(); });
   // The maps never change while the server runs: ListMaps's answer is built
   // once (MapInfoFromMap scans the terrain) and copied for every call.
   for (const std::shared_ptr<const RiskMap>& map : maps_.maps()) {
@@ -328,6 +338,60 @@ grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanTrajectory(
     metrics_.PlanReleased();
     call->Reject(kDraining);
   }
+  return call.get();
+}
+
+grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanFleet(
+    grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* raw_request) {
+  // PlanTrajectory's order: the caller, the drain, the request, then
+  // admission (of the missions, all or none), before any mission plans.
+  Caller caller;
+  const grpc::Status authorized = authorizer_->Check(*ctx, "PlanFleet", &caller);
+  std::shared_ptr<FleetCall> call = FleetCall::Create(ctx, &metrics_, &open_calls_, caller);
+  if (!authorized.ok()) {
+    call->Reject(authorized);
+    return call.get();
+  }
+  if (draining()) {
+    call->Reject(kDraining);
+    return call.get();
+  }
+  v1::FleetRequest request;
+  if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
+    call->Reject(ToGrpcStatus(s));
+    return call.get();
+  }
+  absl::StatusOr<FleetSpec> spec = ValidateFleetRequest(request, maps_, options_.limits);
+  if (!spec.ok()) {
+    call->Reject(ToGrpcStatus(spec.status()));
+    return call.get();
+  }
+  const int64_t missions = static_cast<int64_t>(spec->missions.size());
+  if (!fleet_.TryAdmit(missions)) {
+    call->Reject(grpc::Status(
+        grpc::StatusCode::RESOURCE_EXHAUSTED,
+        absl::StrFormat("riskplan-server cannot admit this fleet's %d missions: at most %d fleet "
+                        "missions are admitted at once (--max_admitted_missions); retry later or "
+                        "on another replica",
+                        missions, fleet_.max_admitted_missions())));
+    return call.get();
+  }
+  metrics_.RecordFleetMissionsAdmitted(missions);
+  auto shared = std::make_shared<const FleetSpec>(*std::move(spec));
+  const std::vector<MissionGroup> groups = GroupMissions(*shared);
+  int64_t grouped = 0;
+  for (const MissionGroup& g : groups) grouped += static_cast<int64_t>(g.missions.size());
+  // The invalid missions end now (Start), and count no longer.
+  fleet_.Unadmit(missions - grouped);
+  // Fair share is between authenticated callers; without a token or a
+  // client certificate, the request's tenant says who the fleet is for
+  // (prefixed, so that it can never pass for an authenticated identity).
+  const std::string identity =
+      !caller.identity.empty() ? caller.identity : absl::StrCat("tenant:", shared->tenant);
+  FleetCall* raw_call = call.get();
+  call->Start(shared, static_cast<int>(groups.size()),
+              [this, raw_call] { fleet_.DropQueued(raw_call); });
+  fleet_.Enqueue(call, shared, groups, identity);
   return call.get();
 }
 

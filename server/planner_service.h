@@ -16,11 +16,12 @@
 #include <memory>
 
 #include "accel/risk_engine.h"
-#include "server/auth.h"
 #include "core/base/cancellation.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
+#include "server/auth.h"
 #include "server/feasibility_cache.h"
+#include "server/fleet_scheduler.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
@@ -36,6 +37,11 @@ struct ServiceOptions {
   RequestLimits limits;
   int plan_threads = 2;            // planners running at once
   int max_running_plans = 4;       // admitted plans (planning or queued); more: RESOURCE_EXHAUSTED
+  // PlanFleet: mission groups planning at once (each also takes one of
+  // max_running_plans), and missions admitted at once over every fleet
+  // (queued or planning; a fleet that does not fit: RESOURCE_EXHAUSTED).
+  int fleet_plan_slots = 2;
+  int64_t max_admitted_missions = 1024;
   int eval_threads = 2;            // EvaluateRisk and GetMapLayer workers
   size_t max_queued_evals = 1024;  // waiting evaluations; more: RESOURCE_EXHAUSTED
   size_t max_cached_checkers = 8;  // two-tier feasibility checkers kept (EvaluateRisk.two_tier)
@@ -51,10 +57,10 @@ struct ServiceOptions {
 // riskplan.v1.Planner with every method raw (server/message_codec.h says
 // why): the service parses each request and serialises each response itself.
 using RawPlannerService = v1::Planner::WithRawCallbackMethod_PlanTrajectory<
-    v1::Planner::WithRawCallbackMethod_EvaluateRisk<
+    v1::Planner::WithRawCallbackMethod_PlanFleet<v1::Planner::WithRawCallbackMethod_EvaluateRisk<
         v1::Planner::WithRawCallbackMethod_ListMaps<v1::Planner::WithRawCallbackMethod_GetMapLayer<
             v1::Planner::WithRawCallbackMethod_GetRiskLayer<
-                v1::Planner::WithRawCallbackMethod_Ping<v1::Planner::Service>>>>>>;
+                v1::Planner::WithRawCallbackMethod_Ping<v1::Planner::Service>>>>>>>;
 
 class PlannerService final : public RawPlannerService {
  public:
@@ -69,6 +75,8 @@ class PlannerService final : public RawPlannerService {
   // method's request message), then serves it.
   grpc::ServerWriteReactor<grpc::ByteBuffer>* PlanTrajectory(
       grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* request) override;
+  grpc::ServerWriteReactor<grpc::ByteBuffer>* PlanFleet(grpc::CallbackServerContext* ctx,
+                                                        const grpc::ByteBuffer* request) override;
   grpc::ServerUnaryReactor* EvaluateRisk(grpc::CallbackServerContext* ctx,
                                          const grpc::ByteBuffer* request,
                                          grpc::ByteBuffer* response) override;
@@ -84,8 +92,12 @@ class PlannerService final : public RawPlannerService {
   grpc::ServerUnaryReactor* Ping(grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* request,
                                  grpc::ByteBuffer* response) override;
 
-  // From now on every new call gets UNAVAILABLE. Thread-safe.
-  void StartDraining() { draining_.store(true); }
+  // From now on every new call gets UNAVAILABLE, and fleet missions still
+  // waiting for a plan slot end at once (end reason SHUTDOWN). Thread-safe.
+  void StartDraining() {
+    draining_.store(true);
+    fleet_.StopQueued();
+  }
   bool draining() const { return draining_.load(); }
   // Stops the evaluations queued and running (they end with UNAVAILABLE)
   // and the model builds: the drain's last step before gRPC shuts down, so
@@ -111,6 +123,9 @@ class PlannerService final : public RawPlannerService {
   CancellationToken stop_evaluations_;  // cancelled by StopEvaluations
   ActivePlans active_;
   OpenCalls open_calls_;
+  // Its groups plan on plan_pool_, which is destroyed first (it runs the
+  // tasks still queued, and they use fleet_).
+  FleetScheduler fleet_;
   // Declared last: destroyed first, so queued tasks run while everything they
   // use is still alive.
   TimerQueue timer_;

@@ -49,6 +49,7 @@ struct RequestLimits {
   // Configuration risks of one GetRiskLayer (cells, times the heading bins
   // for the maximum over headings).
   int64_t max_risk_layer_evaluations = int64_t{1} << 24;
+  size_t max_fleet_missions = 256;  // missions of one PlanFleet request
 };
 
 // The bounds of building a model for a request: --max_table_bytes, and

@@ -54,6 +54,14 @@ ABSL_FLAG(int, plan_threads, 0, "Planners running at once (0: one per CPU core)"
 ABSL_FLAG(int, max_running_plans, 0,
           "Plans admitted at once, planning or waiting for a planning thread; one more gets "
           "RESOURCE_EXHAUSTED at once (0: twice --plan_threads)");
+ABSL_FLAG(int, fleet_plan_slots, 0,
+          "PlanFleet: mission groups planning at once, each also taking one of "
+          "--max_running_plans (0: --plan_threads, at most --max_running_plans)");
+ABSL_FLAG(int, max_fleet_missions, 256,
+          "PlanFleet: most missions in one request; more is INVALID_ARGUMENT");
+ABSL_FLAG(int64_t, max_admitted_missions, 1024,
+          "PlanFleet: missions admitted at once over every fleet, waiting or planning; a fleet "
+          "whose missions do not fit gets RESOURCE_EXHAUSTED at once");
 ABSL_FLAG(int, eval_threads, 0,
           "EvaluateRisk, GetMapLayer and GetRiskLayer workers (0: one per CPU core)");
 ABSL_FLAG(int, max_queued_evals, 1024,
@@ -225,6 +233,13 @@ ServiceOptions ServiceOptionsFromFlags() {
   // that is refused at once rather than queued without bound (docs/api.md).
   options.max_running_plans = absl::GetFlag(FLAGS_max_running_plans);
   if (options.max_running_plans == 0) options.max_running_plans = 2 * options.plan_threads;
+  options.fleet_plan_slots = absl::GetFlag(FLAGS_fleet_plan_slots);
+  if (options.fleet_plan_slots == 0) {
+    options.fleet_plan_slots = std::min(options.plan_threads, options.max_running_plans);
+  }
+  options.max_admitted_missions = absl::GetFlag(FLAGS_max_admitted_missions);
+  options.limits.max_fleet_missions =
+      static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_fleet_missions)));
   options.eval_threads = absl::GetFlag(FLAGS_eval_threads);
   if (options.eval_threads == 0) options.eval_threads = static_cast<int>(cores);
   options.max_queued_evals =
@@ -256,6 +271,13 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
   if (options.plan_threads < 1 || options.max_running_plans < 1 || options.eval_threads < 1) {
     return absl::InvalidArgumentError(
         "--plan_threads, --max_running_plans and --eval_threads must be >= 0");
+  }
+  if (options.fleet_plan_slots < 1 || options.fleet_plan_slots > options.max_running_plans ||
+      options.limits.max_fleet_missions < 1 || options.max_admitted_missions < 1 ||
+      static_cast<int64_t>(options.limits.max_fleet_missions) > options.max_admitted_missions) {
+    return absl::InvalidArgumentError(
+        "need 1 <= --fleet_plan_slots <= --max_running_plans (0: automatic) and 1 <= "
+        "--max_fleet_missions <= --max_admitted_missions");
   }
   if (options.limits.max_plan_time_ms < 1 || options.limits.default_plan_time_ms < 1 ||
       options.limits.default_plan_time_ms > options.limits.max_plan_time_ms) {

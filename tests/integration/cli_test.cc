@@ -5,6 +5,7 @@
 #include <sstream>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
@@ -198,6 +199,71 @@ TEST_F(CliTest, LoadReportsThroughputLatencyAndCodes) {
   for (const auto& [code, n] : j["codes"].items()) by_code += n.get<int64_t>();
   EXPECT_EQ(by_code, 20);
   EXPECT_GT(j["first_update_ms"]["count"].get<int>(), 0);
+}
+
+TEST_F(CliTest, FleetShowsEachMissionASummaryAndAPictureOfAll) {
+  const std::string missions = *dir_ + "/fleet.json";
+  const std::string svg = *dir_ + "/fleet.svg";
+  // Two missions share the goal of --goal (one tree); the third is RRT.
+  std::ofstream(missions) << R"({"tenant": "ground-1", "missions": [
+      {"id": "north", "start": "300,375,240,0.785", "priority": 5},
+      {"id": "west", "start": [400, 300, 245, 0.785]},
+      {"id": "solo", "start": "300,600,245,0.785", "algorithm": "RRT", "iterations": 200}]})";
+  CommandResult r =
+      Cli("fleet --missions=" + missions +
+          " --goal=1700,1625,250,0.785 --budget_ms=0 --iterations=300 --picture=" + svg);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("fleet of 3 missions"));
+  for (const char* id : {"north", "west"}) {
+    EXPECT_THAT(r.output, ::testing::ContainsRegex(
+                              absl::StrCat("\\[[123]/3\\] ", id, ": BUDGET_EXHAUSTED, risk ")));
+  }
+  EXPECT_THAT(r.output, ::testing::ContainsRegex("mission +prio +algorithm +end +risk"));
+  EXPECT_THAT(r.output, ::testing::ContainsRegex("\nsolo +0 +RRT +CONVERGED"));
+  const std::string picture = Read(svg);
+  EXPECT_THAT(picture, HasSubstr("<title>north: risk "));
+  EXPECT_THAT(picture, HasSubstr("<title>west: risk "));
+  EXPECT_THAT(picture, HasSubstr("<title>solo: risk "));
+
+  // load --rpc=fleet sends the whole fleet per call.
+  const std::string report = *dir_ + "/fleet-load.json";
+  r = Cli("load --rpc=fleet --missions=" + missions +
+          " --goal=1700,1625,250,0.785 --budget_ms=0 --iterations=50 --concurrency=1 "
+          "--duration_s=1 --report_json=" +
+          report);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json j = nlohmann::json::parse(Read(report));
+  EXPECT_EQ(j["rpc"], "PlanFleet");
+  EXPECT_GE(j["completed"].get<int>(), 1);
+  EXPECT_EQ(j["codes"]["OK"], j["completed"]);
+  // Three final messages per fleet.
+  EXPECT_EQ(j["plan_updates"].get<int>(), 3 * j["completed"].get<int>());
+}
+
+TEST_F(CliTest, FleetRefusesABadMissionsFileSayingWhere) {
+  const std::string missions = *dir_ + "/bad-fleet.json";
+  std::ofstream(missions)
+      << "{\"missions\": [\n  {\"id\": \"a\", \"start\": \"300,375,240,0.785\"}\n  "
+         "{\"id\": \"b\"}]}";
+  CommandResult r = Cli("fleet --missions=" + missions + " --goal=1700,1625,250,0.785");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("missions file '" + missions + "': not JSON:"));
+  EXPECT_THAT(r.output, HasSubstr("line 3, column 3"));
+
+  std::ofstream(missions) << R"({"missions": [{"id": "a", "start": "300,375,240,0.785"},
+      {"id": "b", "start": "300,375,240,0.785", "budget_ms": "fast"}]})";
+  r = Cli("fleet --missions=" + missions + " --goal=1700,1625,250,0.785");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("missions[1].budget_ms: must be an integer"));
+
+  std::ofstream(missions) << R"({"missions": [{"id": "a", "start": "300,375"}]})";
+  r = Cli("fleet --missions=" + missions + " --goal=1700,1625,250,0.785");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("missions[0].start: "));
+
+  r = Cli("fleet --missions=" + *dir_ + "/no-such-file.json");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("cannot open missions file"));
 }
 
 }  // namespace

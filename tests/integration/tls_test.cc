@@ -406,6 +406,34 @@ TEST_F(TlsTest, TokensAreCheckedOnAPlaintextLoopbackPortToo) {
   EXPECT_TRUE(op.Ping().ok());
 }
 
+TEST_F(TlsTest, AViewerMayNotPlanAFleetAndAPlannerMay) {
+  std::unique_ptr<ServerProcess> server = Start({"--token_file=" + P("tokens.txt")});
+  ASSERT_NE(server, nullptr);
+  v1::FleetRequest fleet;
+  v1::FleetMission* mission = fleet.add_missions();
+  mission->set_id("m");
+  *mission->mutable_request() = SmallCityPlan(0, 50);
+  const auto run = [&](const std::string& token) {
+    client::ConnectionOptions options;
+    options.token_file = P(token + ".token");
+    client::RiskplanClient c = Client(*server, options);
+    int finals = 0;
+    const grpc::Status status = c.PlanFleet(fleet, [&](const v1::FleetUpdate& u) {
+      finals += u.update().final() ? 1 : 0;
+      return true;
+    });
+    return std::pair{status, finals};
+  };
+  const auto [refused, none] = run("viewer");
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(refused.error_message(),
+            "alice has role viewer; PlanFleet needs role planner or above");
+  EXPECT_EQ(none, 0);
+  const auto [planned, finals] = run("planner");
+  EXPECT_TRUE(planned.ok()) << planned.error_message();
+  EXPECT_EQ(finals, 1);
+}
+
 TEST_F(TlsTest, HealthIsOpenOnItsPlaintextPortAndOnTheTlsPort) {
   std::unique_ptr<ServerProcess> server =
       Start(MutualFlags({"--token_file=" + P("tokens.txt"), "--health_listen=127.0.0.1:0"}));

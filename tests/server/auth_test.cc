@@ -26,11 +26,12 @@ TEST(RequiredRoleTest, EveryMethodHasItsRoleAndHealthIsOpen) {
   EXPECT_EQ(RequiredRole("GetRiskLayer"), Role::kViewer);
   EXPECT_EQ(RequiredRole("EvaluateRisk"), Role::kViewer);
   EXPECT_EQ(RequiredRole("/riskplan.v1.Planner/PlanTrajectory"), Role::kPlanner);
+  EXPECT_EQ(RequiredRole("/riskplan.v1.Planner/PlanFleet"), Role::kPlanner);
   EXPECT_EQ(RequiredRole("Ping"), Role::kOperator);
   EXPECT_EQ(RequiredRole("/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo"),
             Role::kViewer);
   // A method nobody gave a role yet is closed to all but operators.
-  EXPECT_EQ(RequiredRole("/riskplan.v1.Planner/PlanFleet"), Role::kOperator);
+  EXPECT_EQ(RequiredRole("/riskplan.v1.Planner/PlanSomethingNew"), Role::kOperator);
 }
 
 TEST(TokenHashTest, IsTheHexSha256OfTheToken) {

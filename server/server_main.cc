@@ -431,6 +431,7 @@ int Main() {
   absl::StatusOr<ServerConfig> config = ConfigFromFlags();
   if (!config.ok()) return Fail(2, config.status().message());
   SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
+  RouteProtobufLogs();
   const sigset_t stop_signals = BlockStopSignals();
 
   absl::StatusOr<LoadedMaps> maps = LoadMaps(config->options.limits);

@@ -57,6 +57,8 @@ std::vector<MetricSample> EngineMetrics(const RiskEngineStats& stats) {
     add("riskplan_accel_worker_failures_total", Type::kCounter, {{"worker", w.name}}, w.failures);
     add("riskplan_accel_worker_unsupported_total", Type::kCounter, {{"worker", w.name}},
         w.unsupported);
+    add("riskplan_accel_worker_taken_over_total", Type::kCounter, {{"worker", w.name}},
+        w.taken_over);
     add("riskplan_accel_blob_uploads_total", Type::kCounter, {{"worker", w.name}}, w.uploads);
     add("riskplan_accel_audited_sites_total", Type::kCounter, {{"worker", w.name}}, w.audited);
     add("riskplan_accel_audit_failures_total", Type::kCounter, {{"worker", w.name}},

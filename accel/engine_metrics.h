@@ -11,6 +11,8 @@
 //   riskplan_accel_worker_state_changes_total{worker} counter
 //   riskplan_accel_worker_failures_total{worker}      counter  failed requests
 //   riskplan_accel_worker_unsupported_total{worker}   counter  chunks left to the CPU
+//   riskplan_accel_worker_taken_over_total{worker}    counter  chunks callers took back from
+//                                                              the board (their stop reached)
 //   riskplan_accel_blob_uploads_total{worker}         counter
 //   riskplan_accel_audited_sites_total{worker}        counter  sites spot-checked on the CPU
 //   riskplan_accel_audit_failures_total{worker}       counter  replies the spot check refused

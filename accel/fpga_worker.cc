@@ -105,6 +105,7 @@ absl::Status FpgaWorker::Connect() {
       ShimClient::Connect(endpoint_, options_.client);
   if (!client.ok()) return client.status();
   owned_client_ = *std::move(client);
+  uploads_since_chunk_ = 0;
   absl::MutexLock lock(&mu_);
   if (stop_.load()) owned_client_->Interrupt();
   client_ = owned_client_.get();
@@ -168,31 +169,77 @@ void FpgaWorker::Run() {
           break;
         }
         const absl::Time start = absl::Now();
+        const size_t count = chunk->count;
         bool unsupported = false;
-        absl::Status s = RunChunk(chunk, &unsupported);
+        bool taken_over = false;
+        std::shared_ptr<const Blob> missing;
+        absl::Status s = RunChunk(chunk, &unsupported, &taken_over, &missing);
         const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
+        if (missing != nullptr) {
+          // The board lacks a blob (it restarted, or dropped it): not its
+          // failure. The chunk goes back at once, for the CPU or another
+          // board, and the blob is uploaded with no chunk held (seconds for a
+          // large map), so that no caller waits for the upload.
+          {
+            absl::MutexLock lock(&mu_);
+            stats_.busy_seconds += seconds;
+            ++(taken_over ? stats_.taken_over : stats_.requeued);
+          }
+          if (!taken_over) queue_->Requeue(chunk);
+          s = Upload(*missing);
+          if (s.ok()) break;
+          {
+            absl::MutexLock lock(&mu_);
+            ++stats_.failures;
+            stats_.last_error = std::string(s.message());
+          }
+          DropClient();
+          if (stop_.load()) break;
+          if (++consecutive_failures_ >= options_.max_consecutive_failures) {
+            SetState(WorkerState::kDown,
+                     absl::StrFormat("%d requests failed in a row, the last: %s",
+                                     consecutive_failures_, s.message()));
+          } else {
+            SetState(WorkerState::kSuspect, std::string(s.message()));
+          }
+          break;
+        }
         if (s.ok()) {
+          // The board answered well (whether or not its caller still wanted it).
           consecutive_failures_ = 0;
+          uploads_since_chunk_ = 0;
           backoff_ = options_.backoff_initial;
           {
             absl::MutexLock lock(&mu_);
-            ++stats_.chunks;
-            stats_.configurations += chunk->count;
+            if (taken_over) {
+              ++stats_.taken_over;
+            } else {
+              ++stats_.chunks;
+              stats_.configurations += count;
+            }
             stats_.busy_seconds += seconds;
           }
-          queue_->Complete(chunk);
+          if (!taken_over) queue_->Complete(chunk);
           break;
         }
         {
           absl::MutexLock lock(&mu_);
           stats_.busy_seconds += seconds;
           ++(unsupported ? stats_.unsupported : stats_.failures);
+          if (taken_over) ++stats_.taken_over;
           stats_.last_error = std::string(s.message());
         }
-        if (unsupported || ++chunk->fpga_failures >= options_.max_failures_per_chunk) {
-          chunk->cpu_only = true;
+        // A chunk taken over is its caller's now: it is neither counted nor given back.
+        if (!taken_over) {
+          if (unsupported || ++chunk->fpga_failures >= options_.max_failures_per_chunk) {
+            chunk->cpu_only = true;
+          }
+          {
+            absl::MutexLock lock(&mu_);
+            ++stats_.requeued;
+          }
+          queue_->Requeue(chunk);
         }
-        queue_->Requeue(chunk);
         if (!unsupported) {
           DropClient();
           if (stop_.load()) break;
@@ -212,34 +259,30 @@ void FpgaWorker::Run() {
   SetState(WorkerState::kDown, "stopped");
 }
 
-absl::StatusOr<EvalReply> FpgaWorker::EvalWithUploads(const Blob& map, const Blob& kernels,
-                                                      std::span<const DeviceSite> sites) {
-  absl::StatusOr<EvalReply> reply = owned_client_->Eval(map.hash, kernels.hash, sites);
-  // At most one upload of each blob per request.
-  for (int upload = 0; upload < 2 && absl::IsNotFound(reply.status()); ++upload) {
-    const BlobHash missing = owned_client_->missing_blob();
-    const Blob* blob = missing == map.hash ? &map : missing == kernels.hash ? &kernels : nullptr;
-    if (blob == nullptr) {
-      return absl::DataLossError(
-          absl::StrCat("shim ", endpoint_, " asked for a blob that was not named"));
-    }
-    if (absl::Status s = owned_client_->PutBlob(blob->kind, blob->hash, blob->bytes); !s.ok()) {
-      return s;
-    }
-    {
-      absl::MutexLock lock(&mu_);
-      ++stats_.uploads;
-    }
-    reply = owned_client_->Eval(map.hash, kernels.hash, sites);
+absl::Status FpgaWorker::Upload(const Blob& blob) {
+  // A board that asks again and again (its store too small for a model's
+  // blobs, say) without completing a chunk is failing, not missing a blob.
+  if (uploads_since_chunk_ >= 2) {
+    return absl::DataLossError(
+        absl::StrFormat("shim %s asked for a blob again after %d uploads without a completed chunk",
+                        endpoint_, uploads_since_chunk_));
   }
-  return reply;
+  if (absl::Status s = owned_client_->PutBlob(blob.kind, blob.hash, blob.bytes); !s.ok()) {
+    return s;
+  }
+  ++uploads_since_chunk_;
+  absl::MutexLock lock(&mu_);
+  ++stats_.uploads;
+  return absl::OkStatus();
 }
 
-absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
+absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over,
+                                  std::shared_ptr<const Blob>* missing) {
   const RiskModel& model = *chunk->batch->model;
   const ImpactTable& table = model.table();
   const HelloReply& hello = owned_client_->hello();
   *unsupported = true;
+  *taken_over = false;
   const int widest = 2 * table.bin(table.height_bins()).half_width + 1;
   if (widest > static_cast<int>(hello.max_kernel_side) || table.height_bins() > 65535 ||
       table.heading_bins() > 65535) {
@@ -247,20 +290,68 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
         absl::StrFormat("the board takes kernels up to %d cells wide; this model needs %d",
                         hello.max_kernel_side, widest));
   }
-  std::shared_ptr<const Blob> map = blobs_->MapBlob(model.map_ptr());
-  std::shared_ptr<const Blob> kernels = blobs_->KernelsBlob(model.table_ptr());
-  if (map == nullptr || kernels == nullptr) {
-    return absl::ResourceExhaustedError(
-        absl::StrFormat("the model's %s blob is larger than the blob cache (%d bytes)",
-                        map == nullptr ? "map" : "kernels", blobs_->budget_bytes()));
-  }
-  if (map->bytes.size() > hello.store_bytes || kernels->bytes.size() > hello.store_bytes) {
-    return absl::ResourceExhaustedError("the model's blobs exceed the board's store");
-  }
   *unsupported = false;
 
+  // Before the board is asked: everything the requests need, in this
+  // worker's own memory (the chunk may be taken over while they run; the
+  // map and table are shared, they outlive it).
+  const std::shared_ptr<const RiskMap> map_ptr = model.map_ptr();
+  const std::shared_ptr<const ImpactTable> table_ptr = model.table_ptr();
   sites_.clear();
   CpuRiskKernel::LocateBatch(model, chunk->configs(), chunk->out(), &sites_);
+  device_sites_.resize(sites_.size());
+  for (size_t a = 0; a < sites_.size(); ++a) {
+    const KernelSite& s = sites_[a].site;
+    device_sites_[a] = DeviceSite{static_cast<uint16_t>(s.height_bin),
+                                  static_cast<uint16_t>(s.heading_bin), s.impact_i, s.impact_j};
+  }
+  const size_t step = hello.max_sites_per_eval;
+  replies_.clear();
+
+  // The board's time: building the blobs (the first time, about a second
+  // for a large map) and the requests (uploads included) touch no chunk
+  // memory, and a caller whose stop is reached may take the chunk over
+  // meanwhile.
+  queue_->BeginIo(&lease_, chunk);
+  absl::Status io = absl::OkStatus();
+  std::shared_ptr<const Blob> map = blobs_->MapBlob(map_ptr);
+  std::shared_ptr<const Blob> kernels = blobs_->KernelsBlob(table_ptr);
+  if (map == nullptr || kernels == nullptr) {
+    *unsupported = true;
+    io = absl::ResourceExhaustedError(
+        absl::StrFormat("the model's %s blob is larger than the blob cache (%d bytes)",
+                        map == nullptr ? "map" : "kernels", blobs_->budget_bytes()));
+  } else if (map->bytes.size() > hello.store_bytes || kernels->bytes.size() > hello.store_bytes) {
+    *unsupported = true;
+    io = absl::ResourceExhaustedError("the model's blobs exceed the board's store");
+  }
+  for (size_t first = 0; io.ok() && first < sites_.size(); first += step) {
+    const size_t n = std::min(step, sites_.size() - first);
+    absl::StatusOr<EvalReply> reply = owned_client_->Eval(
+        map->hash, kernels->hash, std::span<const DeviceSite>(device_sites_).subspan(first, n));
+    if (absl::IsNotFound(reply.status())) {
+      const BlobHash wanted = owned_client_->missing_blob();
+      *missing = wanted == map->hash ? map : wanted == kernels->hash ? kernels : nullptr;
+      io = *missing != nullptr ? reply.status()
+                               : absl::DataLossError(absl::StrCat(
+                                     "shim ", endpoint_, " asked for a blob that was not named"));
+      break;
+    }
+    if (!reply.ok()) {
+      io = reply.status();
+      break;
+    }
+    replies_.push_back(*std::move(reply));
+  }
+  if (!queue_->EndIo(&lease_)) {
+    // Taken over: the chunk is the caller's (and may be gone). A failed
+    // request is still the board's failure, a missing blob still uploaded; a
+    // good reply is dropped.
+    *taken_over = true;
+    return io;
+  }
+  if (!io.ok()) return io;
+
   const NumberFormat& format = hello.format;
   // The scales the board must report (its exponent rule is part of the
   // format), and the largest sums the quantised inputs allow.
@@ -273,26 +364,19 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
   const double impact_max = weight_sum_max * map->max_density * margin;
   const double shelter_max = weight_sum_max * 10.0 * margin;
   std::span<ConfigurationRisk> out = chunk->out();
-  const size_t step = hello.max_sites_per_eval;
   uint64_t cycles = 0;
-  for (size_t first = 0; first < sites_.size(); first += step) {
+  for (size_t r = 0; r < replies_.size(); ++r) {
+    const EvalReply& reply = replies_[r];
+    const size_t first = r * step;
     const size_t n = std::min(step, sites_.size() - first);
-    device_sites_.resize(n);
-    for (size_t a = 0; a < n; ++a) {
-      const KernelSite& s = sites_[first + a].site;
-      device_sites_[a] = DeviceSite{static_cast<uint16_t>(s.height_bin),
-                                    static_cast<uint16_t>(s.heading_bin), s.impact_i, s.impact_j};
-    }
-    absl::StatusOr<EvalReply> reply = EvalWithUploads(*map, *kernels, device_sites_);
-    if (!reply.ok()) return reply.status();
-    if (reply->impact_scale != impact_scale || reply->shelter_scale != shelter_scale) {
-      return absl::DataLossError(
-          absl::StrFormat("shim %s: result scales %d/%d, expected %d/%d", endpoint_,
-                          reply->impact_scale, reply->shelter_scale, impact_scale, shelter_scale));
+    if (reply.impact_scale != impact_scale || reply.shelter_scale != shelter_scale) {
+      return absl::DataLossError(absl::StrFormat("shim %s: result scales %d/%d, expected %d/%d",
+                                                 endpoint_, reply.impact_scale, reply.shelter_scale,
+                                                 impact_scale, shelter_scale));
     }
     for (size_t a = 0; a < n; ++a) {
-      const double impact = AccumulatorToDouble(reply->impact[a], impact_scale);
-      const double shelter = AccumulatorToDouble(reply->shelter[a], shelter_scale);
+      const double impact = AccumulatorToDouble(reply.impact[a], impact_scale);
+      const double shelter = AccumulatorToDouble(reply.shelter[a], shelter_scale);
       if (!(impact <= impact_max) || !(shelter <= shelter_max)) {
         return absl::DataLossError(
             absl::StrFormat("shim %s: implausible sums I = %g, S = %g (largest possible %g, %g)",
@@ -307,8 +391,8 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
     for (int k = 0; k < audits; ++k) {
       const size_t a = std::uniform_int_distribution<size_t>(0, n - 1)(rng_);
       absl::Status audit = AuditBoardSums(model, sites_[first + a].site, scales,
-                                          AccumulatorToDouble(reply->impact[a], impact_scale),
-                                          AccumulatorToDouble(reply->shelter[a], shelter_scale));
+                                          AccumulatorToDouble(reply.impact[a], impact_scale),
+                                          AccumulatorToDouble(reply.shelter[a], shelter_scale));
       if (!audit.ok()) {
         absl::MutexLock lock(&mu_);
         stats_.audited += k + 1;
@@ -321,7 +405,7 @@ absl::Status FpgaWorker::RunChunk(Chunk* chunk, bool* unsupported) {
       absl::MutexLock lock(&mu_);
       stats_.audited += audits;
     }
-    cycles += reply->device_cycles;
+    cycles += reply.device_cycles;
   }
   absl::MutexLock lock(&mu_);
   stats_.device_cycles += cycles;

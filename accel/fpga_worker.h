@@ -22,10 +22,16 @@
 // A request fails on a connection or deadline error, a corrupt frame, an
 // ERROR reply, wrong scales, implausible sums, or sums that the spot check
 // finds outside the format's error bound (accel/board_audit.h).
+// A board that lacks a blob of the chunk's model gets the chunk given back
+// (not a failure) and the blob uploaded with no chunk held.
 // A chunk whose model the board cannot serve (kernel wider than the board's
 // largest side, too many bins, blobs too large for its store or for the
 // server's blob cache) goes back to the queue marked CPU-only, and the
 // worker stays up.
+// While the board works on a chunk, the chunk's caller may take it over
+// (once its cancellation, deadline or time budget is reached: a stalled
+// board must not hold a plan past them); the board's reply is then dropped,
+// and only a failure of the request counts.
 //
 // Thread-safe: the worker runs on its own thread; Stats() and Stop() may be
 // called from any thread.
@@ -86,8 +92,12 @@ struct FpgaWorkerStats {
   HelloReply hello;  // valid when identified
   uint64_t chunks = 0;
   uint64_t configurations = 0;
-  uint64_t failures = 0;     // failed requests (chunks given back)
+  uint64_t failures = 0;     // failed requests (their chunks given back unless taken over)
   uint64_t unsupported = 0;  // chunks given back as CPU-only
+  uint64_t requeued = 0;     // chunks given back (failed or unsupported, not taken over)
+  // Chunks whose caller took them over while the board worked on them (its
+  // stop was reached: a stalled or slow board); their replies are dropped.
+  uint64_t taken_over = 0;
   uint64_t state_changes = 0;
   uint64_t audited = 0;         // sites spot-checked against the CPU
   uint64_t audit_failures = 0;  // replies refused by the spot check
@@ -118,13 +128,19 @@ class FpgaWorker {
   // Connect, HELLO and the known-answer batch (probing and suspect).
   absl::Status Probe();
   absl::Status Connect();
-  // Evaluates a chunk, writing results as the board's replies arrive (a
-  // failed chunk is given back and redone whole, so partial results are
-  // overwritten). `unsupported` is set when the failure is the model's, not
-  // the board's.
-  absl::Status RunChunk(Chunk* chunk, bool* unsupported);
-  absl::StatusOr<EvalReply> EvalWithUploads(const Blob& map, const Blob& kernels,
-                                            std::span<const DeviceSite> sites);
+  // Evaluates a chunk: locates its sites, asks the board (under a lease: the
+  // chunk's caller may take it over meanwhile, WorkQueue::BeginIo), then
+  // finishes and checks the replies into the chunk's results (a failed chunk
+  // is given back and redone whole, so partial results are overwritten).
+  // `unsupported` is set when the failure is the model's, not the board's;
+  // `taken_over` when the caller took the chunk over during the requests
+  // (then the chunk must not be touched again, whatever the status).
+  // `missing` is set when the board lacks one of the model's blobs (then the
+  // status is NotFound, and the worker gives the chunk back and uploads it).
+  absl::Status RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over,
+                        std::shared_ptr<const Blob>* missing);
+  // Uploads a blob the board asked for, holding no chunk.
+  absl::Status Upload(const Blob& blob);
   void SetState(WorkerState to, std::string reason);
   // Waits `duration` unless stopped first.
   void Sleep(absl::Duration duration);
@@ -142,8 +158,11 @@ class FpgaWorker {
   std::unique_ptr<ShimClient> owned_client_;
   std::vector<LocatedSite> sites_;
   std::vector<DeviceSite> device_sites_;
+  std::vector<EvalReply> replies_;
+  WorkQueue::Lease lease_;
   absl::Duration backoff_;
   int consecutive_failures_ = 0;
+  int uploads_since_chunk_ = 0;
   std::mt19937_64 rng_;  // jitter and the sites to spot-check
 
   mutable absl::Mutex mu_;

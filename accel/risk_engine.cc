@@ -20,10 +20,10 @@ void LogToStderr(const WorkerEvent& e) {
 // this run's configurations (RiskEvaluator::evaluated()).
 class EngineEvaluator final : public RiskEvaluator {
  public:
-  explicit EngineEvaluator(RiskEngine* engine) : engine_(engine) {}
+  EngineEvaluator(RiskEngine* engine, StopCondition stop) : engine_(engine), stop_(stop) {}
   absl::Status EvaluateBatch(const RiskModel& model, std::span<const Pose> configs,
                              std::span<ConfigurationRisk> out) override {
-    if (absl::Status s = engine_->Evaluate(model, configs, out); !s.ok()) return s;
+    if (absl::Status s = engine_->Evaluate(model, configs, out, &stop_); !s.ok()) return s;
     evaluated_ += configs.size();
     return absl::OkStatus();
   }
@@ -31,6 +31,7 @@ class EngineEvaluator final : public RiskEvaluator {
 
  private:
   RiskEngine* const engine_;
+  const StopCondition stop_;
   uint64_t evaluated_ = 0;
 };
 
@@ -159,7 +160,7 @@ void RiskEngine::CpuWorkerLoop(int index) {
 }
 
 absl::Status RiskEngine::Evaluate(const RiskModel& model, std::span<const Pose> configs,
-                                  std::span<ConfigurationRisk> out) {
+                                  std::span<ConfigurationRisk> out, const StopCondition* stop) {
   if (out.size() != configs.size()) {
     return absl::InvalidArgumentError("RiskEngine::Evaluate: out and configs differ in size");
   }
@@ -206,11 +207,14 @@ absl::Status RiskEngine::Evaluate(const RiskModel& model, std::span<const Pose> 
     }
     queue_.Submit(chunks);
     std::unique_ptr<CpuRiskKernel> kernel;
-    caller_chunks = queue_.RunUntilDone(&batch, [&](Chunk* c) {
-      if (kernel == nullptr) kernel = TakeKernel();
-      kernel->Evaluate(model, c->configs(), c->out());
-      caller_configurations += c->count;
-    });
+    caller_chunks = queue_.RunUntilDone(
+        &batch,
+        [&](Chunk* c) {
+          if (kernel == nullptr) kernel = TakeKernel();
+          kernel->Evaluate(model, c->configs(), c->out());
+          caller_configurations += c->count;
+        },
+        stop);
     if (kernel != nullptr) ReturnKernel(std::move(kernel));
   }
   absl::MutexLock lock(&mu_);
@@ -222,8 +226,8 @@ absl::Status RiskEngine::Evaluate(const RiskModel& model, std::span<const Pose> 
   return absl::OkStatus();
 }
 
-std::unique_ptr<RiskEvaluator> RiskEngine::NewEvaluator() {
-  return std::make_unique<EngineEvaluator>(this);
+std::unique_ptr<RiskEvaluator> RiskEngine::NewEvaluator(StopCondition stop) {
+  return std::make_unique<EngineEvaluator>(this, stop);
 }
 
 RiskEngineStats RiskEngine::Stats() const {
@@ -238,7 +242,8 @@ RiskEngineStats RiskEngine::Stats() const {
     s.cpu = cpu_stats_;
     for (const auto& w : fpga_) s.fpga.push_back(w->Stats());
   }
-  for (const FpgaWorkerStats& f : s.fpga) s.requeues += f.failures + f.unsupported;
+  for (const FpgaWorkerStats& f : s.fpga) s.requeues += f.requeued;
+  s.taken_over = queue_.taken_over();
   s.cache_hits = site_cache_.hits();
   s.cache_misses = site_cache_.misses();
   s.site_cache_bytes = site_cache_.capacity_bytes();

@@ -89,6 +89,9 @@ struct RiskEngineStats {
   uint64_t caller_chunks = 0;  // chunks run by calling threads
   uint64_t caller_configurations = 0;
   uint64_t requeues = 0;  // chunks given back by FPGA workers
+  // Chunks that callers whose stop was reached took over from FPGA workers
+  // still waiting for their boards.
+  uint64_t taken_over = 0;
   uint64_t cache_hits = 0;
   uint64_t cache_misses = 0;
   size_t site_cache_bytes = 0;
@@ -116,13 +119,19 @@ class RiskEngine {
   // out[i] = the configuration risk of configs[i] under `model`, for every i.
   // REQUIRES: out.size() == configs.size(); `model` lives until it returns.
   // Never fails for a worker's failure (the CPU takes over); an error only
-  // for bad arguments.
+  // for bad arguments. Once `stop` (if given: the caller's cancellation,
+  // deadline or time budget) is reached, the calling thread computes the
+  // batch's remaining chunks itself, those a board is working on included,
+  // instead of waiting for boards (WorkQueue, "Taking over"): the batch is
+  // still complete, and exact where the CPU computed it, within milliseconds
+  // rather than a stalled board's request deadline.
   absl::Status Evaluate(const RiskModel& model, std::span<const Pose> configs,
-                        std::span<ConfigurationRisk> out);
+                        std::span<ConfigurationRisk> out, const StopCondition* stop = nullptr);
 
-  // A RiskEvaluator for one planner run, counting its own configurations.
-  // The engine must outlive it.
-  std::unique_ptr<RiskEvaluator> NewEvaluator();
+  // A RiskEvaluator for one planner run or evaluation, counting its own
+  // configurations; its batches are evaluated with `stop` (above; the
+  // default is never reached). The engine and stop's tokens must outlive it.
+  std::unique_ptr<RiskEvaluator> NewEvaluator(StopCondition stop = StopCondition());
 
   // Adds a worker for one more board (AlreadyExists if present), or removes
   // one (NotFound if absent): its chunk in flight goes back to the queue.

@@ -1,5 +1,7 @@
 #include "accel/work_queue.h"
 
+#include <algorithm>
+
 namespace riskplan::accel {
 
 void WorkQueue::Submit(std::span<Chunk> chunks) {
@@ -28,6 +30,29 @@ Chunk* WorkQueue::Take(Taker taker, absl::Duration wait, const std::atomic<bool>
     if (changed_.WaitWithDeadline(&mu_, deadline)) return nullptr;
   }
   return nullptr;
+}
+
+void WorkQueue::BeginIo(Lease* lease, Chunk* chunk) {
+  absl::MutexLock lock(&mu_);
+  lease->chunk = chunk;
+  lease->taken_over = false;
+  leases_.push_back(lease);
+  // A caller whose stop was reached while the worker prepared the chunk may
+  // take it over now.
+  changed_.SignalAll();
+}
+
+bool WorkQueue::EndIo(Lease* lease) {
+  absl::MutexLock lock(&mu_);
+  if (lease->taken_over) return false;  // the caller removed it from leases_
+  leases_.erase(std::find(leases_.begin(), leases_.end(), lease));
+  lease->chunk = nullptr;
+  return true;
+}
+
+uint64_t WorkQueue::taken_over() const {
+  absl::MutexLock lock(&mu_);
+  return taken_over_;
 }
 
 void WorkQueue::Wake() {

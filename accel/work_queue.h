@@ -13,6 +13,14 @@
 // thread takes chunks of its own batch when the engine lets callers run, or
 // when nobody else could (no CPU worker, no FPGA worker up).
 //
+// Taking over: while an FPGA worker waits for its board (a Lease, between
+// BeginIo and EndIo), the chunk's results are not being written, and a caller
+// whose stop condition is reached (its cancellation, deadline or time budget)
+// takes the chunk back and computes it itself instead of waiting for a board
+// that may be stalled, restarting or uploading for seconds. The worker then
+// learns at EndIo that the chunk is no longer its own and never touches it
+// again (its late reply is dropped), so the chunk is still completed once.
+//
 // Thread-safe.
 #ifndef RISKPLAN_ACCEL_WORK_QUEUE_H_
 #define RISKPLAN_ACCEL_WORK_QUEUE_H_
@@ -22,10 +30,12 @@
 #include <deque>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "core/base/cancellation.h"
 #include "core/base/geometry.h"
 #include "core/risk/risk_model.h"
 
@@ -65,14 +75,32 @@ class WorkQueue {
 
   // For the calling thread of a batch: runs queued chunks of the batch with
   // `run` while it may (see above), else waits, until every chunk of the
-  // batch is complete. Returns how many chunks the caller ran.
+  // batch is complete. Once `stop` (if given) is reached, the caller runs
+  // every queued chunk of its batch and takes over those its FPGA workers are
+  // waiting for (above), polling `stop` every few milliseconds while it
+  // waits. Returns how many chunks the caller ran.
   template <typename Run>
-  size_t RunUntilDone(Batch* batch, Run run);
+  size_t RunUntilDone(Batch* batch, Run run, const StopCondition* stop = nullptr);
 
   // For workers: the next chunk for a taker of this kind, waiting at most
   // `wait`. Null on timeout, when Stop()ped, or when *cancel is true after a
   // Wake(). An FPGA taker calls it only while it is up.
   Chunk* Take(Taker taker, absl::Duration wait, const std::atomic<bool>* cancel = nullptr);
+
+  // An FPGA worker's request in flight for a chunk it holds. Owned by the
+  // worker; its fields are the queue's.
+  struct Lease {
+    Chunk* chunk = nullptr;
+    bool taken_over = false;
+  };
+  // From now on, until EndIo, the chunk's caller may take it over; the worker
+  // must not touch the chunk (nor its batch) in between.
+  void BeginIo(Lease* lease, Chunk* chunk);
+  // True: the chunk is still the worker's (to complete or requeue). False: a
+  // caller took it over; the pointer may dangle, the worker drops its results.
+  bool EndIo(Lease* lease);
+  // Chunks taken over from FPGA workers by callers so far.
+  uint64_t taken_over() const;
   // Wakes every waiter (after setting a cancel flag, say).
   void Wake();
   // The chunk's results are written.
@@ -100,26 +128,46 @@ class WorkQueue {
   mutable absl::Mutex mu_;
   absl::CondVar changed_;
   std::deque<Chunk*> queue_ ABSL_GUARDED_BY(mu_);
+  std::vector<Lease*> leases_ ABSL_GUARDED_BY(mu_);
+  uint64_t taken_over_ ABSL_GUARDED_BY(mu_) = 0;
   int cpu_workers_ ABSL_GUARDED_BY(mu_) = 0;
   int fpga_up_ ABSL_GUARDED_BY(mu_) = 0;
   bool stopped_ ABSL_GUARDED_BY(mu_) = false;
 };
 
 template <typename Run>
-size_t WorkQueue::RunUntilDone(Batch* batch, Run run) {
+size_t WorkQueue::RunUntilDone(Batch* batch, Run run, const StopCondition* stop) {
   size_t ran = 0;
   absl::MutexLock lock(&mu_);
   while (batch->remaining > 0) {
+    const bool stopping = stop != nullptr && stop->Reached();
     Chunk* mine = nullptr;
     for (auto it = queue_.begin(); it != queue_.end(); ++it) {
-      if ((*it)->batch == batch && CallerMayRun(**it)) {
+      if ((*it)->batch == batch && (stopping || CallerMayRun(**it))) {
         mine = *it;
         queue_.erase(it);
         break;
       }
     }
+    if (mine == nullptr && stopping) {
+      for (auto it = leases_.begin(); it != leases_.end(); ++it) {
+        if ((*it)->chunk->batch == batch) {
+          mine = (*it)->chunk;
+          (*it)->chunk = nullptr;
+          (*it)->taken_over = true;
+          leases_.erase(it);
+          ++taken_over_;
+          break;
+        }
+      }
+    }
     if (mine == nullptr) {
-      changed_.Wait(&mu_);
+      // A stop condition cannot signal: poll it.
+      if (stop != nullptr && !stopping) {
+        changed_.WaitWithTimeout(&mu_, absl::Milliseconds(5));
+      } else {
+        changed_.Wait(&mu_);
+      }
       continue;
     }
     mu_.Unlock();

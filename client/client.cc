@@ -49,6 +49,14 @@ grpc::Status RiskplanClient::GetMapLayer(const v1::GetMapLayerRequest& request,
   return stub_->GetMapLayer(&context, request, response);
 }
 
+grpc::Status RiskplanClient::GetRiskLayer(const v1::GetRiskLayerRequest& request,
+                                          v1::GetRiskLayerResponse* response,
+                                          absl::Duration timeout) {
+  grpc::ClientContext context;
+  SetTimeout(&context, timeout);
+  return stub_->GetRiskLayer(&context, request, response);
+}
+
 grpc::Status RiskplanClient::EvaluateRisk(const v1::EvaluateRiskRequest& request,
                                           v1::EvaluateRiskResponse* response,
                                           absl::Duration timeout) {

@@ -38,6 +38,9 @@ class RiskplanClient {
   grpc::Status ListMaps(v1::ListMapsResponse* response, absl::Duration timeout = absl::Seconds(10));
   grpc::Status GetMapLayer(const v1::GetMapLayerRequest& request, v1::GetMapLayerResponse* response,
                            absl::Duration timeout = absl::Seconds(30));
+  grpc::Status GetRiskLayer(const v1::GetRiskLayerRequest& request,
+                            v1::GetRiskLayerResponse* response,
+                            absl::Duration timeout = absl::Seconds(60));
   grpc::Status EvaluateRisk(const v1::EvaluateRiskRequest& request,
                             v1::EvaluateRiskResponse* response,
                             absl::Duration timeout = absl::Seconds(30));

@@ -1,10 +1,14 @@
 #include "client/commands.h"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "absl/strings/ascii.h"
@@ -27,6 +31,10 @@ namespace {
 int Usage(const std::string& message) {
   std::fprintf(stderr, "riskplan: %s\n", message.c_str());
   return 2;
+}
+
+absl::Status InFlag(const char* flag, const absl::Status& status) {
+  return absl::Status(status.code(), absl::StrFormat("%s: %s", flag, status.message()));
 }
 
 // The code by name, as docs/api.md lists the codes with their meaning and
@@ -68,10 +76,19 @@ absl::StatusOr<v1::EvaluateRiskRequest> EvalRequest(const CliOptions& o) {
     return absl::InvalidArgumentError(
         "give exactly one of --waypoints, --polyline and --trajectory_file");
   }
-  if (!o.waypoints.empty()) {
+  std::string_view rest;
+  if (!o.waypoints.empty() && HasWgs84Prefix(o.waypoints, &rest)) {
+    absl::StatusOr<v1::GeoWaypoints> w = ParseGeoWaypoints(rest);
+    if (!w.ok()) return w.status();
+    *request.mutable_waypoints_wgs84() = *w;
+  } else if (!o.waypoints.empty()) {
     absl::StatusOr<v1::Waypoints> w = ParseWaypoints(o.waypoints);
     if (!w.ok()) return w.status();
     *request.mutable_waypoints() = *w;
+  } else if (!o.polyline.empty() && HasWgs84Prefix(o.polyline, &rest)) {
+    absl::StatusOr<v1::GeoPolyline> p = ParseGeoPolyline(rest);
+    if (!p.ok()) return p.status();
+    *request.mutable_polyline_wgs84() = *p;
   } else if (!o.polyline.empty()) {
     absl::StatusOr<v1::Polyline> p = ParsePolyline(o.polyline);
     if (!p.ok()) return p.status();
@@ -128,14 +145,27 @@ absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
   // Checked here so that the message names the flags (the server could only
   // say that the request has no start).
   if (o.start.empty() || o.goal.empty()) {
-    return absl::InvalidArgumentError("--start and --goal are required ('x,y,z,theta')");
+    return absl::InvalidArgumentError(
+        "--start and --goal are required ('x,y,z,theta' or 'wgs84:lat,lon,alt,heading_deg')");
   }
-  absl::StatusOr<v1::Pose> start = ParsePose(o.start);
-  if (!start.ok()) return start.status();
-  absl::StatusOr<v1::Pose> goal = ParsePose(o.goal);
-  if (!goal.ok()) return goal.status();
-  *request.mutable_start() = *start;
-  *request.mutable_goal() = *goal;
+  // Each endpoint in its own frame: the request keeps them apart (start or
+  // start_wgs84), so a WGS84 start may meet a local goal.
+  for (auto [text, local, wgs84, flag] :
+       {std::tuple{&o.start, &v1::PlanRequest::mutable_start, &v1::PlanRequest::mutable_start_wgs84,
+                   "--start"},
+        std::tuple{&o.goal, &v1::PlanRequest::mutable_goal, &v1::PlanRequest::mutable_goal_wgs84,
+                   "--goal"}}) {
+    std::string_view rest;
+    if (HasWgs84Prefix(*text, &rest)) {
+      absl::StatusOr<v1::GeoPose> pose = ParseGeoPose(rest);
+      if (!pose.ok()) return InFlag(flag, pose.status());
+      *(request.*wgs84)() = *pose;
+    } else {
+      absl::StatusOr<v1::Pose> pose = ParsePose(*text);
+      if (!pose.ok()) return InFlag(flag, pose.status());
+      *(request.*local)() = *pose;
+    }
+  }
   // Enum names in any case (--algorithm=rrt), parsed by the proto so that a
   // new algorithm needs no change here.
   v1::Algorithm algorithm = v1::ALGORITHM_UNSPECIFIED;
@@ -158,14 +188,214 @@ absl::StatusOr<v1::PlanRequest> PlanRequest(const CliOptions& o) {
   if (absl::Status s = ParseModelParameters(o.params, request.mutable_model_params()); !s.ok()) {
     return s;
   }
-  absl::StatusOr<std::vector<v1::Point2>> obstacles = ParsePoints2(o.obstacles);
-  if (!obstacles.ok()) return obstacles.status();
-  request.mutable_obstacle_points()->Assign(obstacles->begin(), obstacles->end());
+  std::string_view rest;
+  if (HasWgs84Prefix(o.obstacles, &rest)) {
+    absl::StatusOr<std::vector<v1::GeoPoint2>> obstacles = ParseGeoPoints2(rest);
+    if (!obstacles.ok()) return obstacles.status();
+    request.mutable_obstacle_points_wgs84()->Assign(obstacles->begin(), obstacles->end());
+  } else {
+    absl::StatusOr<std::vector<v1::Point2>> obstacles = ParsePoints2(o.obstacles);
+    if (!obstacles.ok()) return obstacles.status();
+    request.mutable_obstacle_points()->Assign(obstacles->begin(), obstacles->end());
+  }
   return request;
 }
 
 std::string PoseText(const v1::Pose& p) {
   return absl::StrFormat("(%.1f, %.1f, %.1f, %.3f)", p.x(), p.y(), p.z(), p.theta());
+}
+
+std::string GeoPoseText(const v1::GeoPose& p) {
+  return absl::StrFormat("(%.7f, %.7f, %.1f m, %.1f deg)", p.lat_deg(), p.lon_deg(), p.alt_m(),
+                         p.heading_deg());
+}
+
+std::string StartText(const v1::PlanRequest& r) {
+  return r.has_start_wgs84() ? GeoPoseText(r.start_wgs84()) : PoseText(r.start());
+}
+
+std::string GoalText(const v1::PlanRequest& r) {
+  return r.has_goal_wgs84() ? GeoPoseText(r.goal_wgs84()) : PoseText(r.goal());
+}
+
+// The export options from the flags, checked before any call (with the
+// target level of safety, which the same commands read).
+absl::StatusOr<ExportFiles> ExportsFromOptions(const CliOptions& o) {
+  if (!(o.target_level_of_safety > 0.0) || !std::isfinite(o.target_level_of_safety)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--target_level_of_safety=%g: must be finite and > 0 (expected casualties per flight "
+        "hour)",
+        o.target_level_of_safety));
+  }
+  ExportFiles files = o.exports;
+  if (absl::Status s = CheckExportFiles(o.plan_firmware, &files); !s.ok()) return s;
+  return files;
+}
+
+// Exit code of a failed export: 2 when the input cannot be exported (a map
+// without geo-reference), 1 when a file cannot be written.
+int ExportError(const absl::Status& status) {
+  std::fprintf(stderr, "riskplan: %s\n", std::string(status.message()).c_str());
+  return absl::IsUnavailable(status) ? 1 : 2;
+}
+
+// Exports the evaluation of a trajectory that has a path.
+int Export(const ExportFiles& files, const v1::EvaluateRiskResponse& response,
+           const std::string& map, const std::string& description, bool quiet = false) {
+  absl::StatusOr<geo::ExportTrajectory> trajectory =
+      ExportTrajectoryOf(response, map, description, files.spacing_m);
+  if (!trajectory.ok()) return ExportError(trajectory.status());
+  if (absl::Status s = WriteExports(files, *trajectory, quiet); !s.ok()) return ExportError(s);
+  return 0;
+}
+
+// The local start and goal of a plan request (for its picture).
+absl::StatusOr<std::pair<v1::Pose, v1::Pose>> LocalEndpoints(RiskplanClient& client,
+                                                             const v1::PlanRequest& request,
+                                                             const v1::PlanUpdate& final_update,
+                                                             absl::Duration timeout) {
+  if (final_update.has_trajectory() && final_update.trajectory().waypoints_size() >= 2) {
+    const auto& w = final_update.trajectory().waypoints();
+    return std::pair{w[0], w[w.size() - 1]};
+  }
+  v1::EvaluateRiskRequest eval;
+  eval.set_map(request.map());
+  eval.set_path_spacing_m(100000.0);
+  if (request.has_start_wgs84() && request.has_goal_wgs84()) {
+    for (const v1::GeoPose* p : {&request.start_wgs84(), &request.goal_wgs84()}) {
+      v1::GeoPoint3* q = eval.mutable_polyline_wgs84()->add_points();
+      q->set_lat_deg(p->lat_deg());
+      q->set_lon_deg(p->lon_deg());
+      q->set_alt_m(p->alt_m());
+    }
+  } else {
+    // One endpoint in each frame: only the WGS84 one needs converting; a
+    // polyline from it to itself has a single path pose.
+    const v1::GeoPose& p = request.has_start_wgs84() ? request.start_wgs84() : request.goal_wgs84();
+    for (int k = 0; k < 2; ++k) {
+      v1::GeoPoint3* q = eval.mutable_polyline_wgs84()->add_points();
+      q->set_lat_deg(p.lat_deg());
+      q->set_lon_deg(p.lon_deg());
+      q->set_alt_m(p.alt_m());
+    }
+  }
+  v1::EvaluateRiskResponse response;
+  if (grpc::Status s = client.EvaluateRisk(eval, &response, timeout); !s.ok()) {
+    return absl::UnavailableError(
+        absl::StrFormat("EvaluateRisk of the endpoints failed: %s", s.error_message()));
+  }
+  if (response.path_size() < 1) return absl::InternalError("no path in EvaluateRisk's answer");
+  const v1::Pose& first = response.path(0).pose();
+  const v1::Pose& last = response.path(response.path_size() - 1).pose();
+  if (request.has_start_wgs84() && request.has_goal_wgs84()) return std::pair{first, last};
+  if (request.has_start_wgs84()) return std::pair{first, request.goal()};
+  return std::pair{request.start(), first};
+}
+
+// The map's landing sites and the picture's layers, fetched before the plan
+// so that a plan cut short by the server's end can still be drawn. The layers
+// are downsampled by the server to the picture's size: a full layer is 4
+// bytes a map cell, far more than a picture of a few hundred pixels needs.
+// Both are asked for at the same size, so they come on the same grid.
+int FetchPictureLayers(const CliOptions& o, RiskplanClient& client, PictureInput* picture) {
+  v1::ListMapsResponse maps;
+  if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError("ListMaps", s);
+  for (const v1::MapInfo& m : maps.maps()) {
+    if (m.name() == o.map) picture->map = m;
+  }
+  v1::GetMapLayerRequest layer;
+  layer.set_map(o.map);
+  layer.set_max_side_cells(o.picture_size);
+  layer.set_layer(v1::POPULATION_DENSITY);
+  if (grpc::Status s = client.GetMapLayer(layer, &picture->density); !s.ok()) {
+    return RpcError("GetMapLayer", s);
+  }
+  layer.set_layer(v1::NO_FLY);
+  if (grpc::Status s = client.GetMapLayer(layer, &picture->nofly); !s.ok()) {
+    return RpcError("GetMapLayer", s);
+  }
+  return 0;
+}
+
+// --trajectory_out: the waypoints of `best`; 0, or the exit code of a
+// failure.
+int WriteTrajectoryOut(const CliOptions& o, const v1::Trajectory& best) {
+  if (o.trajectory_out.empty()) return 0;
+  std::ofstream out(o.trajectory_out);
+  out << WaypointsToJson(best.waypoints());
+  out.close();
+  if (!out) return Usage(absl::StrFormat("cannot write --trajectory_out=%s", o.trajectory_out));
+  std::printf("trajectory: %s\n", o.trajectory_out.c_str());
+  return 0;
+}
+
+// --picture of `plan` (its improvements received, and with `final_update`
+// its tree and end), its layers already in `picture`; 0, or 1 on failure.
+// The picture's endpoints are local: a request in WGS84 takes them from the
+// best trajectory (or asks the server, when there is none).
+int WritePlanPicture(const CliOptions& o, RiskplanClient& client, const v1::PlanRequest& request,
+                     const v1::PlanUpdate& final_update, PictureInput& picture) {
+  picture.tree.assign(final_update.tree_edges().begin(), final_update.tree_edges().end());
+  picture.start = request.start();
+  picture.goal = request.goal();
+  if (request.has_start_wgs84() || request.has_goal_wgs84()) {
+    // The client has no map projection: the server's local form of the
+    // endpoints is the best trajectory's ends, or, without one, the ends of
+    // a two-point polyline it evaluates.
+    if (absl::StatusOr<std::pair<v1::Pose, v1::Pose>> ends =
+            LocalEndpoints(client, request, final_update, TimeoutOr(o, absl::Seconds(30)));
+        ends.ok()) {
+      picture.start = ends->first;
+      picture.goal = ends->second;
+    } else {
+      std::fprintf(stderr, "riskplan: %s\n", std::string(ends.status().message()).c_str());
+      return 1;
+    }
+  }
+  if (absl::Status s = WritePicture(o.picture, picture); !s.ok()) {
+    std::fprintf(stderr, "riskplan: %s\n", std::string(s.message()).c_str());
+    return 1;
+  }
+  std::printf("picture: %s\n", o.picture.c_str());
+  return 0;
+}
+
+// The stream broke (the server died or was restarted, the network failed,
+// the deadline passed): what was received is kept, as it would have been at
+// the end. Risk never increases along the stream, so the last improvement is
+// the best one. Returns 1, the exit code of a failed RPC.
+int KeepWhatWasReceived(const CliOptions& o, RiskplanClient& client, const v1::PlanRequest& request,
+                        const grpc::Status& status, const ExportFiles& exports,
+                        PictureInput& picture) {
+  RpcError("PlanTrajectory", status);
+  const std::vector<v1::Trajectory>& improvements = picture.improvements;
+  if (improvements.empty()) {
+    std::fprintf(stderr, "riskplan: no improvement was received before the stream ended\n");
+    return 1;
+  }
+  const v1::Trajectory& best = improvements.back();
+  std::fprintf(stderr,
+               "riskplan: received %d improvements before the stream ended; keeping the best: "
+               "risk %.9g expected casualties per flight, length %.1f m, %d waypoints\n",
+               static_cast<int>(improvements.size()), best.risk(), best.length_m(),
+               best.waypoints_size());
+  WriteTrajectoryOut(o, best);
+  if (exports.any()) {
+    std::fprintf(stderr,
+                 "riskplan: --plan_out, --geojson_out and --kml_out are not written: the server "
+                 "samples their path\n");
+  }
+  if (!o.picture.empty()) {
+    picture.caption = absl::StrFormat(
+        "%s, %s: %d improvements, best risk %.4g, length %.0f m (stream ended early: %s)", o.map,
+        v1::Algorithm_Name(request.algorithm()), static_cast<int>(improvements.size()), best.risk(),
+        best.length_m(), StatusCodeName(status.error_code()));
+    // The best trajectory's ends are the endpoints: no call to the server.
+    v1::PlanUpdate received;
+    *received.mutable_trajectory() = best;
+    WritePlanPicture(o, client, request, received, picture);
+  }
+  return 1;
 }
 
 }  // namespace
@@ -186,6 +416,20 @@ int RunMaps(const CliOptions& o, RiskplanClient& client) {
         m.y0_m(), m.terrain_min_m(), m.terrain_max_m(), m.landing_sites_size(),
         m.memory_bytes() / 1e6);
     if (!m.provenance().empty()) std::printf("  provenance: %s\n", m.provenance().c_str());
+    if (m.has_geo()) {
+      std::printf("  geo-reference: local (%g, %g) m is WGS84 (%.9f, %.9f) deg%s\n",
+                  m.geo().origin_x_m(), m.geo().origin_y_m(), m.geo().origin_lat_deg(),
+                  m.geo().origin_lon_deg(),
+                  m.geo().crs().empty() ? "" : absl::StrFormat(" (%s)", m.geo().crs()).c_str());
+    }
+    if (m.has_bounds_wgs84()) {
+      const v1::GeoBounds& b = m.bounds_wgs84();
+      std::printf("  WGS84 extent: latitudes %.7f to %.7f, longitudes %.7f to %.7f\n",
+                  b.min_lat_deg(), b.max_lat_deg(), b.min_lon_deg(), b.max_lon_deg());
+      if (!m.geo().proj_definition().empty()) {
+        std::printf("  local frame: %s\n", m.geo().proj_definition().c_str());
+      }
+    }
   }
   return 0;
 }
@@ -193,12 +437,16 @@ int RunMaps(const CliOptions& o, RiskplanClient& client) {
 int RunEval(const CliOptions& o, RiskplanClient& client) {
   absl::StatusOr<v1::EvaluateRiskRequest> request = EvalRequest(o);
   if (!request.ok()) return Usage(std::string(request.status().message()));
+  absl::StatusOr<ExportFiles> exports = ExportsFromOptions(o);
+  if (!exports.ok()) return Usage(std::string(exports.status().message()));
+  if (exports->any()) request->set_path_spacing_m(exports->spacing_m);
   v1::EvaluateRiskResponse r;
   grpc::Status status = client.EvaluateRisk(*request, &r, TimeoutOr(o, absl::Seconds(30)));
   if (!status.ok()) return RpcError("EvaluateRisk", status);
   if (o.json) {
     std::printf("%s\n", ToJson(r).c_str());
-    return 0;
+    return exports->any() ? Export(*exports, r, o.map, "riskplan eval on " + o.map, /*quiet=*/true)
+                          : 0;
   }
   // Risks with 9 significant digits: enough to tell apart the trajectories a
   // planner compares, and to check a plan's reported risk against an
@@ -211,6 +459,9 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
     std::printf("  piece %d: risk %.9g, length %.1f m, %d parts, %s\n", i, p.risk(), p.length_m(),
                 p.parts(), p.admissible() ? "admissible" : "not admissible");
   }
+  std::printf("%s\n", TargetLevelOfSafetyText(r.risk_per_flight_hour(), r.flight_time_s(),
+                                              r.airspeed_mps(), o.target_level_of_safety)
+                          .c_str());
   if (r.has_first_violation()) {
     std::printf("first violation: %s\n", r.first_violation().message().c_str());
   }
@@ -224,6 +475,7 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
                   s.expected_shelter(), s.casualty_probability());
     }
   }
+  if (exports->any()) return Export(*exports, r, o.map, "riskplan eval on " + o.map);
   return 0;
 }
 
@@ -235,8 +487,17 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
   if (!o.picture.empty() && !o.picture.ends_with(".svg") && !o.picture.ends_with(".png")) {
     return Usage("--picture must name a .svg or .png file");
   }
+  absl::StatusOr<ExportFiles> exports = ExportsFromOptions(o);
+  if (!exports.ok()) return Usage(std::string(exports.status().message()));
+  if (exports->any()) {
+    if (absl::Status s = CheckMapHasGeo(client, o.map); !s.ok()) return ExportError(s);
+  }
+  PictureInput picture;
+  if (!o.picture.empty()) {
+    if (int code = FetchPictureLayers(o, client, &picture); code != 0) return code;
+  }
   std::printf("plan on %s: start %s -> goal %s, %s, budget %d ms%s, seed %d\n", o.map.c_str(),
-              PoseText(request->start()).c_str(), PoseText(request->goal()).c_str(),
+              StartText(*request).c_str(), GoalText(*request).c_str(),
               v1::Algorithm_Name(request->algorithm()).c_str(), static_cast<int>(o.budget_ms),
               o.iterations > 0 ? absl::StrFormat(" / %d iterations", o.iterations).c_str() : "",
               static_cast<int>(o.seed));
@@ -246,7 +507,7 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
   // point of streaming is to see each improvement as it arrives.
   std::fflush(stdout);
 
-  std::vector<v1::Trajectory> improvements;
+  std::vector<v1::Trajectory>& improvements = picture.improvements;
   v1::PlanUpdate final_update;
   // No deadline by default: the plan's budget already bounds it on the server
   // (and --max_plan_time_ms caps every plan), so a client deadline could only
@@ -275,7 +536,7 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
         return true;
       },
       timeout);
-  if (!status.ok()) return RpcError("PlanTrajectory", status);
+  if (!status.ok()) return KeepWhatWasReceived(o, client, *request, status, *exports, picture);
 
   // "found" counts every improvement of the planner, also those the server
   // never sent because a newer one replaced them (docs/api.md, "The
@@ -290,53 +551,44 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
     const v1::Trajectory& best = final_update.trajectory();
     std::printf("best: risk %.9g expected casualties per flight, length %.1f m, %d waypoints\n",
                 best.risk(), best.length_m(), best.waypoints_size());
-    if (!o.trajectory_out.empty()) {
-      std::ofstream out(o.trajectory_out);
-      out << WaypointsToJson(best.waypoints());
-      if (!out) return Usage(absl::StrFormat("cannot write --trajectory_out=%s", o.trajectory_out));
-      std::printf("trajectory: %s\n", o.trajectory_out.c_str());
+    std::printf("%s\n", TargetLevelOfSafetyText(
+                            best.risk_per_flight_hour(), best.flight_time_s(),
+                            best.flight_time_s() > 0 ? best.length_m() / best.flight_time_s() : 0,
+                            o.target_level_of_safety)
+                            .c_str());
+    if (int code = WriteTrajectoryOut(o, best); code != 0) return code;
+    if (exports->any()) {
+      // The server samples the best trajectory's path in both frames: the
+      // client cannot (it has no map projection), and the same waypoints
+      // and parameters give exactly the plan's risk.
+      v1::EvaluateRiskRequest eval;
+      eval.set_map(o.map);
+      eval.mutable_waypoints()->mutable_poses()->CopyFrom(best.waypoints());
+      *eval.mutable_model_params() = request->model_params();
+      eval.set_path_spacing_m(exports->spacing_m);
+      v1::EvaluateRiskResponse path;
+      if (grpc::Status s = client.EvaluateRisk(eval, &path, TimeoutOr(o, absl::Seconds(30)));
+          !s.ok()) {
+        return RpcError("EvaluateRisk", s);
+      }
+      const std::string description = absl::StrFormat(
+          "riskplan plan on %s: %s, seed %d, %s", o.map, v1::Algorithm_Name(request->algorithm()),
+          o.seed, v1::EndReason_Name(final_update.end_reason()));
+      if (int code = Export(*exports, path, o.map, description); code != 0) return code;
     }
   } else {
     std::printf("no admissible trajectory was found\n");
   }
 
   if (!o.picture.empty()) {
-    // The landing sites come from ListMaps, the layers from GetMapLayer,
-    // downsampled by the server to the picture's size: a full layer is 4
-    // bytes a map cell, far more than a picture of a few hundred pixels
-    // needs. Both layers are asked for at the same size, so they come on the
-    // same grid.
-    PictureInput picture;
-    v1::ListMapsResponse maps;
-    if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError("ListMaps", s);
-    for (const v1::MapInfo& m : maps.maps()) {
-      if (m.name() == o.map) picture.map = m;
-    }
-    v1::GetMapLayerRequest layer;
-    layer.set_map(o.map);
-    layer.set_max_side_cells(o.picture_size);
-    layer.set_layer(v1::POPULATION_DENSITY);
-    if (grpc::Status s = client.GetMapLayer(layer, &picture.density); !s.ok()) {
-      return RpcError("GetMapLayer", s);
-    }
-    layer.set_layer(v1::NO_FLY);
-    if (grpc::Status s = client.GetMapLayer(layer, &picture.nofly); !s.ok()) {
-      return RpcError("GetMapLayer", s);
-    }
-    picture.improvements = improvements;
-    picture.tree.assign(final_update.tree_edges().begin(), final_update.tree_edges().end());
-    picture.start = request->start();
-    picture.goal = request->goal();
     picture.caption = absl::StrFormat(
         "%s, %s: %d improvements, best risk %.4g, length %.0f m, %d iterations (%s)", o.map,
         v1::Algorithm_Name(request->algorithm()), static_cast<int>(improvements.size()),
         final_update.trajectory().risk(), final_update.trajectory().length_m(),
         static_cast<int>(final_update.iterations()), v1::EndReason_Name(final_update.end_reason()));
-    if (absl::Status s = WritePicture(o.picture, picture); !s.ok()) {
-      std::fprintf(stderr, "riskplan: %s\n", std::string(s.message()).c_str());
-      return 1;
+    if (int code = WritePlanPicture(o, client, *request, final_update, picture); code != 0) {
+      return code;
     }
-    std::printf("picture: %s\n", o.picture.c_str());
   }
   // 3 tells a script that the plan ran but found nothing (NO_SOLUTION, or a
   // SHUTDOWN before the first solution), which is not an RPC failure.

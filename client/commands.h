@@ -2,7 +2,8 @@
 // (riskplan_main.cc). Each prints to stdout (results, progress) and stderr
 // (errors), and returns the process exit code:
 //   0  success;
-//   1  the RPC failed (the status code and message are printed);
+//   1  the RPC failed (the status code and message are printed; a `plan`
+//      whose stream broke still writes the best trajectory it received);
 //   2  bad command-line input;
 //   3  `plan` only: the plan ended without a trajectory (NO_SOLUTION, SHUTDOWN).
 #ifndef RISKPLAN_CLIENT_COMMANDS_H_
@@ -13,6 +14,7 @@
 
 #include "absl/time/time.h"
 #include "client/client.h"
+#include "client/exports.h"
 
 namespace riskplan::client {
 
@@ -50,6 +52,13 @@ struct CliOptions {
   std::string picture;         // .svg or .png
   int picture_size = 800;      // largest side, pixels (map cells after downsampling)
   std::string trajectory_out;  // JSON of the best trajectory's waypoints
+
+  // Ground-station and GIS files of the trajectory (plan, eval), written
+  // from the server's path sampled every exports.spacing_m.
+  ExportFiles exports;
+  std::string plan_firmware = "px4";  // px4 | ardupilot | generic (the .plan's firmwareType)
+  // Target level of safety, expected casualties per flight hour (plan, eval).
+  double target_level_of_safety = 1e-6;
 
   // Load.
   std::string rpc = "eval";     // eval | plan | ping

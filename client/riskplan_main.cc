@@ -19,8 +19,10 @@ ABSL_FLAG(int64_t, timeout_ms, 0,
 ABSL_FLAG(bool, json, false, "maps, eval: print the response as JSON");
 ABSL_FLAG(std::string, waypoints, "",
           "eval, load: waypoints 'x,y,z,theta;...' (m, m, m AMSL, rad), joined by "
-          "Dubins-airplane manoeuvres");
-ABSL_FLAG(std::string, polyline, "", "eval, load: polyline 'x,y,z;...' of straight segments");
+          "Dubins-airplane manoeuvres; or 'wgs84:lat,lon,alt,heading_deg;...' (deg, deg, m AMSL, "
+          "deg clockwise from true north) on a geo-referenced map");
+ABSL_FLAG(std::string, polyline, "",
+          "eval, load: polyline 'x,y,z;...' of straight segments, or 'wgs84:lat,lon,alt;...'");
 ABSL_FLAG(std::string, trajectory_file, "",
           "eval, load: JSON file {\"waypoints\": [[x,y,z,theta],...]} or {\"polyline\": "
           "[[x,y,z],...]} (docs/api.md, \"Trajectory files\")");
@@ -40,8 +42,12 @@ ABSL_FLAG(bool, two_tier_bresenham, false,
 ABSL_FLAG(std::string, params, "",
           "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
           "mass_kg=12,airspeed_mps=20)");
-ABSL_FLAG(std::string, start, "", "plan: start pose 'x,y,z,theta'");
-ABSL_FLAG(std::string, goal, "", "plan: goal pose 'x,y,z,theta'");
+ABSL_FLAG(std::string, start, "",
+          "plan: start pose 'x,y,z,theta' (m, m, m AMSL, rad from east), or "
+          "'wgs84:lat,lon,alt,heading_deg' (deg, deg, m AMSL, deg clockwise from true north) on a "
+          "geo-referenced map");
+ABSL_FLAG(std::string, goal, "",
+          "plan: goal pose 'x,y,z,theta' or 'wgs84:lat,lon,alt,heading_deg'");
 ABSL_FLAG(std::string, algorithm, "RISK_RRT_STAR",
           "plan: RISK_RRT_STAR, RRT, GENETIC or HARMONIC (docs/planners.md)");
 ABSL_FLAG(int64_t, budget_ms, 5000, "plan: time budget, ms (0: none; then --iterations)");
@@ -50,8 +56,8 @@ ABSL_FLAG(uint64_t, seed, 1, "plan: planner seed");
 ABSL_FLAG(std::string, planner_params, "",
           "plan: planner parameters 'name=value,...' (listed by `riskplan-server --help`)");
 ABSL_FLAG(std::string, obstacles, "",
-          "plan: point obstacles 'x,y;...' kept at the planner's clearance_m (RRT, GENETIC, "
-          "HARMONIC)");
+          "plan: point obstacles 'x,y;...' (or 'wgs84:lat,lon;...') kept at the planner's "
+          "clearance_m (RRT, GENETIC, HARMONIC)");
 ABSL_FLAG(int64_t, min_update_interval_ms, 100, "plan: least time between streamed updates, ms");
 ABSL_FLAG(double, display_step_m, 25.0, "plan: spacing of the streamed display path, m");
 ABSL_FLAG(bool, tree, false, "plan: draw the planner's final tree in the picture");
@@ -59,6 +65,19 @@ ABSL_FLAG(std::string, picture, "", "plan: write a picture of the plan (.svg or 
 ABSL_FLAG(int, picture_size, 800, "plan: largest side of the picture, pixels");
 ABSL_FLAG(std::string, trajectory_out, "",
           "plan: write the best trajectory as JSON waypoints (readable by --trajectory_file)");
+ABSL_FLAG(std::string, plan_out, "",
+          "plan, eval: write the trajectory as a QGroundControl mission (.plan; a geo-referenced "
+          "map only)");
+ABSL_FLAG(std::string, geojson_out, "",
+          "plan, eval: write the trajectory as GeoJSON (RFC 7946) with each sample's risk");
+ABSL_FLAG(std::string, kml_out, "", "plan, eval: write the trajectory as KML");
+ABSL_FLAG(double, export_spacing_m, 50.0,
+          "plan, eval: spacing of the exported waypoints along the flown path, m, [1, 100000]");
+ABSL_FLAG(std::string, plan_firmware, "px4",
+          "plan, eval: the .plan's firmwareType: px4, ardupilot or generic");
+ABSL_FLAG(double, target_level_of_safety, 1e-6,
+          "plan, eval: target level of safety, expected casualties per flight hour (SORA: 1e-6); "
+          "the risk per flight hour is compared with it");
 ABSL_FLAG(std::string, rpc, "eval", "load: the RPC to load, eval | plan | ping");
 ABSL_FLAG(std::string, mode, "closed",
           "load: closed (--concurrency callers back to back) or open (--rate calls per second, "
@@ -92,6 +111,9 @@ riskplan::cmdline::ProgramHelp Help() {
       "budget_ms",      "iterations", "seed",
       "planner_params", "obstacles",  "min_update_interval_ms",
       "display_step_m", "tree"};
+  const std::vector<std::string> exports = {"plan_out",      "geojson_out",
+                                            "kml_out",       "export_spacing_m",
+                                            "plan_firmware", "target_level_of_safety"};
   auto join = [](std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
     return a;
@@ -101,22 +123,42 @@ riskplan::cmdline::ProgramHelp Help() {
       {"eval", "risk, length and admissibility of a trajectory",
        "  riskplan eval (--waypoints=... | --polyline=... | --trajectory_file=F) [flags]\n"
        "\n"
+       "Prints the risk per flight hour (risk / (length / airspeed)) and whether it\n"
+       "meets --target_level_of_safety. On a geo-referenced map the trajectory may be\n"
+       "given in WGS84 ('wgs84:lat,lon,alt,heading_deg; ...'), and --plan_out,\n"
+       "--geojson_out and --kml_out write it for ground stations and GIS\n"
+       "(docs/geodata.md).\n"
+       "\n"
        "Example:\n"
        "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'",
        join(join({"server", "map", "timeout_ms", "json"}, trajectory),
-            join({"samples", "params"}, two_tier))},
+            join(join({"samples", "params"}, two_tier), exports))},
       {"plan", "plan a trajectory, showing each improvement as it streams",
        "  riskplan plan --start=X,Y,Z,THETA --goal=X,Y,Z,THETA [flags]\n"
+       "  riskplan plan --start=wgs84:LAT,LON,ALT,HEADING_DEG --goal=wgs84:... [flags]\n"
+       "\n"
+       "Poses are local, 'x,y,z,theta' (m east, m north, m AMSL, rad counter-clockwise\n"
+       "from east), or, on a geo-referenced map (riskplan maps), WGS84 with the prefix\n"
+       "'wgs84:': 'wgs84:lat,lon,alt,heading_deg' (degrees, m AMSL, degrees clockwise\n"
+       "from true north); --obstacles takes 'wgs84:lat,lon; ...' too.\n"
        "\n"
        "--picture=F.svg or F.png draws the plan: population density, no-fly zones,\n"
        "landing sites, every improvement and the final trajectory, with a legend and\n"
-       "a scale bar. Exit code 3: the plan ended without a trajectory.\n"
+       "a scale bar. --plan_out=F.plan (QGroundControl), --geojson_out=F.geojson and\n"
+       "--kml_out=F.kml write the best trajectory sampled every --export_spacing_m, in\n"
+       "WGS84 with altitudes AMSL. The risk per flight hour is compared with\n"
+       "--target_level_of_safety. Exit code 3: the plan ended without a trajectory.\n"
+       "If the stream breaks (the server dies, say), the error and what was received\n"
+       "go to stderr, the best trajectory received is still written (--trajectory_out,\n"
+       "--picture; the exports need the server) and the exit code is 1.\n"
        "\n"
-       "Example:\n"
+       "Examples:\n"
        "  riskplan plan --start=1200,1500,250,0.785 --goal=6800,6500,250,0.785 "
-       "--budget_ms=5000 --picture=plan.svg",
+       "--budget_ms=5000 --picture=plan.svg\n"
+       "  riskplan plan --map=lux --start=wgs84:49.6012,6.1034,420,45 "
+       "--goal=wgs84:49.6301,6.1625,430,90 --plan_out=mission.plan",
        join(join({"server", "map", "timeout_ms"}, planning),
-            {"params", "picture", "picture_size", "trajectory_out"})},
+            join({"params", "picture", "picture_size", "trajectory_out"}, exports))},
       {"load", "load test of one RPC (eval, plan or ping), closed or open loop",
        "  riskplan load [--rpc=eval|plan|ping] [--mode=closed|open] [flags]\n"
        "\n"
@@ -139,7 +181,8 @@ riskplan::cmdline::ProgramHelp Help() {
       "\n"
       "Exit codes: 0 success; 1 the RPC failed, or a flag is unknown or malformed;\n"
       "2 bad input; 3 plan found no trajectory.\n"
-      "Units: metres, metres above mean sea level, radians counter-clockwise from east.";
+      "Units: metres, metres above mean sea level, radians counter-clockwise from east;\n"
+      "with 'wgs84:', degrees of latitude and longitude and degrees clockwise from north.";
   return help;
 }
 
@@ -177,6 +220,12 @@ int main(int argc, char** argv) {
   o.picture = absl::GetFlag(FLAGS_picture);
   o.picture_size = absl::GetFlag(FLAGS_picture_size);
   o.trajectory_out = absl::GetFlag(FLAGS_trajectory_out);
+  o.exports.plan_out = absl::GetFlag(FLAGS_plan_out);
+  o.exports.geojson_out = absl::GetFlag(FLAGS_geojson_out);
+  o.exports.kml_out = absl::GetFlag(FLAGS_kml_out);
+  o.exports.spacing_m = absl::GetFlag(FLAGS_export_spacing_m);
+  o.plan_firmware = absl::GetFlag(FLAGS_plan_firmware);
+  o.target_level_of_safety = absl::GetFlag(FLAGS_target_level_of_safety);
   o.rpc = absl::GetFlag(FLAGS_rpc);
   o.mode = absl::GetFlag(FLAGS_mode);
   o.concurrency = absl::GetFlag(FLAGS_concurrency);

@@ -63,6 +63,80 @@ std::vector<std::string> Points(std::string_view text) {
 
 }  // namespace
 
+bool HasWgs84Prefix(std::string_view text, std::string_view* rest) {
+  const size_t start = text.find_first_not_of(" \t");
+  if (start != std::string_view::npos && text.substr(start, kWgs84Prefix.size()) == kWgs84Prefix) {
+    *rest = text.substr(start + kWgs84Prefix.size());
+    return true;
+  }
+  *rest = text;
+  return false;
+}
+
+absl::StatusOr<v1::GeoPose> ParseGeoPose(std::string_view text) {
+  absl::StatusOr<std::vector<double>> v = ParseNumbers(text, 4, "WGS84 pose (lat,lon,alt,heading)");
+  if (!v.ok()) return v.status();
+  v1::GeoPose pose;
+  pose.set_lat_deg((*v)[0]);
+  pose.set_lon_deg((*v)[1]);
+  pose.set_alt_m((*v)[2]);
+  pose.set_heading_deg((*v)[3]);
+  return pose;
+}
+
+absl::StatusOr<v1::GeoWaypoints> ParseGeoWaypoints(std::string_view text) {
+  v1::GeoWaypoints out;
+  const std::vector<std::string> points = Points(text);
+  for (size_t i = 0; i < points.size(); ++i) {
+    absl::StatusOr<std::vector<double>> v =
+        ParseNumbers(points[i], 4, absl::StrFormat("WGS84 waypoint %d (lat,lon,alt,heading)", i));
+    if (!v.ok()) return v.status();
+    v1::GeoPose* pose = out.add_poses();
+    pose->set_lat_deg((*v)[0]);
+    pose->set_lon_deg((*v)[1]);
+    pose->set_alt_m((*v)[2]);
+    pose->set_heading_deg((*v)[3]);
+  }
+  if (out.poses_size() < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("waypoints: %d given; at least 2 are needed", out.poses_size()));
+  }
+  return out;
+}
+
+absl::StatusOr<v1::GeoPolyline> ParseGeoPolyline(std::string_view text) {
+  v1::GeoPolyline out;
+  const std::vector<std::string> points = Points(text);
+  for (size_t i = 0; i < points.size(); ++i) {
+    absl::StatusOr<std::vector<double>> v =
+        ParseNumbers(points[i], 3, absl::StrFormat("WGS84 polyline point %d (lat,lon,alt)", i));
+    if (!v.ok()) return v.status();
+    v1::GeoPoint3* p = out.add_points();
+    p->set_lat_deg((*v)[0]);
+    p->set_lon_deg((*v)[1]);
+    p->set_alt_m((*v)[2]);
+  }
+  if (out.points_size() < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("polyline: %d points given; at least 2 are needed", out.points_size()));
+  }
+  return out;
+}
+
+absl::StatusOr<std::vector<v1::GeoPoint2>> ParseGeoPoints2(std::string_view text) {
+  std::vector<v1::GeoPoint2> out;
+  const std::vector<std::string> points = Points(text);
+  for (size_t i = 0; i < points.size(); ++i) {
+    absl::StatusOr<std::vector<double>> v =
+        ParseNumbers(points[i], 2, absl::StrFormat("WGS84 obstacle %d (lat,lon)", i));
+    if (!v.ok()) return v.status();
+    v1::GeoPoint2& p = out.emplace_back();
+    p.set_lat_deg((*v)[0]);
+    p.set_lon_deg((*v)[1]);
+  }
+  return out;
+}
+
 absl::StatusOr<v1::Pose> ParsePose(std::string_view text) {
   absl::StatusOr<std::vector<double>> v = ParseNumbers(text, 4, "pose");
   if (!v.ok()) return v.status();

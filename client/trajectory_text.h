@@ -6,6 +6,16 @@
 //   polyline:  "x,y,z; x,y,z; ..."
 //   JSON file: {"waypoints": [[x, y, z, theta], ...]} or
 //              {"polyline": [[x, y, z], ...]}
+// On a geo-referenced map the same forms may be given in WGS84 by starting
+// the text with "wgs84:", which applies to every point of the text:
+//   pose:      "wgs84:lat,lon,alt,heading_deg"   (deg, deg, m AMSL, deg
+//                                                 clockwise from true north)
+//   waypoints: "wgs84:lat,lon,alt,heading_deg; lat,lon,alt,heading_deg; ..."
+//   polyline:  "wgs84:lat,lon,alt; lat,lon,alt; ..."
+//   obstacles: "wgs84:lat,lon; lat,lon; ..."
+// (latitude first, as ground stations write it). Without the prefix a text is
+// in the map's local metres, as before: a bare list of numbers never changes
+// its meaning.
 // The text forms' parsers check the syntax and that every number is finite;
 // ranges and admissibility are the server's business. Errors
 // (InvalidArgument) name the point index and the text at fault.
@@ -23,7 +33,21 @@
 
 namespace riskplan::client {
 
+// The prefix that puts a text form in WGS84.
+inline constexpr std::string_view kWgs84Prefix = "wgs84:";
+
+// Whether `text` (after leading blanks) starts with kWgs84Prefix; `rest` is
+// set to what follows it (or to the whole text when it does not).
+bool HasWgs84Prefix(std::string_view text, std::string_view* rest);
+
 absl::StatusOr<v1::Pose> ParsePose(std::string_view text);
+// "lat,lon,alt,heading_deg" (without the prefix).
+absl::StatusOr<v1::GeoPose> ParseGeoPose(std::string_view text);
+// "lat,lon,alt,heading_deg; ..." and "lat,lon,alt; ..." (without the
+// prefix), at least 2 points; "lat,lon; ..." (any number).
+absl::StatusOr<v1::GeoWaypoints> ParseGeoWaypoints(std::string_view text);
+absl::StatusOr<v1::GeoPolyline> ParseGeoPolyline(std::string_view text);
+absl::StatusOr<std::vector<v1::GeoPoint2>> ParseGeoPoints2(std::string_view text);
 absl::StatusOr<v1::Waypoints> ParseWaypoints(std::string_view text);
 absl::StatusOr<v1::Polyline> ParsePolyline(std::string_view text);
 // "x,y; x,y; ..." (any number of points, none for empty text).

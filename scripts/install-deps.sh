@@ -10,6 +10,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   prometheus-cpp-dev
+  libgdal-dev libproj-dev gdal-bin
 )
 # Extra packages a caller asks for (e.g. the benchmark script adds OMPL).
 PACKAGES+=("$@")

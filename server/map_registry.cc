@@ -35,6 +35,16 @@ absl::StatusOr<std::unique_ptr<MapRegistry>> MapRegistry::FromMaps(
   std::unique_ptr<MapRegistry> registry(new MapRegistry);
   for (std::shared_ptr<const RiskMap>& map : maps) {
     const std::string name = map->name();
+    // A geo-reference the loader passed but PROJ cannot use (a latitude of
+    // 95) would make every WGS84 answer wrong: refused at start-up.
+    if (map->header().geo.has_value()) {
+      absl::StatusOr<geo::GeoFrame> frame = geo::FrameOfMap(map->header());
+      if (!frame.ok()) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("map '%s': %s", name, frame.status().message()));
+      }
+      registry->frames_[name] = std::make_shared<const geo::GeoFrame>(*std::move(frame));
+    }
     if (!registry->by_name_.emplace(name, std::move(map)).second) {
       return absl::InvalidArgumentError(absl::StrFormat("two maps are called '%s'", name));
     }
@@ -48,6 +58,11 @@ absl::StatusOr<std::unique_ptr<MapRegistry>> MapRegistry::FromMaps(
 std::shared_ptr<const RiskMap> MapRegistry::Find(std::string_view name) const {
   auto it = by_name_.find(name);
   return it == by_name_.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<const geo::GeoFrame> MapRegistry::Frame(std::string_view name) const {
+  auto it = frames_.find(name);
+  return it == frames_.end() ? nullptr : it->second;
 }
 
 std::string MapRegistry::NameList() const {

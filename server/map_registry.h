@@ -15,6 +15,7 @@
 #include "absl/status/statusor.h"
 #include "core/map/demo_city.h"
 #include "core/map/risk_map.h"
+#include "geo/geo_frame.h"
 
 namespace riskplan::server {
 
@@ -28,12 +29,17 @@ class MapRegistry {
   // The built-in demo-city alone.
   static absl::StatusOr<std::unique_ptr<MapRegistry>> DemoCity(const DemoCityOptions& options = {});
 
-  // The given maps. InvalidArgument when two share a name or there are none.
+  // The given maps. InvalidArgument when two share a name, there are none,
+  // or a map's geo-reference is not a WGS84 position (GeoFrame::Create).
   static absl::StatusOr<std::unique_ptr<MapRegistry>> FromMaps(
       std::vector<std::shared_ptr<const RiskMap>> maps);
 
   // The map called `name`, or null.
   std::shared_ptr<const RiskMap> Find(std::string_view name) const;
+
+  // The WGS84 frame of the map called `name` (geo/geo_frame.h), or null when
+  // it has no geo-reference (or no such map is served).
+  std::shared_ptr<const geo::GeoFrame> Frame(std::string_view name) const;
 
   // Every map, sorted by name.
   const std::vector<std::shared_ptr<const RiskMap>>& maps() const { return sorted_; }
@@ -48,6 +54,7 @@ class MapRegistry {
   MapRegistry() = default;
 
   std::map<std::string, std::shared_ptr<const RiskMap>, std::less<>> by_name_;
+  std::map<std::string, std::shared_ptr<const geo::GeoFrame>, std::less<>> frames_;
   std::vector<std::shared_ptr<const RiskMap>> sorted_;
 };
 

@@ -53,6 +53,13 @@ ServerMetrics::ServerMetrics() : registry_(std::make_shared<prometheus::Registry
                        .Help("Risk models built for overridden model parameters")
                        .Register(*registry_)
                        .Add({});
+  accept_errors_ = &prometheus::BuildCounter()
+                        .Name("riskplan_accept_errors_total")
+                        .Help(
+                            "Connections the server could not accept (out of file descriptors "
+                            "or memory); it retries, and they wait in the listen backlog")
+                        .Register(*registry_)
+                        .Add({});
 }
 
 ServerMetrics::~ServerMetrics() = default;

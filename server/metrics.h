@@ -8,6 +8,7 @@
 //   riskplan_plan_updates_total{kind}              counter (kind: sent, replaced)
 //   riskplan_map_memory_bytes{map}                 gauge
 //   riskplan_model_cache_builds_total              counter
+//   riskplan_accept_errors_total                   counter (failed accepts, ConnectionAcceptor)
 //
 // Thread-safe.
 #ifndef RISKPLAN_SERVER_METRICS_H_
@@ -48,6 +49,7 @@ class ServerMetrics {
   void RecordUpdates(int64_t sent, int64_t replaced);
   void SetMapMemory(const std::string& map, double bytes);
   void RecordModelBuild() { model_builds_->Increment(); }
+  void RecordAcceptError() { accept_errors_->Increment(); }
 
   prometheus::Registry& registry() { return *registry_; }
 
@@ -66,6 +68,7 @@ class ServerMetrics {
   prometheus::Family<prometheus::Counter>* plan_updates_;
   prometheus::Family<prometheus::Gauge>* map_memory_;
   prometheus::Counter* model_builds_;
+  prometheus::Counter* accept_errors_;
 };
 
 }  // namespace riskplan::server

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <exception>
+#include <optional>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -175,9 +176,21 @@ absl::StatusOr<PlanResult> PlanCall::Plan() {
   if (!endpoints_checked_.load()) {
     if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
   }
-  // One evaluator per plan: it counts the plan's configurations.
-  std::unique_ptr<RiskEvaluator> evaluator =
-      env_.engine != nullptr ? env_.engine->NewEvaluator() : nullptr;
+  // One evaluator per plan: it counts the plan's configurations. It stops
+  // waiting for boards once the plan is cancelled or its time budget is over
+  // (measured from here, just before the planner's own clock starts): a
+  // stalled or restarting board's chunk is then computed by this thread, and
+  // the planner ends on time instead of after the board's request deadline.
+  std::unique_ptr<RiskEvaluator> evaluator;
+  if (env_.engine != nullptr) {
+    std::optional<std::chrono::steady_clock::time_point> deadline;
+    if (spec_.options.budget.max_time_s > 0.0) {
+      deadline = std::chrono::steady_clock::now() +
+                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                     std::chrono::duration<double>(spec_.options.budget.max_time_s));
+    }
+    evaluator = env_.engine->NewEvaluator(StopCondition(&cancel_, nullptr, deadline));
+  }
   absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec_.algorithm, evaluator.get());
   if (!planner.ok()) return planner.status();
   return (*planner)->Plan(
@@ -195,8 +208,9 @@ void PlanCall::OfferFinal(const PlanResult& result) {
   env_.metrics->RecordPlan(v1::EndReason_Name(end_reason), absl::Seconds(result.elapsed_s));
   // Built outside the lock (the display path and the tree can be large): the
   // plan thread pays for it, and gRPC's threads never wait for it.
-  absl::StatusOr<v1::PlanUpdate> final_update = FinalUpdateToProto(
-      result, end_reason, spec_.params, spec_.display_step_m, spec_.options.record_tree);
+  absl::StatusOr<v1::PlanUpdate> final_update =
+      FinalUpdateToProto(result, end_reason, spec_.params, spec_.display_step_m,
+                         spec_.options.record_tree, spec_.frame.get());
   // A planner's best trajectory always converts; in a release build a
   // failure still ends the call, with INTERNAL, instead of a final message
   // without its trajectory.
@@ -223,7 +237,7 @@ void PlanCall::OfferFinal(const PlanResult& result) {
 void PlanCall::OnImprovement(const PlanImprovement& improvement) {
   // Built outside the lock: the planner thread pays for it, not gRPC's.
   absl::StatusOr<v1::PlanUpdate> update =
-      ImprovementToProto(improvement, spec_.params, spec_.display_step_m);
+      ImprovementToProto(improvement, spec_.params, spec_.display_step_m, spec_.frame.get());
   // Never fails for a planner's output; in a release build the update is
   // dropped (a later improvement or the final message carries a newer one).
   RISKPLAN_DCHECK(update.ok());

@@ -12,8 +12,10 @@
 #include "absl/time/clock.h"
 #include "accel/kernel_evaluator.h"
 #include "core/flight/trajectory.h"
+#include "core/risk/risk_layer.h"
 #include "server/message_codec.h"
 #include "server/proto_convert.h"
+#include "server/risk_layer_request.h"
 #include "server/rpc_log.h"
 #include "server/status_util.h"
 
@@ -146,7 +148,10 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
     return s;
   }
   // Without an engine: accel's exact kernel on this thread (RiskModel::Evaluate bit for bit).
-  std::unique_ptr<RiskEvaluator> evaluator = engine != nullptr ? engine->NewEvaluator() : nullptr;
+  // With one, a batch stops waiting for boards once `stop` is reached (its
+  // remaining chunks are computed here, RiskEngine::Evaluate).
+  std::unique_ptr<RiskEvaluator> evaluator =
+      engine != nullptr ? engine->NewEvaluator(stop) : nullptr;
   absl::StatusOr<TrajectoryEvaluation> evaluation = EvaluateTrajectory(
       **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples},
       evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator(), stop);
@@ -159,13 +164,55 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
         "both must be finite",
         evaluation->risk, evaluation->length_m));
   }
-  EvaluationToProto(*evaluation, spec.include_samples, response);
+  EvaluationToProto(*evaluation, params, spec.include_samples, spec.frame.get(), response);
   if (spec.two_tier.has_value()) {
     // Bounded like the evaluation: the cells visited grow with the length,
     // which CheckSampleCount has capped.
     std::shared_ptr<const SharedFeasibility> feasibility = checkers.Get(*model, *spec.two_tier);
-    FeasibilityToProto(feasibility->checker.CheckTrajectory(*pieces), response->mutable_two_tier());
+    FeasibilityToProto(feasibility->checker.CheckTrajectory(*pieces), spec.frame.get(),
+                       response->mutable_two_tier());
   }
+  if (spec.path_spacing_m > 0.0) {
+    // Counted before it is sampled: the path's poses, their risks and their
+    // WGS84 forms are all bounded by --max_response_samples.
+    if (absl::Status s = CheckPathCount(length_m, spec.path_spacing_m, limits); !s.ok()) return s;
+    const std::vector<PathPose> path =
+        SamplePath(*pieces, spec.path_spacing_m, static_cast<size_t>(limits.max_response_samples));
+    std::vector<Pose> poses;
+    poses.reserve(path.size());
+    for (const PathPose& p : path) poses.push_back(p.pose);
+    // The path's configuration risks through the same evaluator, in batches
+    // of kEvaluationBatch so that the stop is polled between them.
+    std::vector<ConfigurationRisk> risks(poses.size());
+    RiskEvaluator* risk_evaluator =
+        evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator();
+    for (size_t begin = 0; begin < poses.size(); begin += kEvaluationBatch) {
+      if (stop.Reached()) return absl::CancelledError("the evaluation was stopped");
+      const size_t n = std::min(kEvaluationBatch, poses.size() - begin);
+      if (absl::Status s =
+              risk_evaluator->EvaluateBatch(**model, std::span<const Pose>(poses).subspan(begin, n),
+                                            std::span<ConfigurationRisk>(risks).subspan(begin, n));
+          !s.ok()) {
+        return s;
+      }
+    }
+    PathToProto(path, risks, *spec.map, spec.frame.get(), response);
+  }
+  return absl::OkStatus();
+}
+
+// The risk layer of a validated request (on the evaluation pool), stopped
+// once `stop` is reached.
+absl::Status ComputeLayer(RiskModelCache& models, const RiskLayerSpec& spec,
+                          const StopCondition& stop, v1::GetRiskLayerResponse* response) {
+  if (stop.Reached()) return absl::CancelledError("the risk layer was stopped before it started");
+  absl::StatusOr<std::shared_ptr<const RiskModel>> model = models.Get(*spec.map, spec.params);
+  if (!model.ok()) return InField("model_params", model.status());
+  RiskLayerOptions options = spec.options;
+  options.stop = stop;
+  absl::StatusOr<RiskLayer> layer = ComputeRiskLayer(**model, options);
+  if (!layer.ok()) return layer.status();
+  *response = RiskLayerToProto(*layer, *spec.map, options, spec.frame.get());
   return absl::OkStatus();
 }
 
@@ -182,7 +229,7 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
   // The maps never change while the server runs: ListMaps's answer is built
   // once (MapInfoFromMap scans the terrain) and copied for every call.
   for (const std::shared_ptr<const RiskMap>& map : maps_.maps()) {
-    *map_list_.add_maps() = MapInfoFromMap(*map);
+    *map_list_.add_maps() = MapInfoFromMap(*map, maps_.Frame(map->name()).get());
     metrics_.SetMapMemory(map->name(), static_cast<double>(map->MemoryBytes()));
   }
 }
@@ -373,6 +420,50 @@ grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContex
       call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                                   "riskplan-server's evaluation queue is full; retry later"),
                      request.map());
+    }
+  });
+  return call;
+}
+
+grpc::ServerUnaryReactor* PlannerService::GetRiskLayer(grpc::CallbackServerContext* ctx,
+                                                       const grpc::ByteBuffer* raw_request,
+                                                       grpc::ByteBuffer* raw_response) {
+  auto* call = new UnaryCall<v1::GetRiskLayerResponse>("GetRiskLayer", ctx, &metrics_, &open_calls_,
+                                                       raw_response);
+  Guarded(call, "GetRiskLayer", "", [&] {
+    if (draining()) {
+      call->Complete(kDraining);
+      return;
+    }
+    v1::GetRiskLayerRequest request;
+    if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
+      call->Complete(ToGrpcStatus(s));
+      return;
+    }
+    // Every refusal, the layer's size above all, comes before the queue.
+    absl::StatusOr<RiskLayerSpec> spec = ValidateRiskLayerRequest(request, maps_, options_.limits);
+    if (!spec.ok()) {
+      call->Complete(ToGrpcStatus(spec.status()), request.map());
+      return;
+    }
+    const std::string map = request.map();
+    const bool queued = eval_pool_.TrySubmit([this, call, spec = *std::move(spec)] {
+      Guarded(call, "GetRiskLayer", spec.map->name(), [&] {
+        const StopCondition stop(&call->cancelled(), &stop_evaluations_);
+        absl::Status status = ComputeLayer(models_, spec, stop, call->response());
+        if (absl::IsCancelled(status) && stop_evaluations_.IsCancelled()) {
+          call->Complete(kDraining, spec.map->name());
+          return;
+        }
+        call->Complete(ToGrpcStatus(status), spec.map->name());
+      });
+    });
+    if (!queued) {
+      call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                  absl::StrFormat("riskplan-server has %d evaluations waiting "
+                                                  "(--max_queued_evals); retry later",
+                                                  options_.max_queued_evals)),
+                     map);
     }
   });
   return call;

@@ -1,9 +1,10 @@
 // PlannerService: riskplan.v1.Planner on gRPC's callback API.
 //
 // Threading: handlers run on gRPC's threads and only validate, look up and
-// dispatch. Planning runs on the plan pool (--plan_threads), risk evaluation
-// and map-layer downsampling on the evaluation pool (--eval_threads); ListMaps
-// and Ping answer inline. See docs/architecture.md.
+// dispatch. Planning runs on the plan pool (--plan_threads), risk evaluation,
+// map-layer downsampling and risk layers on the evaluation pool
+// (--eval_threads); ListMaps and Ping answer inline. See
+// docs/architecture.md.
 //
 // Shutdown: StartDraining() makes every new call fail with UNAVAILABLE;
 // ActivePlans lets the caller wait for running plans and stop them.
@@ -59,7 +60,8 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
 using RawPlannerService = v1::Planner::WithRawCallbackMethod_PlanTrajectory<
     v1::Planner::WithRawCallbackMethod_EvaluateRisk<
         v1::Planner::WithRawCallbackMethod_ListMaps<v1::Planner::WithRawCallbackMethod_GetMapLayer<
-            v1::Planner::WithRawCallbackMethod_Ping<v1::Planner::Service>>>>>;
+            v1::Planner::WithRawCallbackMethod_GetRiskLayer<
+                v1::Planner::WithRawCallbackMethod_Ping<v1::Planner::Service>>>>>>;
 
 class PlannerService final : public RawPlannerService {
  public:
@@ -83,6 +85,9 @@ class PlannerService final : public RawPlannerService {
   grpc::ServerUnaryReactor* GetMapLayer(grpc::CallbackServerContext* ctx,
                                         const grpc::ByteBuffer* request,
                                         grpc::ByteBuffer* response) override;
+  grpc::ServerUnaryReactor* GetRiskLayer(grpc::CallbackServerContext* ctx,
+                                         const grpc::ByteBuffer* request,
+                                         grpc::ByteBuffer* response) override;
   grpc::ServerUnaryReactor* Ping(grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* request,
                                  grpc::ByteBuffer* response) override;
 

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <tuple>
+#include <vector>
 
 #include "absl/strings/str_format.h"
 #include "core/base/check.h"
@@ -13,6 +16,38 @@ void PoseToProto(const Pose& pose, v1::Pose* out) {
   out->set_y(pose.y);
   out->set_z(pose.z);
   out->set_theta(pose.theta);
+}
+
+void GeoPoseToProto(const geo::GeoPose& pose, v1::GeoPose* out) {
+  out->set_lat_deg(pose.lat_deg);
+  out->set_lon_deg(pose.lon_deg);
+  out->set_alt_m(pose.alt_m);
+  out->set_heading_deg(pose.heading_deg);
+}
+
+std::vector<std::optional<geo::GeoPose>> ToWgs84Where(const geo::GeoFrame& frame,
+                                                      std::span<const Pose> poses) {
+  std::vector<std::optional<geo::GeoPose>> out(poses.size());
+  std::vector<Pose> covered;
+  std::vector<size_t> index;
+  covered.reserve(poses.size());
+  index.reserve(poses.size());
+  for (size_t k = 0; k < poses.size(); ++k) {
+    if (frame.Covers(poses[k].x, poses[k].y) && std::isfinite(poses[k].z) &&
+        std::isfinite(poses[k].theta)) {
+      covered.push_back(poses[k]);
+      index.push_back(k);
+    }
+  }
+  absl::StatusOr<std::vector<geo::GeoPose>> geo = frame.ToWgs84(covered);
+  if (!geo.ok()) return out;
+  for (size_t k = 0; k < index.size(); ++k) out[index[k]] = (*geo)[k];
+  return out;
+}
+
+FlightHours FlightHoursOf(double risk, double length_m, const ModelParams& params) {
+  const double seconds = FlightTimeS(length_m, params.airspeed_mps);
+  return FlightHours{seconds, RiskPerFlightHour(risk, seconds)};
 }
 
 v1::ViolationKind ViolationKindToProto(ViolationKind kind) {
@@ -35,17 +70,26 @@ v1::ViolationKind ViolationKindToProto(ViolationKind kind) {
   return v1::VIOLATION_KIND_UNSPECIFIED;
 }
 
-void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samples,
+void EvaluationToProto(const TrajectoryEvaluation& evaluation, const ModelParams& params,
+                       bool include_samples, const geo::GeoFrame* frame,
                        v1::EvaluateRiskResponse* out) {
   out->Clear();
   out->set_risk(evaluation.risk);
   out->set_length_m(evaluation.length_m);
   out->set_admissible(evaluation.admissible);
+  const FlightHours hours = FlightHoursOf(evaluation.risk, evaluation.length_m, params);
+  out->set_flight_time_s(hours.flight_time_s);
+  out->set_risk_per_flight_hour(hours.risk_per_flight_hour);
+  out->set_airspeed_mps(params.airspeed_mps);
   if (evaluation.first_violation.has_value()) {
     const Violation& v = *evaluation.first_violation;
     v1::Violation* violation = out->mutable_first_violation();
     violation->set_kind(ViolationKindToProto(v.kind));
     PoseToProto(v.pose, violation->mutable_pose());
+    if (frame != nullptr) {
+      const std::optional<geo::GeoPose> geo = ToWgs84Where(*frame, {&v.pose, 1})[0];
+      if (geo.has_value()) GeoPoseToProto(*geo, violation->mutable_pose_wgs84());
+    }
     violation->set_arc_length_m(v.arc_length_m);
     violation->set_piece(v.piece);
     if (!std::isnan(v.limit_m)) violation->set_limit_m(v.limit_m);
@@ -66,8 +110,17 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samp
   // The caller evaluated with keep_samples; the count was bounded by
   // --max_response_samples before the evaluation (CheckSampleCount).
   out->mutable_samples()->Reserve(static_cast<int>(evaluation.samples.size()));
-  for (const SampleEvaluation& sample : evaluation.samples) {
+  std::vector<std::optional<geo::GeoPose>> geo;
+  if (frame != nullptr) {
+    std::vector<Pose> poses;
+    poses.reserve(evaluation.samples.size());
+    for (const SampleEvaluation& sample : evaluation.samples) poses.push_back(sample.pose);
+    geo = ToWgs84Where(*frame, poses);
+  }
+  for (size_t k = 0; k < evaluation.samples.size(); ++k) {
+    const SampleEvaluation& sample = evaluation.samples[k];
     v1::Sample* s = out->add_samples();
+    if (!geo.empty() && geo[k].has_value()) GeoPoseToProto(*geo[k], s->mutable_wgs84());
     s->set_x(sample.pose.x);
     s->set_y(sample.pose.y);
     s->set_z(sample.pose.z);
@@ -82,7 +135,34 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, bool include_samp
   }
 }
 
-void FeasibilityToProto(const FeasibilityResult& result, v1::TwoTierResult* out) {
+void PathToProto(std::span<const PathPose> path, std::span<const ConfigurationRisk> risks,
+                 const RiskMap& map, const geo::GeoFrame* frame, v1::EvaluateRiskResponse* out) {
+  RISKPLAN_DCHECK(risks.size() == path.size());
+  std::vector<std::optional<geo::GeoPose>> geo;
+  if (frame != nullptr) {
+    std::vector<Pose> poses;
+    poses.reserve(path.size());
+    for (const PathPose& p : path) poses.push_back(p.pose);
+    geo = ToWgs84Where(*frame, poses);
+  }
+  out->mutable_path()->Reserve(static_cast<int>(path.size()));
+  for (size_t k = 0; k < path.size(); ++k) {
+    v1::PathSample* s = out->add_path();
+    PoseToProto(path[k].pose, s->mutable_pose());
+    if (!geo.empty() && geo[k].has_value()) GeoPoseToProto(*geo[k], s->mutable_wgs84());
+    s->set_arc_length_m(path[k].arc_length_m);
+    s->set_piece(path[k].piece);
+    s->set_defined(risks[k].defined);
+    s->set_risk(risks[k].defined ? risks[k].risk : 0.0);
+    int i = 0, j = 0;
+    s->set_terrain_m(map.CellOf(path[k].pose.x, path[k].pose.y, &i, &j)
+                         ? static_cast<double>(map.terrain(i, j))
+                         : std::nan(""));
+  }
+}
+
+void FeasibilityToProto(const FeasibilityResult& result, const geo::GeoFrame* frame,
+                        v1::TwoTierResult* out) {
   out->Clear();
   out->set_feasible(result.feasible);
   out->set_cells_checked(result.cells_checked);
@@ -110,10 +190,20 @@ void FeasibilityToProto(const FeasibilityResult& result, v1::TwoTierResult* out)
   out->mutable_position()->set_y(result.position.y);
   out->mutable_position()->set_z(result.position.z);
   out->set_kind(ViolationKindToProto(result.kind));
+  if (frame != nullptr) {
+    const Pose p{result.position.x, result.position.y, result.position.z, 0.0};
+    const std::optional<geo::GeoPose> geo = ToWgs84Where(*frame, {&p, 1})[0];
+    if (geo.has_value()) {
+      out->mutable_position_wgs84()->set_lat_deg(geo->lat_deg);
+      out->mutable_position_wgs84()->set_lon_deg(geo->lon_deg);
+      out->mutable_position_wgs84()->set_alt_m(geo->alt_m);
+    }
+  }
 }
 
 absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelParams& params,
-                               double display_step_m, v1::Trajectory* out) {
+                               double display_step_m, const geo::GeoFrame* frame,
+                               v1::Trajectory* out) {
   out->Clear();
   for (const Pose& pose : improvement.waypoints) PoseToProto(pose, out->add_waypoints());
   out->set_risk(improvement.risk);
@@ -121,6 +211,9 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   out->set_found_at_iteration(improvement.iterations);
   out->set_found_at_s(improvement.elapsed_s);
   out->set_replanned(improvement.replanned);
+  const FlightHours hours = FlightHoursOf(improvement.risk, improvement.length_m, params);
+  out->set_flight_time_s(hours.flight_time_s);
+  out->set_risk_per_flight_hour(hours.risk_per_flight_hour);
 
   absl::StatusOr<std::vector<TrajectoryPiece>> pieces =
       PiecesFromWaypoints(improvement.waypoints, params);
@@ -129,32 +222,39 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   for (const TrajectoryPiece& piece : *pieces) total_m += piece.Length();
   // The step grows with the path so that a long trajectory still fits in
   // kMaxDisplayPathPoses poses (the message and the client's picture stay
-  // bounded); the loop's own bound below is a guard against rounding.
+  // bounded); SamplePath's own bound is a guard against rounding.
   const double step_m = std::max(display_step_m, total_m / (kMaxDisplayPathPoses - 1));
-  // Samples at k * step_m of the whole path's arc length, then the end.
-  double piece_start_m = 0.0;
-  double next_m = 0.0;
-  for (const TrajectoryPiece& piece : *pieces) {
-    const double piece_end_m = piece_start_m + piece.Length();
-    while (next_m <= piece_end_m && out->path_size() < kMaxDisplayPathPoses - 1) {
-      PoseToProto(piece.PoseAt(next_m - piece_start_m), out->add_path());
-      next_m += step_m;
+  const std::vector<PathPose> path = SamplePath(*pieces, step_m, kMaxDisplayPathPoses);
+  out->mutable_path()->Reserve(static_cast<int>(path.size()));
+  for (const PathPose& p : path) PoseToProto(p.pose, out->add_path());
+  if (frame != nullptr) {
+    // Both lists in one batch, so that the PROJ set-up is paid once.
+    std::vector<Pose> poses(improvement.waypoints.begin(), improvement.waypoints.end());
+    for (const PathPose& p : path) poses.push_back(p.pose);
+    const std::vector<std::optional<geo::GeoPose>> geo = ToWgs84Where(*frame, poses);
+    const size_t waypoints = improvement.waypoints.size();
+    // Planned poses lie inside the map, so every one converts; if PROJ
+    // failed, both lists are left empty rather than misaligned.
+    bool all = true;
+    for (const auto& g : geo) all = all && g.has_value();
+    if (all) {
+      for (size_t k = 0; k < geo.size(); ++k) {
+        GeoPoseToProto(*geo[k], k < waypoints ? out->add_waypoints_wgs84() : out->add_path_wgs84());
+      }
     }
-    piece_start_m = piece_end_m;
   }
-  if (!pieces->empty()) PoseToProto(pieces->back().End(), out->add_path());
   return absl::OkStatus();
 }
 
 absl::StatusOr<v1::PlanUpdate> ImprovementToProto(const PlanImprovement& improvement,
-                                                  const ModelParams& params,
-                                                  double display_step_m) {
+                                                  const ModelParams& params, double display_step_m,
+                                                  const geo::GeoFrame* frame) {
   v1::PlanUpdate update;
   update.set_elapsed_s(improvement.elapsed_s);
   update.set_iterations(improvement.iterations);
   update.set_tree_size(improvement.tree_size);
-  if (absl::Status s =
-          TrajectoryToProto(improvement, params, display_step_m, update.mutable_trajectory());
+  if (absl::Status s = TrajectoryToProto(improvement, params, display_step_m, frame,
+                                         update.mutable_trajectory());
       !s.ok()) {
     return absl::InternalError(
         absl::StrFormat("the trajectory of the improvement found at iteration %d (%d waypoints) "
@@ -167,7 +267,7 @@ absl::StatusOr<v1::PlanUpdate> ImprovementToProto(const PlanImprovement& improve
 absl::StatusOr<v1::PlanUpdate> FinalUpdateToProto(const PlanResult& result,
                                                   v1::EndReason end_reason,
                                                   const ModelParams& params, double display_step_m,
-                                                  bool include_tree) {
+                                                  bool include_tree, const geo::GeoFrame* frame) {
   v1::PlanUpdate update;
   update.set_final(true);
   update.set_end_reason(end_reason);
@@ -176,8 +276,8 @@ absl::StatusOr<v1::PlanUpdate> FinalUpdateToProto(const PlanResult& result,
   update.set_tree_size(result.tree_size);
   update.set_configurations_evaluated(result.configurations_evaluated);
   if (result.best.has_value()) {
-    if (absl::Status s =
-            TrajectoryToProto(*result.best, params, display_step_m, update.mutable_trajectory());
+    if (absl::Status s = TrajectoryToProto(*result.best, params, display_step_m, frame,
+                                           update.mutable_trajectory());
         !s.ok()) {
       return absl::InternalError(absl::StrFormat(
           "the final message's best trajectory (found at iteration %d, %d waypoints) cannot be "
@@ -196,12 +296,51 @@ absl::StatusOr<v1::PlanUpdate> FinalUpdateToProto(const PlanResult& result,
       PoseToProto(result.tree[i].from, edge->mutable_from());
       PoseToProto(result.tree[i].to, edge->mutable_to());
     }
+    if (frame != nullptr && edges > 0) {
+      // Positions only (a drawing aid): one PROJ inversion a point.
+      std::vector<geo::LocalXY> points;
+      points.reserve(2 * edges);
+      for (size_t i = 0; i < edges; ++i) {
+        points.push_back({result.tree[i].from.x, result.tree[i].from.y});
+        points.push_back({result.tree[i].to.x, result.tree[i].to.y});
+      }
+      absl::StatusOr<std::vector<geo::LatLon>> geo = frame->ToWgs84(points);
+      if (geo.ok()) {
+        for (size_t i = 0; i < edges; ++i) {
+          v1::TreeEdge* edge = update.mutable_tree_edges(static_cast<int>(i));
+          for (auto [ll, z, out] :
+               {std::tuple{(*geo)[2 * i], result.tree[i].from.z, edge->mutable_from_wgs84()},
+                std::tuple{(*geo)[2 * i + 1], result.tree[i].to.z, edge->mutable_to_wgs84()}}) {
+            out->set_lat_deg(ll.lat_deg);
+            out->set_lon_deg(ll.lon_deg);
+            out->set_alt_m(z);
+          }
+        }
+      }
+    }
     update.set_tree_truncated(result.tree.size() > edges);
   }
   return update;
 }
 
-v1::MapInfo MapInfoFromMap(const RiskMap& map) {
+bool BoundsToProto(const geo::GeoFrame& frame, double x_min, double y_min, double x_max,
+                   double y_max, v1::GeoBounds* out) {
+  absl::StatusOr<geo::GeoBounds> b = frame.BoundsOf(x_min, y_min, x_max, y_max);
+  if (!b.ok()) return false;
+  out->Clear();
+  for (const geo::LatLon& c : b->corners) {
+    v1::GeoPoint2* p = out->add_corners();
+    p->set_lat_deg(c.lat_deg);
+    p->set_lon_deg(c.lon_deg);
+  }
+  out->set_min_lat_deg(b->min_lat_deg);
+  out->set_max_lat_deg(b->max_lat_deg);
+  out->set_min_lon_deg(b->min_lon_deg);
+  out->set_max_lon_deg(b->max_lon_deg);
+  return true;
+}
+
+v1::MapInfo MapInfoFromMap(const RiskMap& map, const geo::GeoFrame* frame) {
   v1::MapInfo info;
   info.set_name(map.name());
   info.set_x0_m(map.x0());
@@ -228,6 +367,23 @@ v1::MapInfo MapInfoFromMap(const RiskMap& map) {
     info.mutable_geo()->set_origin_lat_deg(map.header().geo->origin_lat_deg);
     info.mutable_geo()->set_origin_lon_deg(map.header().geo->origin_lon_deg);
     info.mutable_geo()->set_crs(map.header().geo->crs);
+    info.mutable_geo()->set_origin_x_m(map.x0());
+    info.mutable_geo()->set_origin_y_m(map.y0());
+  }
+  if (frame != nullptr) {
+    info.mutable_geo()->set_proj_definition(frame->proj_definition());
+    BoundsToProto(*frame, map.x0(), map.y0(), map.x0() + map.width_m(), map.y0() + map.height_m(),
+                  info.mutable_bounds_wgs84());
+    std::vector<geo::LocalXY> sites;
+    for (const v1::LandingSite& site : info.landing_sites()) sites.push_back({site.x(), site.y()});
+    absl::StatusOr<std::vector<geo::LatLon>> geo = frame->ToWgs84(sites);
+    if (geo.ok()) {
+      for (size_t k = 0; k < geo->size(); ++k) {
+        v1::GeoPoint2* p = info.mutable_landing_sites(static_cast<int>(k))->mutable_wgs84();
+        p->set_lat_deg((*geo)[k].lat_deg);
+        p->set_lon_deg((*geo)[k].lon_deg);
+      }
+    }
   }
   const std::vector<float>& terrain = map.layers().terrain;
   if (!terrain.empty()) {
@@ -290,6 +446,32 @@ v1::GetMapLayerResponse DownsampleLayer(const RiskMap& map, v1::MapLayer layer,
       values[bj * nx + bi] = layer == v1::NO_FLY ? (any_nofly ? 1.0f : 0.0f)
                                                  : static_cast<float>(sum / std::max(count, 1));
     }
+  }
+  return out;
+}
+
+v1::GetRiskLayerResponse RiskLayerToProto(const RiskLayer& layer, const RiskMap& map,
+                                          const RiskLayerOptions& options,
+                                          const geo::GeoFrame* frame) {
+  v1::GetRiskLayerResponse out;
+  out.set_map(map.name());
+  out.set_x0_m(layer.x0);
+  out.set_y0_m(layer.y0);
+  out.set_cell_m(layer.res_m);
+  out.set_nx(layer.nx);
+  out.set_ny(layer.ny);
+  out.set_stride(options.stride);
+  out.set_first_column(options.first_column);
+  out.set_first_row(options.first_row);
+  out.set_height_agl_m(options.height_agl_m);
+  const bool max_over_headings = std::isnan(options.heading_rad);
+  out.set_max_over_headings(max_over_headings);
+  out.set_heading_rad(max_over_headings ? 0.0 : options.heading_rad);
+  out.mutable_risk()->Assign(layer.risk.begin(), layer.risk.end());
+  out.set_evaluations(layer.evaluations);
+  if (frame != nullptr) {
+    BoundsToProto(*frame, layer.x0, layer.y0, layer.x0 + layer.nx * layer.res_m,
+                  layer.y0 + layer.ny * layer.res_m, out.mutable_bounds_wgs84());
   }
   return out;
 }

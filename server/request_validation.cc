@@ -6,21 +6,52 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "core/flight/trajectory.h"
 #include "google/protobuf/descriptor.h"
 #include "google/protobuf/reflection.h"
+#include "server/wgs84_fields.h"
 
 namespace riskplan::server {
 namespace {
 
 using google::protobuf::FieldDescriptor;
 
+// The start or goal of a plan, from whichever frame the request gives it in,
+// checked inside the map. `name` is "start" or "goal".
+absl::StatusOr<Pose> PlanEndpoint(const MapRegistry& registry, const RiskMap& map, bool has_local,
+                                  const v1::Pose& local, bool has_wgs84, const v1::GeoPose& wgs84,
+                                  const std::string& name) {
+  const std::string wgs84_name = name + "_wgs84";
+  if (has_local) {
+    absl::StatusOr<Pose> pose = PoseFromProto(local, name);
+    if (!pose.ok()) return pose.status();
+    if (absl::Status s = CheckInsideMap(map, *pose, name); !s.ok()) return s;
+    return pose;
+  }
+  if (!has_wgs84) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s is required (or %s on a geo-referenced map)", name, wgs84_name));
+  }
+  absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+      FrameForField(registry, map, wgs84_name, name);
+  if (!frame.ok()) return frame.status();
+  absl::StatusOr<geo::GeoPose> given = GeoPoseFromProto(wgs84, wgs84_name);
+  if (!given.ok()) return given.status();
+  absl::StatusOr<std::vector<Pose>> pose = PosesFromWgs84(**frame, {*given}, wgs84_name, true);
+  if (!pose.ok()) return pose.status();
+  if (absl::Status s = CheckWgs84InsideMap(map, **frame, (*pose)[0], *given, wgs84_name); !s.ok()) {
+    return s;
+  }
+  return (*pose)[0];
+}
+
+}  // namespace
+
 absl::Status CheckFinite(double value, std::string_view field) {
   if (std::isfinite(value)) return absl::OkStatus();
   return absl::InvalidArgumentError(
       absl::StrFormat("%s has value %g; it must be finite", std::string(field), value));
 }
-
-}  // namespace
 
 absl::Status InField(std::string_view field, const absl::Status& status) {
   if (status.ok()) return status;
@@ -159,14 +190,14 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   if (!map.ok()) return map.status();
   spec.map = *std::move(map);
 
-  if (!request.has_start()) return absl::InvalidArgumentError("start is required");
-  if (!request.has_goal()) return absl::InvalidArgumentError("goal is required");
-  absl::StatusOr<Pose> start = PoseFromProto(request.start(), "start");
+  spec.frame = registry.Frame(spec.map->name());
+  absl::StatusOr<Pose> start =
+      PlanEndpoint(registry, *spec.map, request.has_start(), request.start(),
+                   request.has_start_wgs84(), request.start_wgs84(), "start");
   if (!start.ok()) return start.status();
-  absl::StatusOr<Pose> goal = PoseFromProto(request.goal(), "goal");
+  absl::StatusOr<Pose> goal = PlanEndpoint(registry, *spec.map, request.has_goal(), request.goal(),
+                                           request.has_goal_wgs84(), request.goal_wgs84(), "goal");
   if (!goal.ok()) return goal.status();
-  if (absl::Status s = CheckInsideMap(*spec.map, *start, "start"); !s.ok()) return s;
-  if (absl::Status s = CheckInsideMap(*spec.map, *goal, "goal"); !s.ok()) return s;
   spec.start = *start;
   spec.goal = *goal;
 
@@ -227,10 +258,13 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
 
   // Counts first, so that the loops below (and the planners) only ever see
   // a bounded number of points and areas.
-  if (static_cast<size_t>(request.obstacle_points_size()) > limits.max_obstacle_points) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("obstacle_points has %d points; the limit is %d",
-                        request.obstacle_points_size(), limits.max_obstacle_points));
+  if (static_cast<size_t>(request.obstacle_points_size()) +
+          static_cast<size_t>(request.obstacle_points_wgs84_size()) >
+      limits.max_obstacle_points) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "obstacle_points has %d points and obstacle_points_wgs84 %d; the limit is %d together",
+        request.obstacle_points_size(), request.obstacle_points_wgs84_size(),
+        limits.max_obstacle_points));
   }
   if (static_cast<size_t>(request.dynamic_obstacles_size()) > kMaxDynamicObstacles) {
     return absl::InvalidArgumentError(
@@ -243,6 +277,26 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
     if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
     if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
     spec.options.obstacle_points.push_back(Point2{p.x(), p.y()});
+  }
+  if (request.obstacle_points_wgs84_size() > 0) {
+    absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+        FrameForField(registry, *spec.map, "obstacle_points_wgs84", "obstacle_points");
+    if (!frame.ok()) return frame.status();
+    std::vector<geo::LatLon> points;
+    points.reserve(request.obstacle_points_wgs84_size());
+    for (int i = 0; i < request.obstacle_points_wgs84_size(); ++i) {
+      const v1::GeoPoint2& p = request.obstacle_points_wgs84(i);
+      if (absl::Status s = CheckLatLon(p.lat_deg(), p.lon_deg(),
+                                       absl::StrFormat("obstacle_points_wgs84[%d]", i));
+          !s.ok()) {
+        return s;
+      }
+      points.push_back({p.lat_deg(), p.lon_deg()});
+    }
+    absl::StatusOr<std::vector<geo::LocalXY>> local =
+        PointsFromWgs84(**frame, points, "obstacle_points_wgs84");
+    if (!local.ok()) return local.status();
+    for (const geo::LocalXY& p : *local) spec.options.obstacle_points.push_back(Point2{p.x, p.y});
   }
   for (int i = 0; i < request.dynamic_obstacles_size(); ++i) {
     const v1::DynamicObstacle& o = request.dynamic_obstacles(i);
@@ -343,10 +397,64 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
       }
       break;
     }
+    case v1::EvaluateRiskRequest::kWaypointsWgs84: {
+      const auto& poses = request.waypoints_wgs84().poses();
+      if (poses.size() < 2 || static_cast<size_t>(poses.size()) > limits.max_waypoints) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("waypoints_wgs84.poses has %d poses; it must have 2 to %d",
+                            poses.size(), limits.max_waypoints));
+      }
+      absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+          FrameForField(registry, *spec.map, "waypoints_wgs84", "waypoints");
+      if (!frame.ok()) return frame.status();
+      std::vector<geo::GeoPose> given;
+      given.reserve(poses.size());
+      for (int i = 0; i < poses.size(); ++i) {
+        absl::StatusOr<geo::GeoPose> pose =
+            GeoPoseFromProto(poses[i], absl::StrFormat("waypoints_wgs84.poses[%d]", i));
+        if (!pose.ok()) return pose.status();
+        given.push_back(*pose);
+      }
+      absl::StatusOr<std::vector<Pose>> local =
+          PosesFromWgs84(**frame, given, "waypoints_wgs84.poses", /*single=*/false);
+      if (!local.ok()) return local.status();
+      spec.waypoints = *std::move(local);
+      break;
+    }
+    case v1::EvaluateRiskRequest::kPolylineWgs84: {
+      const auto& points = request.polyline_wgs84().points();
+      if (points.size() < 2 || static_cast<size_t>(points.size()) > limits.max_waypoints) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("polyline_wgs84.points has %d points; it must have 2 to %d",
+                            points.size(), limits.max_waypoints));
+      }
+      absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+          FrameForField(registry, *spec.map, "polyline_wgs84", "polyline");
+      if (!frame.ok()) return frame.status();
+      std::vector<geo::LatLon> given;
+      given.reserve(points.size());
+      for (int i = 0; i < points.size(); ++i) {
+        const v1::GeoPoint3& p = points[i];
+        const std::string field = absl::StrFormat("polyline_wgs84.points[%d]", i);
+        if (absl::Status s = CheckLatLon(p.lat_deg(), p.lon_deg(), field); !s.ok()) return s;
+        if (absl::Status s = CheckFinite(p.alt_m(), field + ".alt_m"); !s.ok()) return s;
+        given.push_back({p.lat_deg(), p.lon_deg()});
+      }
+      absl::StatusOr<std::vector<geo::LocalXY>> local =
+          PointsFromWgs84(**frame, given, "polyline_wgs84.points");
+      if (!local.ok()) return local.status();
+      spec.polyline.reserve(points.size());
+      for (int i = 0; i < points.size(); ++i) {
+        spec.polyline.push_back(Point3{(*local)[i].x, (*local)[i].y, points[i].alt_m()});
+      }
+      break;
+    }
     default:
       return absl::InvalidArgumentError(
-          "trajectory is required: set waypoints (poses) or polyline (points)");
+          "trajectory is required: set waypoints (poses) or polyline (points), or on a "
+          "geo-referenced map waypoints_wgs84 or polyline_wgs84");
   }
+  spec.frame = registry.Frame(spec.map->name());
 
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
   if (!params.ok()) return params.status();
@@ -358,7 +466,24 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   absl::StatusOr<TwoTierOptions> two_tier = TwoTierOptionsFromProto(request.two_tier());
   if (!two_tier.ok()) return two_tier.status();
   if (request.two_tier().enabled()) spec.two_tier = *two_tier;
+  const double spacing = request.path_spacing_m();
+  if (spacing != 0.0 && !(std::isfinite(spacing) && spacing >= 1.0 && spacing <= 100000.0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "path_spacing_m has value %g; it must be finite and in [1, 100000] (0: no path)", spacing));
+  }
+  spec.path_spacing_m = spacing;
   return spec;
+}
+
+absl::Status CheckPathCount(double length_m, double spacing_m, const RequestLimits& limits) {
+  const int64_t poses = PathPoseCount(length_m, spacing_m);
+  if (poses > limits.max_response_samples) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "path_spacing_m: the path of %.1f m sampled every %g m has %d poses; at most %d can be "
+        "returned (--max_response_samples)",
+        length_m, spacing_m, poses, limits.max_response_samples));
+  }
+  return absl::OkStatus();
 }
 
 absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_step_m,

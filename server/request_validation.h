@@ -15,6 +15,8 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -26,6 +28,7 @@
 #include "core/planners/planner.h"
 #include "core/planners/two_tier_feasibility.h"
 #include "core/risk/impact_table.h"
+#include "geo/geo_frame.h"
 #include "riskplan/v1/planner.pb.h"
 #include "server/map_registry.h"
 
@@ -43,11 +46,18 @@ struct RequestLimits {
   size_t max_obstacle_points = 10000;     // PlanRequest.obstacle_points (<= kMaxObstaclePoints)
   int64_t max_edge_samples = kDefaultMaxEdgeSamples;  // samples of one edge of a plan
   size_t max_table_bytes = kDefaultMaxTableBytes;     // impact table of a request's parameters
+  // Configuration risks of one GetRiskLayer (cells, times the heading bins
+  // for the maximum over headings).
+  int64_t max_risk_layer_evaluations = int64_t{1} << 24;
 };
 
 // The bounds of building a model for a request: --max_table_bytes, and
 // `stop` (the server's drain).
 ModelBuildLimits BuildLimits(const RequestLimits& limits, StopCondition stop = {});
+
+// INVALID_ARGUMENT "FIELD has value V; it must be finite" unless `value` is
+// finite.
+absl::Status CheckFinite(double value, std::string_view field);
 
 // `status` with its message prefixed by the request field it concerns,
 // "FIELD: MESSAGE" (OK stays OK).
@@ -78,6 +88,9 @@ absl::Status CheckInsideMap(const RiskMap& map, const Pose& pose, std::string_vi
 // A validated PlanRequest.
 struct PlanSpec {
   std::shared_ptr<const RiskMap> map;
+  // The map's WGS84 frame (null without a geo-reference): responses carry
+  // both frames when it is set.
+  std::shared_ptr<const geo::GeoFrame> frame;
   ModelParams params;
   PlannerAlgorithm algorithm = PlannerAlgorithm::kRiskRrtStar;
   Pose start;
@@ -100,12 +113,15 @@ absl::Status CheckPlannerParams(PlannerAlgorithm algorithm,
 // non-empty.
 struct EvaluateSpec {
   std::shared_ptr<const RiskMap> map;
+  std::shared_ptr<const geo::GeoFrame> frame;  // null without a geo-reference
   ModelParams params;
   std::vector<Pose> waypoints;
   std::vector<Point3> polyline;
   bool include_samples = false;
   // Set when two_tier.enabled; passed CheckTwoTierOptions().
   std::optional<TwoTierOptions> two_tier;
+  // Spacing of EvaluateRiskResponse.path, m, in [1, 100000]; 0: no path.
+  double path_spacing_m = 0.0;
 };
 
 // The options of EvaluateRiskRequest.two_tier (unset fields take their
@@ -123,6 +139,11 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
 // `sample_step_m` only explain the count in the message.
 absl::Status CheckSampleCount(int64_t samples, double length_m, double sample_step_m,
                               bool include_samples, const RequestLimits& limits);
+
+// The number of poses of EvaluateRiskResponse.path for a trajectory of
+// `length_m` at `spacing_m` (PathPoseCount), checked against
+// --max_response_samples before the path is sampled.
+absl::Status CheckPathCount(double length_m, double spacing_m, const RequestLimits& limits);
 
 // The algorithm of a request: ALGORITHM_UNSPECIFIED and RISK_RRT_STAR give
 // kRiskRrtStar, RRT, GENETIC and HARMONIC their planners; anything else is

@@ -30,6 +30,7 @@
 #include "grpcpp/health_check_service_interface.h"
 #include "server/accel_metrics.h"
 #include "server/cache_metrics.h"
+#include "server/connection_acceptor.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
@@ -49,7 +50,8 @@ ABSL_FLAG(int, plan_threads, 0, "Planners running at once (0: one per CPU core)"
 ABSL_FLAG(int, max_running_plans, 0,
           "Plans admitted at once, planning or waiting for a planning thread; one more gets "
           "RESOURCE_EXHAUSTED at once (0: twice --plan_threads)");
-ABSL_FLAG(int, eval_threads, 0, "EvaluateRisk and GetMapLayer workers (0: one per CPU core)");
+ABSL_FLAG(int, eval_threads, 0,
+          "EvaluateRisk, GetMapLayer and GetRiskLayer workers (0: one per CPU core)");
 ABSL_FLAG(int, max_queued_evals, 1024,
           "Evaluations waiting for a worker; one more gets RESOURCE_EXHAUSTED");
 ABSL_FLAG(int64_t, max_plan_time_ms, 600000,
@@ -66,6 +68,9 @@ ABSL_FLAG(int64_t, max_response_samples, 200000,
 ABSL_FLAG(int64_t, max_edge_samples, riskplan::kDefaultMaxEdgeSamples,
           "Most samples one edge of a plan may need, projected from the request before it is "
           "queued (map diagonal, turn radius, climbs, sample_step_m); more: INVALID_ARGUMENT");
+ABSL_FLAG(int64_t, max_risk_layer_evaluations, int64_t{1} << 24,
+          "Most configuration risks one GetRiskLayer may compute (cells, times the heading bins "
+          "for the maximum over headings); larger layers are refused before any is computed");
 ABSL_FLAG(int64_t, max_table_bytes, int64_t{512} << 20,
           "Largest impact table a request's model parameters may build, bytes (the default "
           "parameters' is about 34 MB on a 5 m map); larger: INVALID_ARGUMENT");
@@ -125,8 +130,8 @@ constexpr char kUsage[] =
     "\n"
     "  riskplan-server --listen=HOST:PORT [--maps=DIR] [flags]\n"
     "\n"
-    "Serves PlanTrajectory, EvaluateRisk, ListMaps, GetMapLayer and Ping, plus\n"
-    "grpc.health.v1.Health and server reflection. Prints\n"
+    "Serves PlanTrajectory, EvaluateRisk, ListMaps, GetMapLayer, GetRiskLayer and\n"
+    "Ping, plus grpc.health.v1.Health and server reflection. Prints\n"
     "'riskplan-server listening on HOST:PORT' on stdout once it serves. On SIGTERM or\n"
     "SIGINT it drains (see --grace_period_ms) and exits 0. Exit code 1: cannot start\n"
     "(bad map bundle, address in use) or a flag unknown or malformed; 2: a flag's value\n"
@@ -190,6 +195,7 @@ ServiceOptions ServiceOptionsFromFlags() {
   options.limits.max_eval_samples = absl::GetFlag(FLAGS_max_eval_samples);
   options.limits.max_response_samples = absl::GetFlag(FLAGS_max_response_samples);
   options.limits.max_edge_samples = absl::GetFlag(FLAGS_max_edge_samples);
+  options.limits.max_risk_layer_evaluations = absl::GetFlag(FLAGS_max_risk_layer_evaluations);
   options.limits.max_table_bytes =
       static_cast<size_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_max_table_bytes)));
   return options;
@@ -230,6 +236,9 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
     return absl::InvalidArgumentError(
         "--max_edge_samples must be >= 2, --max_table_bytes and --max_eval_samples >= 1, "
         "--max_response_samples >= 0");
+  }
+  if (options.limits.max_risk_layer_evaluations < 1) {
+    return absl::InvalidArgumentError("--max_risk_layer_evaluations must be >= 1");
   }
   if (absl::GetFlag(FLAGS_feasibility_cache_size) < 1) {
     return absl::InvalidArgumentError("--feasibility_cache_size must be >= 1");
@@ -324,22 +333,35 @@ absl::Status StartMetrics(accel::RiskEngine* engine, ServerMetrics& metrics) {
   return absl::OkStatus();
 }
 
-// The gRPC server, listening and serving `service`, health and reflection.
+// The gRPC server, serving `service`, health and reflection on the
+// connections `acceptor` accepts (ConnectionAcceptor: it survives running out
+// of file descriptors, which gRPC's own listener does not).
 struct Serving {
   std::unique_ptr<grpc::Server> server;
   std::string host;  // of --listen
   int port = 0;      // the bound one (--listen may ask for port 0)
+  // Declared after the server, so destroyed before it: no connection is
+  // handed to a server that is gone.
+  std::unique_ptr<ConnectionAcceptor> acceptor;
 };
 
-absl::StatusOr<Serving> BuildAndStart(PlannerService& service) {
+absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& metrics) {
+  const std::string listen = absl::GetFlag(FLAGS_listen);
+  absl::StatusOr<std::unique_ptr<ConnectionAcceptor>> acceptor = ConnectionAcceptor::Listen(listen);
+  if (!acceptor.ok()) {
+    return absl::UnavailableError(absl::StrFormat("cannot start: cannot listen on --listen=%s: %s",
+                                                  listen, acceptor.status().message()));
+  }
   // Both must be set before the builder is created: they install themselves
   // as builder plugins.
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  const std::string listen = absl::GetFlag(FLAGS_listen);
   Serving serving;
-  builder.AddListeningPort(listen, grpc::InsecureServerCredentials(), &serving.port);
+  std::unique_ptr<grpc::experimental::ExternalConnectionAcceptor> connections =
+      builder.experimental().AddExternalConnectionAcceptor(
+          grpc::ServerBuilder::experimental_type::ExternalConnectionType::FROM_FD,
+          grpc::InsecureServerCredentials());
   builder.SetMaxReceiveMessageSize(absl::GetFlag(FLAGS_max_request_bytes));
   // Responses are bounded by the request limits (samples, tree edges, layer
   // side); 64 MiB is the client library's receive limit too.
@@ -349,15 +371,17 @@ absl::StatusOr<Serving> BuildAndStart(PlannerService& service) {
   }
   builder.RegisterService(&service);
   serving.server = builder.BuildAndStart();
-  // gRPC leaves the port at 0 when it could not bind.
-  if (serving.server == nullptr || serving.port == 0) {
+  if (serving.server == nullptr) {
     return absl::UnavailableError(
-        absl::StrFormat("cannot start: cannot listen on --listen=%s", listen));
+        absl::StrFormat("cannot start: gRPC did not start on --listen=%s", listen));
   }
+  serving.acceptor = *std::move(acceptor);
+  serving.acceptor->Start(std::move(connections), [&metrics] { metrics.RecordAcceptError(); });
   grpc::HealthCheckServiceInterface* health = serving.server->GetHealthCheckService();
   health->SetServingStatus("", true);
   health->SetServingStatus("riskplan.v1.Planner", true);
   serving.host = listen.substr(0, listen.rfind(':'));
+  serving.port = serving.acceptor->port();
   return serving;
 }
 
@@ -375,8 +399,9 @@ void AnnounceServing(const Serving& serving, const ServiceOptions& options) {
 // Waits for SIGTERM or SIGINT, then drains: refuse new work, let running
 // plans use the grace period, then stop them so that they send their best
 // trajectory before the server stops.
-void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, grpc::Server& server,
+void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, Serving& serving,
                   int64_t grace_ms) {
+  grpc::Server& server = *serving.server;
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);
 
@@ -415,6 +440,9 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, grpc::S
   // open after the grace period are cancelled). Waiting on gRPC's Shutdown
   // deadline alone would also wait for idle clients to acknowledge GOAWAY.
   const bool none_open = service.open_calls().WaitUntilNone(drain_start + grace);
+  // New connections are refused from here on (a connection handed to gRPC
+  // after its shutdown began would be dropped without being closed).
+  serving.acceptor->Stop();
   server.Shutdown(absl::ToChronoTime(
       none_open ? absl::Now()
                 : std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
@@ -449,10 +477,10 @@ int Main() {
   metrics.AddCollectable(std::make_shared<CacheMetrics>(
       maps->models.get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
       service.checkers()));
-  absl::StatusOr<Serving> serving = BuildAndStart(service);
+  absl::StatusOr<Serving> serving = BuildAndStart(service, metrics);
   if (!serving.ok()) return Fail(1, serving.status().message());
   AnnounceServing(*serving, config->options);
-  WaitAndDrain(stop_signals, service, *serving->server, config->grace_ms);
+  WaitAndDrain(stop_signals, service, *serving, config->grace_ms);
   return 0;
 }
 

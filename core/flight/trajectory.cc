@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "absl/strings/str_format.h"
+#include "core/base/check.h"
 
 namespace riskplan {
 
@@ -189,6 +190,45 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
   }
   while (checking < pieces.size()) finish_piece();
   out.length_m = length_m;
+  return out;
+}
+
+double FlightTimeS(double length_m, double airspeed_mps) { return length_m / airspeed_mps; }
+
+double RiskPerFlightHour(double risk, double flight_time_s) {
+  if (!(flight_time_s > 0.0)) return 0.0;
+  return risk / (flight_time_s / 3600.0);
+}
+
+int64_t PathPoseCount(double length_m, double step_m) {
+  RISKPLAN_DCHECK(step_m > 0.0 && length_m >= 0.0);
+  const double intervals = std::ceil(length_m / step_m);
+  // 2^62: any larger count is refused by every caller's limit anyway.
+  if (!(intervals < 4.6e18)) return std::numeric_limits<int64_t>::max();
+  return static_cast<int64_t>(intervals) + 1;
+}
+
+std::vector<PathPose> SamplePath(std::span<const TrajectoryPiece> pieces, double step_m,
+                                 size_t max_poses) {
+  RISKPLAN_DCHECK(step_m > 0.0 && max_poses >= 2);
+  std::vector<PathPose> out;
+  if (pieces.empty()) return out;
+  double total_m = 0.0;
+  for (const TrajectoryPiece& piece : pieces) total_m += piece.Length();
+  // Arc lengths are k * step_m (not a running sum, which would drift), each
+  // looked up in the piece that holds it.
+  size_t piece = 0;
+  double piece_start_m = 0.0;
+  for (int64_t k = 0; out.size() + 1 < max_poses; ++k) {
+    const double s = static_cast<double>(k) * step_m;
+    if (!(s < total_m)) break;
+    while (piece + 1 < pieces.size() && s >= piece_start_m + pieces[piece].Length()) {
+      piece_start_m += pieces[piece].Length();
+      ++piece;
+    }
+    out.push_back(PathPose{pieces[piece].PoseAt(s - piece_start_m), s, static_cast<int>(piece)});
+  }
+  out.push_back(PathPose{pieces.back().End(), total_m, static_cast<int>(pieces.size() - 1)});
   return out;
 }
 

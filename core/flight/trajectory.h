@@ -90,6 +90,37 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
                                                         RiskEvaluator* evaluator = nullptr,
                                                         const StopCondition& stop = {});
 
+// How long a flight of `length_m` lasts at `airspeed_mps` (spec section 4:
+// the aircraft flies at constant airspeed along the path's 3-D length), s.
+double FlightTimeS(double length_m, double airspeed_mps);
+
+// Expected casualties per flight hour of a flight of `risk` expected
+// casualties per flight lasting `flight_time_s`: risk / (flight_time_s /
+// 3600), the unit of a target level of safety (SORA: 1e-6 per flight hour).
+// 0 when the flight lasts no time (a trajectory of length 0 has risk 0).
+double RiskPerFlightHour(double risk, double flight_time_s);
+
+// A pose of the flown path and where it is along it.
+struct PathPose {
+  Pose pose;
+  double arc_length_m = 0.0;  // from the start of the trajectory
+  int piece = 0;              // index of the piece it lies on
+};
+
+// How many poses SamplePath gives for a path of `length_m` at `step_m`:
+// ceil(length_m / step_m) + 1 (1 for a path of length 0), saturating at
+// INT64_MAX for a count a double cannot hold (never reached for a bounded
+// request: check it before sampling). REQUIRES: step_m > 0, length_m >= 0.
+int64_t PathPoseCount(double length_m, double step_m);
+
+// The path of `pieces` sampled at arc lengths 0, step_m, 2 step_m, ... below
+// its length L, then at L (its last pose), so consecutive poses are step_m
+// apart along the path, the last gap being (0, step_m]. At most `max_poses`
+// poses: past max_poses - 1 the rest are left out and the last pose is still
+// the end. Empty for no pieces. REQUIRES: step_m > 0, max_poses >= 2.
+std::vector<PathPose> SamplePath(std::span<const TrajectoryPiece> pieces, double step_m,
+                                 size_t max_poses);
+
 }  // namespace riskplan
 
 #endif  // RISKPLAN_CORE_FLIGHT_TRAJECTORY_H_

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <string>
@@ -20,6 +21,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/string_view.h"
+#include "core/map/staged_directory.h"
 #include "nlohmann/json.hpp"
 
 namespace riskplan {
@@ -357,17 +359,12 @@ absl::Status WriteFileAtomically(const fs::path& dir, const std::string& name, c
                                  size_t size) {
   const fs::path final_path = dir / name;
   const fs::path temp_path = dir / absl::StrCat(".", name, ".tmp-", ::getpid());
-  {
-    std::ofstream out(temp_path, std::ios::binary | std::ios::trunc);
-    out.write(data, static_cast<std::streamsize>(size));
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      fs::remove(temp_path, ignored);
-      return absl::UnavailableError(absl::StrCat("cannot write '", temp_path.string(), "'"));
-    }
-  }
   std::error_code ec;
+  fs::remove(temp_path, ec);  // left by a writer that died with this pid
+  if (absl::Status s = WriteNewFileDurably(temp_path.string(), data, size, final_path.string());
+      !s.ok()) {
+    return s;
+  }
   fs::rename(temp_path, final_path, ec);
   if (ec) {
     std::error_code ignored;
@@ -377,6 +374,13 @@ absl::Status WriteFileAtomically(const fs::path& dir, const std::string& name, c
   }
   return absl::OkStatus();
 }
+
+// Receives each file of a bundle being written: its name and bytes.
+using BundleFileSink =
+    std::function<absl::Status(const std::string& name, const char* data, size_t size)>;
+
+// The bundle's files, layers first and the manifest last, each into `sink`.
+absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink);
 
 }  // namespace
 
@@ -456,6 +460,31 @@ absl::Status WriteMapBundle(const RiskMap& map, const std::string& dir) {
     return absl::UnavailableError(
         absl::StrCat("cannot create map bundle directory '", dir, "': ", ec.message()));
   }
+  return WriteBundleFiles(map, [&](const std::string& name, const char* data, size_t size) {
+    return WriteFileAtomically(dir, name, data, size);
+  });
+}
+
+absl::Status WriteMapBundleAtomically(const RiskMap& map, const std::string& dir,
+                                      ExistingDirectory existing) {
+  absl::StatusOr<std::unique_ptr<StagedDirectory>> staged =
+      StagedDirectory::Create(dir, existing, kManifestName);
+  if (!staged.ok()) {
+    return absl::Status(staged.status().code(),
+                        absl::StrCat("map bundle: ", staged.status().message()));
+  }
+  if (absl::Status s = WriteBundleFiles(
+          map, [&](const std::string& name, const char* data,
+                   size_t size) { return (*staged)->WriteFile(name, data, size); });
+      !s.ok()) {
+    return s;
+  }
+  return (*staged)->Commit();
+}
+
+namespace {
+
+absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink) {
   const MapHeader& h = map.header();
   const MapLayers& l = map.layers();
 
@@ -489,8 +518,8 @@ absl::Status WriteMapBundle(const RiskMap& map, const std::string& dir) {
                                  : name == "shelter" ? EncodeFloat32(l.shelter)
                                  : name == "terrain" ? EncodeFloat32(l.terrain)
                                                      : l.nofly;
-    if (absl::Status s = WriteFileAtomically(
-            dir, info.default_file, reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (absl::Status s =
+            sink(info.default_file, reinterpret_cast<const char*>(bytes.data()), bytes.size());
         !s.ok()) {
       return s;
     }
@@ -504,8 +533,10 @@ absl::Status WriteMapBundle(const RiskMap& map, const std::string& dir) {
   // Invalid UTF-8 in a name or provenance is replaced rather than thrown on.
   const std::string text =
       manifest.dump(2, ' ', false, OrderedJson::error_handler_t::replace) + "\n";
-  return WriteFileAtomically(dir, kManifestName, text.data(), text.size());
+  return sink(kManifestName, text.data(), text.size());
 }
+
+}  // namespace
 
 absl::StatusOr<std::vector<std::shared_ptr<const RiskMap>>> LoadMapDirectory(
     const std::string& dir, const ModelParams& params) {
@@ -516,6 +547,10 @@ absl::StatusOr<std::vector<std::shared_ptr<const RiskMap>>> LoadMapDirectory(
   std::vector<fs::path> bundles;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code entry_ec;
+    // A name starting with a dot is hidden, and is what an interrupted
+    // WriteMapBundleAtomically leaves: possibly a complete copy of a bundle
+    // that is also there under its own name.
+    if (it->path().filename().string().starts_with('.')) continue;
     if (it->is_directory(entry_ec) && fs::is_regular_file(it->path() / kManifestName, entry_ec)) {
       bundles.push_back(it->path());
     }

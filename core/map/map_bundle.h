@@ -16,6 +16,7 @@
 #include "absl/status/statusor.h"
 #include "core/base/model_params.h"
 #include "core/map/risk_map.h"
+#include "core/map/staged_directory.h"
 
 namespace riskplan {
 
@@ -24,13 +25,35 @@ namespace riskplan {
 absl::StatusOr<std::shared_ptr<const RiskMap>> LoadMapBundle(const std::string& dir,
                                                              const ModelParams& params = {});
 
-// Writes `map` as a bundle into `dir` (created if missing; existing bundle files
-// are replaced). The written bundle loads back bit for bit.
+// Writes `map` as a bundle at `dir` so that `dir` is, at every moment, either
+// what it was before or the complete new bundle, never a partial one: not on
+// a full disk, a read-only mount or under a file size limit, not when the
+// process dies. The bundle is written into a temporary sibling directory
+// (`.NAME.tmp-XXXXXX`, beside `dir`), every file and the directory flushed
+// to disk, then renamed to `dir` (StagedDirectory). With kRefuse (the
+// default) an existing `dir` is left alone (AlreadyExists); with kReplace an
+// existing bundle (or empty directory) is replaced in one step, and anything
+// else at `dir` is refused (FailedPrecondition). Missing parent directories
+// are created. On failure nothing of the new bundle is left behind, and the
+// error names the file at fault and the system's reason, e.g. "cannot write
+// 'maps/city/density.f32': No space left on device". The written bundle
+// loads back bit for bit. Every program that writes bundles for others to
+// load (riskplan-tool write-map, importers) writes them with this.
+absl::Status WriteMapBundleAtomically(const RiskMap& map, const std::string& dir,
+                                      ExistingDirectory existing = ExistingDirectory::kRefuse);
+
+// Writes `map` as a bundle into `dir` in place (created if missing; existing
+// bundle files are replaced, other files are left): each file through its own
+// temporary file and rename, so no file is ever half-written, but a failure
+// part way leaves some layers new and the old manifest (whose checksums then
+// refuse them). For tests and tools that own `dir`; prefer
+// WriteMapBundleAtomically. The written bundle loads back bit for bit.
 absl::Status WriteMapBundle(const RiskMap& map, const std::string& dir);
 
 // Loads every bundle found in the immediate sub-directories of `dir` that hold a
-// manifest.json, sorted by directory name. Fails on the first bad bundle, or on
-// two bundles with the same map name.
+// manifest.json, sorted by directory name, except those whose name starts with
+// '.' (such as the temporary directory of a write that was interrupted). Fails
+// on the first bad bundle, or on two bundles with the same map name.
 absl::StatusOr<std::vector<std::shared_ptr<const RiskMap>>> LoadMapDirectory(
     const std::string& dir, const ModelParams& params = {});
 

@@ -11,6 +11,9 @@
 // The layer covers whole blocks only: when stride does not divide nx (ny), the
 // last nx % stride columns at the east edge (ny % stride rows at the north
 // edge) of the map are left out, so no layer cell reaches past the map.
+// A layer may cover a window of the map instead (first_column, columns, ...
+// below): the same geometry with the window's south-west cell as (0, 0) and
+// its edges as the map's.
 #ifndef RISKPLAN_CORE_RISK_RISK_LAYER_H_
 #define RISKPLAN_CORE_RISK_RISK_LAYER_H_
 
@@ -19,6 +22,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/base/cancellation.h"
 #include "core/risk/risk_model.h"
 
 namespace riskplan {
@@ -31,8 +35,18 @@ struct RiskLayerOptions {
   double heading_rad = 0.0;
   int threads = 1;  // rows are split between this many threads
   // Side of a layer cell in map cells (1: one value per map cell), in
-  // [1, min(nx, ny)] of the map (ComputeRiskLayer refuses others).
+  // [1, min(columns, rows)] of the window (ComputeRiskLayer refuses others).
   int stride = 1;
+  // The window of map cells the layer covers: columns [first_column,
+  // first_column + columns) and rows [first_row, first_row + rows); 0
+  // columns (rows) means up to the map's east (north) edge. Inside the map.
+  int first_column = 0;
+  int first_row = 0;
+  int columns = 0;
+  int rows = 0;
+  // Polled before every row: once reached, ComputeRiskLayer stops and
+  // returns Cancelled.
+  StopCondition stop{};
 };
 
 struct RiskLayer {
@@ -60,8 +74,20 @@ struct RiskLayer {
 
 // Computes the layer described above. Deterministic whatever the thread count.
 // Errors (InvalidArgument): height not finite and > 0, infinite heading,
-// threads outside [1, 256], stride < 1 or larger than the map's smaller side.
+// threads outside [1, 256], a window not inside the map, stride < 1 or larger
+// than the window's smaller side; Cancelled once options.stop is reached.
+// The work is layer columns * rows configuration risks (times the heading
+// bins for the maximum): a caller serving requests bounds it before calling
+// (LayerCells).
 absl::StatusOr<RiskLayer> ComputeRiskLayer(const RiskModel& model, const RiskLayerOptions& options);
+
+// The columns and rows of the layer ComputeRiskLayer would compute for `map`
+// and `options`, or its error (the same checks, nothing computed).
+struct LayerShape {
+  int nx = 0;
+  int ny = 0;
+};
+absl::StatusOr<LayerShape> LayerCells(const RiskMap& map, const RiskLayerOptions& options);
 
 }  // namespace riskplan
 

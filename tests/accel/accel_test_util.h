@@ -5,13 +5,17 @@
 #ifndef RISKPLAN_TESTS_ACCEL_ACCEL_TEST_UTIL_H_
 #define RISKPLAN_TESTS_ACCEL_ACCEL_TEST_UTIL_H_
 
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -223,10 +227,48 @@ class ShimProcess {
   std::string stderr_path_;
 };
 
+// 127.0.0.1:PORT held bound but not listening, with SO_REUSEADDR, for a
+// riskplan-fpga-shim that is stopped and started again on the same port.
+// The shim sets SO_REUSEADDR too, so it can listen beside this socket; and
+// while it is down no connect() on the machine can take the port as its
+// source port (Linux never picks a port that a socket bound explicitly), the
+// worker's own reconnects to it included (a connect from a port to itself
+// would succeed and hold it). So the restarted shim always gets it back.
+class ReservedPort {
+ public:
+  ReservedPort() : socket_(socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) {
+    const int one = 1;
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t len = sizeof(addr);
+    if (!socket_.valid() ||
+        setsockopt(socket_.fd(), SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one)) != 0 ||
+        bind(socket_.fd(), reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0 ||
+        getsockname(socket_.fd(), reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
+      error_ = std::string("cannot reserve a port: ") + std::strerror(errno);
+      return;
+    }
+    endpoint_ = "127.0.0.1:" + std::to_string(ntohs(addr.sin_port));
+  }
+  bool ok() const { return error_.empty(); }
+  const std::string& error() const { return error_; }
+  const std::string& endpoint() const { return endpoint_; }
+
+ private:
+  Socket socket_;
+  std::string endpoint_;
+  std::string error_;
+};
+
 // An engine whose only worker is the board at `endpoint` (no CPU workers,
 // callers do not compute while it is up: every chunk goes to the board),
 // returned once that worker is up. Null, with a test failure, when the
 // engine cannot be made; a test failure when the board never comes up.
+// Its users check that every configuration went to the board, so the
+// worker's deadlines are far longer than the production defaults (2 s per
+// EVAL, plus 20 us a site): a simulated RTL board on a loaded machine can take
+// longer than that for a chunk, which would then fall back to the CPU.
 inline std::unique_ptr<RiskEngine> BoardOnlyEngine(const std::string& endpoint,
                                                    int min_chunk_configs = 512) {
   RiskEngineOptions options;
@@ -234,6 +276,10 @@ inline std::unique_ptr<RiskEngine> BoardOnlyEngine(const std::string& endpoint,
   options.caller_runs = false;
   options.min_chunk_configs = min_chunk_configs;
   options.fpga_shims = {endpoint};
+  options.fpga.client.eval_timeout = absl::Minutes(10);
+  options.fpga.client.hello_timeout = absl::Seconds(60);
+  options.fpga.client.ping_timeout = absl::Seconds(60);
+  options.fpga.client.upload_timeout = absl::Seconds(60);
   absl::StatusOr<std::unique_ptr<RiskEngine>> engine = RiskEngine::Create(options);
   if (!engine.ok()) {
     ADD_FAILURE() << engine.status();
@@ -281,6 +327,8 @@ enum class Misbehaviour {
   kSilent,         // accepts connections, never answers anything (not even HELLO)
   kCorruptHeader,  // big EVALs: a header byte flipped (header checksum mismatch)
   kWrongSums,      // big EVALs: a valid frame, every impact sum off by 2^-20 (plausible)
+  kSlow,           // big EVALs: the right reply, 1.5 s late
+  kSlowUpload,     // big PUT_BLOBs (a model's map or kernels): each chunk answered 60 s late
 };
 
 // An in-process shim serving ShimSession over a ModelDevice, misbehaving as
@@ -336,6 +384,12 @@ class FakeShim {
         break;
       }
       const Misbehaviour m = misbehaviour_.load();
+      if (m == Misbehaviour::kSlowUpload && header.type == MessageType::kPutBlob &&
+          payload.size() > (size_t{64} << 10)) {
+        ++misbehaved_;
+        const absl::Time until = absl::Now() + absl::Seconds(60);
+        while (!stop_.load() && absl::Now() < until) absl::SleepFor(absl::Milliseconds(10));
+      }
       if (m == Misbehaviour::kSilent) {
         ++misbehaved_;
         continue;
@@ -350,6 +404,9 @@ class FakeShim {
       } else if (big && m == Misbehaviour::kHang) {
         ++misbehaved_;
         continue;  // never answered; the client times out and hangs up
+      } else if (big && m == Misbehaviour::kSlow) {
+        ++misbehaved_;
+        absl::SleepFor(absl::Milliseconds(1500));
       } else if (big && m == Misbehaviour::kCloseOnEval) {
         ++misbehaved_;
         break;

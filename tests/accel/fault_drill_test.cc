@@ -19,10 +19,24 @@ using testing::FakeShim;
 using testing::FpgaExpectation;
 using testing::Misbehaviour;
 using testing::MixedConfigs;
+using testing::ReservedPort;
 using testing::SameRisk;
 using testing::ShimProcess;
 using testing::SmallCity;
 using testing::WaitFor;
+
+// How long the worker waits for the board. A drill whose fault is not a
+// timeout waits far longer than any loaded machine needs, so that only the
+// drilled fault can fail a request and the counts it asserts (zero failures,
+// every chunk on the board) hold however slow the machine is. Only the drills
+// of a board that never answers wait briefly, so that they end soon; the
+// board's good answers in those drills (HELLO, PING, the known-answer batch)
+// are a few hundred bytes computed in microseconds.
+struct DrillTimeouts {
+  absl::Duration eval = absl::Seconds(30);
+  absl::Duration hello = absl::Seconds(30);
+  absl::Duration ping = absl::Seconds(30);
+};
 
 struct Drill {
   absl::Mutex mu;
@@ -33,9 +47,10 @@ struct Drill {
 
   // CPU fallback only through the calling thread (no CPU workers, callers
   // do not run chunks while a board is up): every chunk that can go to the
-  // board does.
-  explicit Drill(const std::string& endpoint, int cpu_workers = 0,
-                 size_t blob_cache_bytes = size_t{256} << 20) {
+  // board does. Fails the test (fatally: call it inside
+  // ASSERT_NO_FATAL_FAILURE) when the engine cannot be made.
+  void Start(const std::string& endpoint, int cpu_workers = 0,
+             size_t blob_cache_bytes = size_t{256} << 20, DrillTimeouts timeouts = {}) {
     RiskEngineOptions options;
     options.cpu_workers = cpu_workers;
     options.blob_cache_bytes = blob_cache_bytes;
@@ -43,9 +58,10 @@ struct Drill {
     options.min_chunk_configs = 1000;
     options.max_chunk_configs = 4000;
     options.fpga_shims = {endpoint};
-    options.fpga.client.eval_timeout = absl::Milliseconds(400);
-    options.fpga.client.ping_timeout = absl::Milliseconds(200);
-    options.fpga.client.hello_timeout = absl::Milliseconds(400);
+    options.fpga.client.eval_timeout = timeouts.eval;
+    options.fpga.client.ping_timeout = timeouts.ping;
+    options.fpga.client.hello_timeout = timeouts.hello;
+    options.fpga.client.upload_timeout = absl::Seconds(30);
     options.fpga.backoff_initial = absl::Milliseconds(10);
     options.fpga.backoff_max = absl::Milliseconds(100);
     options.fpga.ping_interval = absl::Milliseconds(100);
@@ -53,7 +69,9 @@ struct Drill {
       absl::MutexLock lock(&mu);
       events.push_back(e);
     };
-    engine = *RiskEngine::Create(options);
+    absl::StatusOr<std::unique_ptr<RiskEngine>> created = RiskEngine::Create(options);
+    ASSERT_TRUE(created.ok()) << created.status();
+    engine = *std::move(created);
   }
 
   WorkerState state() { return engine->Stats().fpga[0].state; }
@@ -110,7 +128,8 @@ std::vector<Pose> Configs(size_t n, uint64_t seed) { return MixedConfigs(*SmallC
 TEST(FaultDrillTest, ShimKilledMidBatch) {
   auto shim = ShimProcess::Start({"--device=model"});
   ASSERT_NE(shim, nullptr);
-  Drill drill(shim->endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(shim->endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   const std::vector<Pose> configs = Configs(120000, 1);
   // Kill the shim once the board has finished a chunk of this batch (others
@@ -132,7 +151,9 @@ TEST(FaultDrillTest, ShimKilledMidBatch) {
 
 TEST(FaultDrillTest, ShimHangs) {
   FakeShim fake(Misbehaviour::kHang);
-  Drill drill(fake.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(
+      drill.Start(fake.endpoint(), 0, size_t{256} << 20, {.eval = absl::Seconds(1)}));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 3), NumberFormat::Board()), 0u);
   EXPECT_GT(fake.misbehaved(), 0);
@@ -155,7 +176,9 @@ TEST(FaultDrillTest, ShimHangs) {
 
 TEST(FaultDrillTest, ShimNeverAnswersHello) {
   FakeShim fake(Misbehaviour::kSilent);
-  Drill drill(fake.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(
+      drill.Start(fake.endpoint(), 0, size_t{256} << 20, {.hello = absl::Milliseconds(400)}));
   ASSERT_TRUE(WaitFor([&] { return drill.SawState(WorkerState::kDown); })) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(10000, 12), NumberFormat::Board()), 0u);
   EXPECT_FALSE(drill.SawState(WorkerState::kUp)) << drill.Reasons();
@@ -166,7 +189,8 @@ TEST(FaultDrillTest, ShimNeverAnswersHello) {
 
 TEST(FaultDrillTest, ShimCorruptsFrameHeaders) {
   FakeShim fake(Misbehaviour::kCorruptHeader);
-  Drill drill(fake.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(fake.endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 13), NumberFormat::Board()), 0u);
   EXPECT_GT(fake.misbehaved(), 0);
@@ -175,7 +199,8 @@ TEST(FaultDrillTest, ShimCorruptsFrameHeaders) {
 
 TEST(FaultDrillTest, ShimReturnsPlausibleButWrongSums) {
   FakeShim fake(Misbehaviour::kWrongSums);
-  Drill drill(fake.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(fake.endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 14), NumberFormat::Board()), 0u);
   EXPECT_GT(fake.misbehaved(), 0);
@@ -188,7 +213,8 @@ TEST(FaultDrillTest, ShimReturnsPlausibleButWrongSums) {
 TEST(FaultDrillTest, BlobsAreUploadedOnceAndSpotChecksPass) {
   auto shim = ShimProcess::Start({"--device=model"});
   ASSERT_NE(shim, nullptr);
-  Drill drill(shim->endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(shim->endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   size_t from_board = 0;
   for (uint64_t seed = 15; seed < 18; ++seed) {
@@ -209,7 +235,9 @@ TEST(FaultDrillTest, BlobsAreUploadedOnceAndSpotChecksPass) {
 
 TEST(FaultDrillTest, AModelTooLargeForTheBlobCacheIsLeftToTheCpu) {
   FakeShim fake(Misbehaviour::kNone);
-  Drill drill(fake.endpoint(), /*cpu_workers=*/0, /*blob_cache_bytes=*/1 << 20);
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(
+      drill.Start(fake.endpoint(), /*cpu_workers=*/0, /*blob_cache_bytes=*/1 << 20));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(10000, 19), NumberFormat::Board()), 0u);
   const RiskEngineStats stats = drill.engine->Stats();
@@ -223,7 +251,8 @@ TEST(FaultDrillTest, AModelTooLargeForTheBlobCacheIsLeftToTheCpu) {
 
 TEST(FaultDrillTest, ShimCorruptsFrames) {
   FakeShim fake(Misbehaviour::kCorruptFrame);
-  Drill drill(fake.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(fake.endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 4), NumberFormat::Board()), 0u);
   EXPECT_GT(fake.misbehaved(), 0);
@@ -232,7 +261,8 @@ TEST(FaultDrillTest, ShimCorruptsFrames) {
 
 TEST(FaultDrillTest, ShimReturnsGarbageInValidFrames) {
   FakeShim fake(Misbehaviour::kGarbageValues);
-  Drill drill(fake.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(fake.endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 5), NumberFormat::Board()), 0u);
   EXPECT_GT(fake.misbehaved(), 0);
@@ -241,7 +271,8 @@ TEST(FaultDrillTest, ShimReturnsGarbageInValidFrames) {
 
 TEST(FaultDrillTest, ShimClosesTheConnectionOnEval) {
   FakeShim fake(Misbehaviour::kCloseOnEval);
-  Drill drill(fake.endpoint(), /*cpu_workers=*/1);
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(fake.endpoint(), /*cpu_workers=*/1));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(20000, 6), NumberFormat::Board()), 0u);
   EXPECT_GT(fake.misbehaved(), 0);
@@ -249,7 +280,8 @@ TEST(FaultDrillTest, ShimClosesTheConnectionOnEval) {
 
 TEST(FaultDrillTest, ProtocolVersionMismatch) {
   FakeShim fake(Misbehaviour::kWrongVersion);
-  Drill drill(fake.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(fake.endpoint()));
   ASSERT_TRUE(WaitFor([&] { return drill.SawState(WorkerState::kDown); }));
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(10000, 7), NumberFormat::Board()), 0u);
   EXPECT_FALSE(drill.SawState(WorkerState::kUp));
@@ -257,10 +289,16 @@ TEST(FaultDrillTest, ProtocolVersionMismatch) {
 }
 
 TEST(FaultDrillTest, ShimRestartsAndTheWorkerReturnsToService) {
-  auto shim = ShimProcess::Start({"--device=model"});
+  // The port stays reserved while the board is down, so the restarted shim
+  // gets it back: no other connection (the worker's own reconnects included)
+  // can take it as its source port meanwhile.
+  const ReservedPort port;
+  ASSERT_TRUE(port.ok()) << port.error();
+  auto shim = ShimProcess::Start({"--device=model"}, port.endpoint());
   ASSERT_NE(shim, nullptr);
-  const std::string endpoint = shim->endpoint();
-  Drill drill(endpoint);
+  ASSERT_EQ(shim->endpoint(), port.endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(port.endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   EXPECT_GT(drill.EvaluateAndCheck(Configs(8000, 8), NumberFormat::Board()), 0u);
   shim->Kill();
@@ -269,7 +307,7 @@ TEST(FaultDrillTest, ShimRestartsAndTheWorkerReturnsToService) {
   EXPECT_EQ(drill.EvaluateAndCheck(Configs(8000, 9), NumberFormat::Board()), 0u);
   // The board comes back on the same port (a restarted board has lost its
   // blobs: they are uploaded again).
-  shim = ShimProcess::Start({"--device=model"}, endpoint);
+  shim = ShimProcess::Start({"--device=model"}, port.endpoint());
   ASSERT_NE(shim, nullptr);
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   const uint64_t uploads = drill.engine->Stats().fpga[0].uploads;
@@ -281,7 +319,8 @@ TEST(FaultDrillTest, ShimRestartsAndTheWorkerReturnsToService) {
 TEST(FaultDrillTest, RemovingAWorkerMidBatch) {
   auto shim = ShimProcess::Start({"--device=model"});
   ASSERT_NE(shim, nullptr);
-  Drill drill(shim->endpoint());
+  Drill drill;
+  ASSERT_NO_FATAL_FAILURE(drill.Start(shim->endpoint()));
   ASSERT_TRUE(drill.WaitForState(WorkerState::kUp)) << drill.Reasons();
   std::thread remover([&] {
     EXPECT_TRUE(WaitFor([&] { return drill.engine->Stats().fpga[0].chunks >= 1; }));

@@ -1,11 +1,11 @@
 // Cancellation, deadlines and admission control: a stopped plan frees its
-// slot within milliseconds, and a plan past the limit is refused at once.
+// slot, and a plan past the limit is refused at once rather than queued.
 #include <signal.h>
 
 #include <optional>
-#include <thread>
+#include <regex>
+#include <string>
 
-#include "absl/synchronization/notification.h"
 #include "absl/time/clock.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -17,51 +17,68 @@ namespace {
 
 using ::testing::HasSubstr;
 
+// Plans that only a cancellation, a deadline or a shutdown can end: their
+// budget is the server's cap, ten minutes. Every bound on time below is far
+// under it, so passing one says the plan was stopped, not that the machine
+// was fast; how soon the planner stops once told to is checked to the
+// iteration in tests/core/planners, with no clock.
+constexpr int64_t kEndlessPlanMs = 600000;
+// How long a stopped plan may take to free its slot, or a call to come back,
+// on a loaded machine: generous, yet a tenth of kEndlessPlanMs.
+constexpr absl::Duration kPatience = absl::Seconds(60);
+
 class CancellationTest : public ::testing::Test {
  protected:
   void SetUp() override {
     // One plan at a time: every test below can see whether the slot is free.
-    auto server = ServerProcess::Start({"--plan_threads=1", "--max_running_plans=1"});
+    // A grace period far longer than the waits for exit below, so that an
+    // exit within them says the server did not wait for it.
+    auto server = ServerProcess::Start(
+        {"--plan_threads=1", "--max_running_plans=1", "--grace_period_ms=120000"});
     ASSERT_TRUE(server.ok()) << server.status();
     server_ = *std::move(server);
     client_ = std::make_unique<client::RiskplanClient>(server_->address());
   }
 
-  // Time until a new plan is admitted: plans of one iteration are tried
-  // until one is not refused with RESOURCE_EXHAUSTED.
-  absl::Duration TimeUntilSlotFree(absl::Duration limit) {
+  // Whether a new plan is admitted within `limit`: plans of one iteration are
+  // tried until one is not refused with RESOURCE_EXHAUSTED.
+  bool SlotFreesWithin(absl::Duration limit) {
     const absl::Time start = absl::Now();
     while (absl::Now() - start < limit) {
-      PlanOutcome probe = RunPlan(*client_, SmallCityPlan(0, 1));
+      PlanOutcome probe = RunPlan(*client_, SmallCityPlan(0, 1), kPatience);
       if (probe.status.error_code() != grpc::StatusCode::RESOURCE_EXHAUSTED) {
         EXPECT_TRUE(probe.status.ok()) << probe.status.error_message();
-        return absl::Now() - start;
+        return true;
       }
     }
-    return absl::InfiniteDuration();
+    return false;
   }
 
   std::unique_ptr<ServerProcess> server_;
   std::unique_ptr<client::RiskplanClient> client_;
 };
 
-TEST_F(CancellationTest, AdmissionControlRefusesAtOnce) {
-  absl::Notification first_update;
-  grpc::Status long_status;
-  std::thread long_plan([&] {
-    long_status = client_->Plan(
-        SmallCityPlan(20000),
-        [&](const v1::PlanUpdate&) {
-          if (!first_update.HasBeenNotified()) first_update.Notify();
-          return true;
-        },
-        absl::Milliseconds(1500));
-  });
-  ASSERT_TRUE(first_update.WaitForNotificationWithTimeout(absl::Seconds(10)));
+// The duration_ms that the server logged for its PlanTrajectory call that
+// ended with `code` (the whole call by the server's clock), or -1.
+double LoggedCallMs(const std::string& log, const std::string& code) {
+  std::smatch match;
+  const std::regex line("\"method\":\"PlanTrajectory\",\"code\":\"" + code +
+                        "\",\"duration_ms\":([0-9.]+)");
+  return std::regex_search(log, match, line) ? std::stod(match[1]) : -1.0;
+}
 
-  const absl::Time start = absl::Now();
-  PlanOutcome refused = RunPlan(*client_, SmallCityPlan(500));
-  EXPECT_LT(absl::Now() - start, absl::Milliseconds(500));  // at once, not after waiting
+TEST_F(CancellationTest, AdmissionControlRefusesAtOnce) {
+  // A plan that holds the only slot until this test cancels it.
+  grpc::ClientContext long_context;
+  std::unique_ptr<grpc::ClientReader<v1::PlanUpdate>> long_plan =
+      client_->stub().PlanTrajectory(&long_context, SmallCityPlan(kEndlessPlanMs));
+  v1::PlanUpdate update;
+  ASSERT_TRUE(long_plan->Read(&update)) << long_plan->Finish().error_message();
+
+  // Refused while that plan runs: a plan that waited for the slot instead
+  // would wait until this test cancels the first one below, so its call
+  // would end with DEADLINE_EXCEEDED here.
+  PlanOutcome refused = RunPlan(*client_, SmallCityPlan(500), kPatience);
   EXPECT_EQ(refused.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_THAT(refused.status.error_message(),
               HasSubstr("maximum of 1 plans (--max_running_plans)"));
@@ -69,35 +86,41 @@ TEST_F(CancellationTest, AdmissionControlRefusesAtOnce) {
   // Evaluations are not plans: they still go through.
   v1::EvaluateRiskResponse response;
   EXPECT_TRUE(client_->EvaluateRisk(SmallCityPolyline(), &response).ok());
-  long_plan.join();
-  EXPECT_EQ(long_status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
+
+  long_context.TryCancel();
+  while (long_plan->Read(&update)) EXPECT_FALSE(update.final());
+  EXPECT_EQ(long_plan->Finish().error_code(), grpc::StatusCode::CANCELLED);
 }
 
 TEST_F(CancellationTest, CancelStopsThePlanAndFreesTheSlotPromptly) {
-  absl::Time cancelled_at;
   int updates = 0;
-  const absl::Time start = absl::Now();
-  grpc::Status status = client_->Plan(SmallCityPlan(30000), [&](const v1::PlanUpdate& u) {
-    ++updates;
-    EXPECT_FALSE(u.final());
-    cancelled_at = absl::Now();
-    return false;  // cancel after the first update
-  });
+  grpc::Status status = client_->Plan(
+      SmallCityPlan(kEndlessPlanMs),
+      [&](const v1::PlanUpdate& u) {
+        ++updates;
+        EXPECT_FALSE(u.final());
+        return false;  // cancel after the first update
+      },
+      kPatience);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::CANCELLED);
   EXPECT_EQ(updates, 1);
-  EXPECT_LT(absl::Now() - start, absl::Seconds(5));
-  // The 30 s plan stopped: its slot is free again within milliseconds.
-  const absl::Duration free_after = TimeUntilSlotFree(absl::Seconds(5));
-  EXPECT_LT(free_after, absl::Milliseconds(500));
+  // The ten-minute plan stopped: its slot is free again.
+  EXPECT_TRUE(SlotFreesWithin(kPatience));
   // The server logs a plan when gRPC is done with it, which may be after the
   // client has moved on: stop the server (it exits once every call is done),
-  // then read its log. With no call open it exits at once, well within its
-  // 10 s grace period, even though this client is still connected; a call
+  // then read its log. With no call open it exits at once, long before its
+  // grace period ends, even though this client is still connected; a call
   // gRPC never finished (a cancelled plan whose last write failed used to
   // be one) would hold it for the whole grace period.
   server_->Signal(SIGTERM);
-  ASSERT_EQ(server_->Wait(absl::Seconds(5)), std::optional<int>(0));
-  EXPECT_THAT(server_->Stderr(), HasSubstr("\"method\":\"PlanTrajectory\",\"code\":\"CANCELLED\""));
+  ASSERT_EQ(server_->Wait(kPatience), std::optional<int>(0));
+  const std::string log = server_->Stderr();
+  EXPECT_THAT(log, HasSubstr("\"method\":\"PlanTrajectory\",\"code\":\"CANCELLED\""));
+  // By the server's own clock the call lasted far less than the plan's
+  // budget: the cancellation ended it.
+  const double call_ms = LoggedCallMs(log, "CANCELLED");
+  EXPECT_GE(call_ms, 0.0) << log;
+  EXPECT_LT(call_ms, absl::ToDoubleMilliseconds(kPatience)) << log;
 }
 
 TEST_F(CancellationTest, StopsAtOnceWhenNoCallIsOpenThoughClientsAreConnected) {
@@ -106,30 +129,32 @@ TEST_F(CancellationTest, StopsAtOnceWhenNoCallIsOpenThoughClientsAreConnected) {
   // wait for that once its calls are done.
   v1::EvaluateRiskResponse response;
   ASSERT_TRUE(client_->EvaluateRisk(SmallCityPolyline(), &response).ok());
-  ASSERT_TRUE(RunPlan(*client_, SmallCityPlan(0, 1)).status.ok());
+  ASSERT_TRUE(RunPlan(*client_, SmallCityPlan(0, 1), kPatience).status.ok());
   server_->Signal(SIGTERM);
-  ASSERT_EQ(server_->Wait(absl::Seconds(5)), std::optional<int>(0));
+  // Well within the two-minute grace period.
+  ASSERT_EQ(server_->Wait(kPatience), std::optional<int>(0));
   EXPECT_THAT(server_->Stderr(), HasSubstr("\"event\":\"stopped\""));
 }
 
 TEST_F(CancellationTest, DeadlineStopsThePlanAndFreesTheSlotPromptly) {
   const absl::Time start = absl::Now();
-  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(30000), absl::Milliseconds(400));
-  const absl::Duration took = absl::Now() - start;
+  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(kEndlessPlanMs), absl::Milliseconds(400));
   EXPECT_EQ(plan.status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
-  EXPECT_GE(took, absl::Milliseconds(390));
-  EXPECT_LT(took, absl::Milliseconds(1500));
-  EXPECT_GE(plan.updates.size(), 1u);  // improvements streamed before the deadline
+  // Never before the deadline (a loaded machine only makes it later).
+  EXPECT_GE(absl::Now() - start, absl::Milliseconds(390));
+  // Whatever came before the deadline (nothing, on a slow machine) are
+  // improvements, not the end.
   for (const v1::PlanUpdate& u : plan.updates) EXPECT_FALSE(u.final());
-  const absl::Duration free_after = TimeUntilSlotFree(absl::Seconds(5));
-  EXPECT_LT(free_after, absl::Milliseconds(500));
+  // The server saw the deadline and stopped the ten-minute plan.
+  EXPECT_TRUE(SlotFreesWithin(kPatience));
 }
 
 TEST_F(CancellationTest, SlotIsFreeAfterANormalEnd) {
-  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(300));
+  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(300), kPatience);
   ASSERT_TRUE(plan.status.ok());
-  // Right after the final message: nothing to wait for.
-  PlanOutcome next = RunPlan(*client_, SmallCityPlan(0, 1));
+  // Right after the final message: nothing to wait for (the server frees the
+  // slot before it sends the final message).
+  PlanOutcome next = RunPlan(*client_, SmallCityPlan(0, 1), kPatience);
   EXPECT_TRUE(next.status.ok()) << next.status.error_message();
 }
 

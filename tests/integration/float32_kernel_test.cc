@@ -2,10 +2,7 @@
 // reports is within the float32 path's 1e-5 of the exact re-evaluation of
 // its trajectory (EvaluateRisk on a server without the flag, which is
 // riskplan-tool's and EvaluateTrajectory's arithmetic bit for bit).
-#include <sys/wait.h>
-
 #include <cmath>
-#include <cstdio>
 #include <regex>
 #include <string>
 
@@ -18,18 +15,6 @@ namespace riskplan::testing {
 namespace {
 
 using ::testing::HasSubstr;
-
-// Output and exit status of a shell command.
-std::string RunCommand(const std::string& command, int* status) {
-  std::string out;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return out;
-  char buf[4096];
-  size_t got;
-  while ((got = fread(buf, 1, sizeof(buf), pipe)) > 0) out.append(buf, got);
-  *status = pclose(pipe);
-  return out;
-}
 
 TEST(Float32KernelTest, PlanRiskIsWithin1e5OfTheExactReevaluation) {
   auto exact = ServerProcess::Start();
@@ -91,16 +76,13 @@ TEST(Float32KernelTest, PlanRiskIsWithin1e5OfTheExactReevaluation) {
 }
 
 TEST(Float32KernelTest, FlagIsListedAndChecked) {
-  int status = 0;
   const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-server";
-  const std::string help = RunCommand(binary + " --help", &status);
-  EXPECT_THAT(help, HasSubstr("-cpu_kernel"));
-  EXPECT_THAT(help, HasSubstr("float32"));
-  const std::string bad =
-      RunCommand(binary + " --listen=127.0.0.1:0 --cpu_kernel=float16", &status);
-  EXPECT_THAT(bad, HasSubstr("--cpu_kernel=float16: must be exact or float32"));
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const CommandResult help = RunCommand(binary + " --help 2>&1");
+  EXPECT_THAT(help.output, HasSubstr("-cpu_kernel"));
+  EXPECT_THAT(help.output, HasSubstr("float32"));
+  const CommandResult bad = RunCommand(binary + " --listen=127.0.0.1:0 --cpu_kernel=float16 2>&1");
+  EXPECT_THAT(bad.output, HasSubstr("--cpu_kernel=float16: must be exact or float32"));
+  EXPECT_EQ(bad.exit_code, 2);
 }
 
 }  // namespace

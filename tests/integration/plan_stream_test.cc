@@ -1,7 +1,6 @@
 // PlanTrajectory end to end: the real server binary and the real client.
 #include <cmath>
 
-#include "absl/time/clock.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/integration/requests.h"
@@ -13,8 +12,12 @@ namespace {
 
 class PlanStreamTest : public SharedServerTest<PlanStreamTest> {};
 
+// A deadline on every plan below: a server that ignored a budget fails the
+// test instead of running to its 600 s cap.
+constexpr absl::Duration kPlanDeadline = absl::Seconds(120);
+
 TEST_F(PlanStreamTest, StreamsImprovementsThenOneFinalMessage) {
-  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(800));
+  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(800), kPlanDeadline);
   ASSERT_TRUE(plan.status.ok()) << plan.status.error_message();
   ASSERT_GE(plan.updates.size(), 2u);  // at least one improvement and the final message
   for (size_t i = 0; i < plan.updates.size(); ++i) {
@@ -31,7 +34,13 @@ TEST_F(PlanStreamTest, StreamsImprovementsThenOneFinalMessage) {
   }
   const v1::PlanUpdate& final_update = plan.updates.back();
   EXPECT_EQ(final_update.end_reason(), v1::BUDGET_EXHAUSTED);
-  EXPECT_NEAR(final_update.elapsed_s(), 0.8, 0.25);
+  // The time budget, by the server's own clock: the plan does not end before
+  // it (a loaded machine can only make it end later, by an iteration and
+  // whatever the scheduler adds, so no upper bound but the deadline above).
+  EXPECT_GE(final_update.elapsed_s(), 0.8);
+  for (size_t i = 1; i < plan.updates.size(); ++i) {
+    EXPECT_GE(plan.updates[i].elapsed_s(), plan.updates[i - 1].elapsed_s());
+  }
   EXPECT_GT(final_update.iterations(), 0);
   EXPECT_GT(final_update.configurations_evaluated(), 0u);
   EXPECT_GE(final_update.improvements(), static_cast<int64_t>(plan.updates.size()) - 1);
@@ -42,11 +51,18 @@ TEST_F(PlanStreamTest, StreamsImprovementsThenOneFinalMessage) {
 }
 
 TEST_F(PlanStreamTest, RiskNeverIncreasesAcrossUpdates) {
-  v1::PlanRequest request = SmallCityPlan(1000);
+  // An iteration budget: the planner's improvements are the same on any
+  // machine (same seed); how many of them reach the client depends on how
+  // fast it reads (a newer one replaces one not yet sent), but never fewer
+  // than the first and the final message.
+  v1::PlanRequest request = SmallCityPlan(0, 1500);
   request.set_min_update_interval_ms(0);
-  PlanOutcome plan = RunPlan(*client_, request);
+  PlanOutcome plan = RunPlan(*client_, request, kPlanDeadline);
   ASSERT_TRUE(plan.status.ok()) << plan.status.error_message();
-  ASSERT_GE(plan.updates.size(), 3u);
+  ASSERT_GE(plan.updates.back().improvements(), 3);
+  ASSERT_GE(plan.updates.size(), 2u);
+  EXPECT_LE(static_cast<int64_t>(plan.updates.size()), plan.updates.back().improvements() + 1);
+  EXPECT_LT(plan.updates.back().trajectory().risk(), plan.updates.front().trajectory().risk());
   for (size_t i = 1; i < plan.updates.size(); ++i) {
     EXPECT_LE(plan.updates[i].trajectory().risk(), plan.updates[i - 1].trajectory().risk())
         << "update " << i + 1;
@@ -55,7 +71,7 @@ TEST_F(PlanStreamTest, RiskNeverIncreasesAcrossUpdates) {
 }
 
 TEST_F(PlanStreamTest, EvaluateRiskOfTheFinalTrajectoryEqualsThePlansRisk) {
-  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(600));
+  PlanOutcome plan = RunPlan(*client_, SmallCityPlan(600), kPlanDeadline);
   ASSERT_TRUE(plan.status.ok()) << plan.status.error_message();
   const v1::Trajectory& best = plan.updates.back().trajectory();
   v1::EvaluateRiskRequest eval;
@@ -72,8 +88,8 @@ TEST_F(PlanStreamTest, EvaluateRiskOfTheFinalTrajectoryEqualsThePlansRisk) {
 
 TEST_F(PlanStreamTest, IterationBudgetIsReproducible) {
   v1::PlanRequest request = SmallCityPlan(0, 300);
-  PlanOutcome a = RunPlan(*client_, request);
-  PlanOutcome b = RunPlan(*client_, request);
+  PlanOutcome a = RunPlan(*client_, request, kPlanDeadline);
+  PlanOutcome b = RunPlan(*client_, request, kPlanDeadline);
   ASSERT_TRUE(a.status.ok() && b.status.ok());
   EXPECT_EQ(a.updates.back().iterations(), 300);
   EXPECT_EQ(a.updates.back().trajectory().risk(), b.updates.back().trajectory().risk());
@@ -84,7 +100,7 @@ TEST_F(PlanStreamTest, IterationBudgetIsReproducible) {
 TEST_F(PlanStreamTest, FinalMessageCarriesTheTreeWhenAsked) {
   v1::PlanRequest request = SmallCityPlan(0, 200);
   request.set_include_tree(true);
-  PlanOutcome plan = RunPlan(*client_, request);
+  PlanOutcome plan = RunPlan(*client_, request, kPlanDeadline);
   ASSERT_TRUE(plan.status.ok());
   const v1::PlanUpdate& final_update = plan.updates.back();
   EXPECT_GT(final_update.tree_edges_size(), 10);
@@ -98,24 +114,23 @@ TEST_F(PlanStreamTest, FinalMessageCarriesTheTreeWhenAsked) {
 TEST_F(PlanStreamTest, MinimumIntervalSpacesUpdates) {
   v1::PlanRequest request = SmallCityPlan(1200);
   request.set_min_update_interval_ms(300);
-  std::vector<absl::Time> received;
-  std::vector<v1::PlanUpdate> updates;
-  grpc::Status status = client_->Plan(request, [&](const v1::PlanUpdate& u) {
-    received.push_back(absl::Now());
-    updates.push_back(u);
-    return true;
-  });
-  ASSERT_TRUE(status.ok());
-  ASSERT_GE(updates.size(), 2u);
-  // Non-final updates at least 300 ms apart when sent; on arrival, network
-  // and scheduling jitter may shorten a gap a little, never to the few
-  // milliseconds between improvements sent without the interval. So at most
-  // 1200 / 300 + 1 of them; the final message is never held back.
-  for (size_t i = 1; i + 1 < updates.size(); ++i) {
-    EXPECT_GE(received[i] - received[i - 1], absl::Milliseconds(200)) << "update " << i + 1;
-  }
-  EXPECT_LE(updates.size(), 6u);
-  EXPECT_GE(updates.back().improvements(), static_cast<int64_t>(updates.size()) - 1);
+  PlanOutcome plan = RunPlan(*client_, request, kPlanDeadline);
+  ASSERT_TRUE(plan.status.ok()) << plan.status.error_message();
+  ASSERT_GE(plan.updates.size(), 2u);
+  // The server starts the non-final updates at least 300 ms apart by its own
+  // clock, all of them after the planner's first improvement and before its
+  // end: over the planner's elapsed E, at most E / 0.3 + 1 of them, and one
+  // more for the moments between the planner's clock and the stream's. The
+  // arrival times at the client are not used: a loaded client can receive
+  // two updates in a row that were sent 300 ms apart. Without the interval
+  // every improvement found would be sent (dozens in 1.2 s on this map,
+  // ~5 on a slow machine, where this bound is ~10).
+  const v1::PlanUpdate& final_update = plan.updates.back();
+  const int64_t non_final = static_cast<int64_t>(plan.updates.size()) - 1;
+  const int64_t most = static_cast<int64_t>(std::floor(final_update.elapsed_s() / 0.3)) + 2;
+  EXPECT_LE(non_final, most) << "the planner ran " << final_update.elapsed_s() << " s";
+  EXPECT_GE(final_update.improvements(), non_final);
+  EXPECT_TRUE(final_update.final());
 }
 
 TEST_F(PlanStreamTest, NoSolutionIsANormalEnd) {
@@ -123,7 +138,7 @@ TEST_F(PlanStreamTest, NoSolutionIsANormalEnd) {
   // guide route, which can: it is found before the first iteration).
   v1::PlanRequest request = SmallCityPlan(0, 1);
   (*request.mutable_planner_params())["guide_cell_m"] = 0.0;
-  PlanOutcome plan = RunPlan(*client_, request);
+  PlanOutcome plan = RunPlan(*client_, request, kPlanDeadline);
   ASSERT_TRUE(plan.status.ok()) << plan.status.error_message();
   ASSERT_EQ(plan.updates.size(), 1u);
   EXPECT_TRUE(plan.updates[0].final());

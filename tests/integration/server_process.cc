@@ -5,14 +5,15 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <fstream>
 #include <regex>
@@ -24,8 +25,6 @@
 #include "absl/strings/str_join.h"
 #include "absl/time/clock.h"
 
-extern char** environ;
-
 namespace riskplan::testing {
 namespace {
 
@@ -36,14 +35,15 @@ int PollMs(absl::Duration left) {
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<std::string> flags,
-                                                                    absl::Duration timeout) {
+                                                                    absl::Duration timeout,
+                                                                    int max_open_files) {
   std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-server",
                                    "--listen=127.0.0.1:0"};
   bool has_maps = false;
   for (const std::string& f : flags) has_maps = has_maps || absl::StartsWith(f, "--maps=");
   if (!has_maps) args.push_back(absl::StrCat("--demo_city_size_m=", kSmallCitySizeM));
   args.insert(args.end(), flags.begin(), flags.end());
-  return Spawn(std::move(args), "riskplan-server listening on ", timeout);
+  return Spawn(std::move(args), "riskplan-server listening on ", timeout, max_open_files);
 }
 
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartShim(
@@ -56,30 +56,39 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartShim(
 
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Spawn(std::vector<std::string> args,
                                                                     const std::string& ready_prefix,
-                                                                    absl::Duration timeout) {
+                                                                    absl::Duration timeout,
+                                                                    int max_open_files) {
   std::unique_ptr<ServerProcess> server(new ServerProcess);
   char stderr_template[] = "/tmp/riskplan-server-stderr-XXXXXX";
-  const int stderr_fd = mkstemp(stderr_template);
+  const int stderr_fd = mkostemp(stderr_template, O_CLOEXEC);
   if (stderr_fd < 0) return absl::InternalError("mkstemp failed");
   server->stderr_path_ = stderr_template;
   int out[2];
-  if (pipe2(out, O_CLOEXEC) != 0) return absl::InternalError("pipe failed");
+  if (pipe2(out, O_CLOEXEC) != 0) {
+    close(stderr_fd);
+    return absl::InternalError("pipe failed");
+  }
 
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
+  const rlimit files{static_cast<rlim_t>(max_open_files), static_cast<rlim_t>(max_open_files)};
 
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, stderr_fd, STDERR_FILENO);
-  const int rc = posix_spawn(&server->pid_, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
+  server->pid_ = fork();
+  if (server->pid_ == 0) {
+    // Only async-signal-safe calls between fork and exec: the test process
+    // has other threads.
+    dup2(out[1], STDOUT_FILENO);
+    dup2(stderr_fd, STDERR_FILENO);
+    if (max_open_files > 0 && setrlimit(RLIMIT_NOFILE, &files) != 0) _exit(126);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
   close(out[1]);
   close(stderr_fd);
-  if (rc != 0) {
+  if (server->pid_ < 0) {
     close(out[0]);
-    return absl::InternalError(absl::StrFormat("cannot start %s: error %d", argv[0], rc));
+    return absl::InternalError(absl::StrFormat("cannot start %s: fork failed", argv[0]));
   }
   server->pidfd_ = static_cast<int>(syscall(SYS_pidfd_open, server->pid_, 0));
 
@@ -162,6 +171,10 @@ absl::StatusOr<std::string> HttpGet(const std::string& address, const std::strin
   }
   const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return absl::InternalError("socket failed");
+  // A server that stops answering fails the test instead of hanging it.
+  const timeval io_timeout{30, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &io_timeout, sizeof(io_timeout));
+  setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &io_timeout, sizeof(io_timeout));
   if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0) {
     close(fd);
     return absl::UnavailableError("cannot connect to " + address);
@@ -176,22 +189,12 @@ absl::StatusOr<std::string> HttpGet(const std::string& address, const std::strin
   ssize_t n = 0;
   while ((n = read(fd, buffer, sizeof(buffer))) > 0)
     response.append(buffer, static_cast<size_t>(n));
+  const bool timed_out = n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK);
   close(fd);
+  if (timed_out) return absl::DeadlineExceededError("no answer from " + address + " in 30 s");
   const size_t body = response.find("\r\n\r\n");
   if (body == std::string::npos) return absl::DataLossError("no HTTP body");
   return response.substr(body + 4);
-}
-
-CommandResult RunCommand(const std::string& command) {
-  CommandResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  size_t n = 0;
-  while ((n = fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.output.append(buffer, n);
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
 }
 
 std::string MetricsAddress(const std::string& log) {

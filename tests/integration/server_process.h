@@ -13,6 +13,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "tests/child_process.h"
 
 namespace riskplan::testing {
 
@@ -21,8 +22,10 @@ class ServerProcess {
   // Starts RISKPLAN_BIN_DIR/riskplan-server --listen=127.0.0.1:0 with
   // `flags` (by default a 2 km demo-city, which loads in a fraction of a
   // second). Fails if the readiness line does not come within `timeout`.
+  // With `max_open_files` > 0 the server runs with that RLIMIT_NOFILE.
   static absl::StatusOr<std::unique_ptr<ServerProcess>> Start(
-      std::vector<std::string> flags = {}, absl::Duration timeout = absl::Seconds(60));
+      std::vector<std::string> flags = {}, absl::Duration timeout = absl::Seconds(60),
+      int max_open_files = 0);
   // Starts RISKPLAN_BIN_DIR/riskplan-fpga-shim --listen=127.0.0.1:0 with
   // `flags` (e.g. --device=model), up to its readiness line.
   static absl::StatusOr<std::unique_ptr<ServerProcess>> StartShim(
@@ -47,7 +50,8 @@ class ServerProcess {
   // starting with `ready_prefix`, whose rest is the address.
   static absl::StatusOr<std::unique_ptr<ServerProcess>> Spawn(std::vector<std::string> args,
                                                               const std::string& ready_prefix,
-                                                              absl::Duration timeout);
+                                                              absl::Duration timeout,
+                                                              int max_open_files = 0);
 
   pid_t pid_ = -1;
   int pidfd_ = -1;
@@ -56,14 +60,8 @@ class ServerProcess {
   std::string stderr_path_;
 };
 
-// Runs a command line through /bin/sh; returns its exit code and stdout.
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;
-};
-CommandResult RunCommand(const std::string& command);
-
-// GET http://ADDRESS/PATH (HTTP/1.0); the response body, or an error.
+// GET http://ADDRESS/PATH (HTTP/1.0); the response body, or an error (also
+// when the server does not answer within 30 s).
 absl::StatusOr<std::string> HttpGet(const std::string& address, const std::string& path);
 
 // The metrics address a server started with --metrics_listen logged (its

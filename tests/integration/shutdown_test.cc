@@ -33,6 +33,7 @@ TEST(ShutdownTest, DrainsOnSigterm) {
 
   // Watch the health status: the stream tells us when it changes.
   grpc::ClientContext watch_context;
+  client::SetTimeout(&watch_context, absl::Seconds(120));  // fails rather than hangs
   auto health_stub = grpc::health::v1::Health::NewStub(client.channel());
   HealthCheckRequest watch_request;
   auto watch = health_stub->Watch(&watch_context, watch_request);
@@ -50,7 +51,7 @@ TEST(ShutdownTest, DrainsOnSigterm) {
       return true;
     });
   });
-  ASSERT_TRUE(first_update.WaitForNotificationWithTimeout(absl::Seconds(10)));
+  ASSERT_TRUE(first_update.WaitForNotificationWithTimeout(absl::Seconds(60)));
 
   const absl::Time sigterm_at = absl::Now();
   server->Signal(SIGTERM);
@@ -74,30 +75,46 @@ TEST(ShutdownTest, DrainsOnSigterm) {
   EXPECT_EQ(final_update.end_reason(), v1::SHUTDOWN);
   ASSERT_TRUE(final_update.has_trajectory());  // its best trajectory, not nothing
   EXPECT_LE(final_update.trajectory().risk(), plan.updates.front().trajectory().risk());
-  // Stopped inside the grace period (2 s), about 1 s before its end.
-  const absl::Duration drained = absl::Now() - sigterm_at;
-  EXPECT_GT(drained, absl::Milliseconds(800));
-  EXPECT_LT(drained, absl::Milliseconds(2000));
+  // The plan had the grace period but for its last second (a lower bound: a
+  // loaded machine only makes the end later).
+  EXPECT_GE(absl::Now() - sigterm_at, absl::Milliseconds(1000));
 
-  std::optional<int> exit_code = server->Wait(absl::Seconds(10));
+  // The drain completed within the grace period (and the two seconds the
+  // server allows past it): the server's own verdict, exit code 0; a drain
+  // still running then would have ended the process with code 1 and a
+  // drain_timeout event.
+  std::optional<int> exit_code = server->Wait(absl::Seconds(60));
   ASSERT_TRUE(exit_code.has_value());
   EXPECT_EQ(*exit_code, 0);
   watch_context.TryCancel();
+  // And in this order: the drain starts, the plan is stopped, it ends with
+  // SHUTDOWN, the server stops.
   const std::string log = server->Stderr();
-  EXPECT_THAT(log, ::testing::HasSubstr("\"event\":\"draining\""));
-  EXPECT_THAT(log, ::testing::HasSubstr("end_reason=SHUTDOWN"));
+  EXPECT_THAT(log, ::testing::Not(::testing::HasSubstr("drain_timeout")));
+  const size_t draining = log.find("\"event\":\"draining\"");
+  const size_t stopping = log.find("\"event\":\"stopping_plans\"");
+  const size_t shutdown = log.find("end_reason=SHUTDOWN");
+  const size_t stopped = log.find("\"event\":\"stopped\"");
+  ASSERT_NE(draining, std::string::npos) << log;
+  ASSERT_NE(stopping, std::string::npos) << log;
+  ASSERT_NE(shutdown, std::string::npos) << log;
+  ASSERT_NE(stopped, std::string::npos) << log;
+  EXPECT_LT(draining, stopping);
+  EXPECT_LT(stopping, shutdown);
+  EXPECT_LT(shutdown, stopped);
 }
 
 TEST(ShutdownTest, IdleServerExitsAtOnce) {
-  auto started = ServerProcess::Start();
+  // With nothing to drain the server does not wait for its grace period: it
+  // exits within a wait that is half of it.
+  auto started = ServerProcess::Start({"--grace_period_ms=120000"});
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
-  const absl::Time start = absl::Now();
   server->Signal(SIGINT);
-  std::optional<int> exit_code = server->Wait(absl::Seconds(10));
+  std::optional<int> exit_code = server->Wait(absl::Seconds(60));
   ASSERT_TRUE(exit_code.has_value());
   EXPECT_EQ(*exit_code, 0);
-  EXPECT_LT(absl::Now() - start, absl::Seconds(2));
+  EXPECT_THAT(server->Stderr(), ::testing::HasSubstr("running_plans=0"));
 }
 
 TEST(ShutdownTest, RefusesToStartOnABadMapsDirectory) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <thread>
 
+#include "absl/time/clock.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/integration/requests.h"
@@ -225,6 +226,17 @@ TEST_F(ValidationTest, BadRequestsNeverDisturbConcurrentGoodOnes) {
                        (status.error_code() == grpc::StatusCode::NOT_FOUND);
       }
     });
+  }
+  // The attack is under way before the good run starts, however the
+  // threads are scheduled, and lasts until it ends.
+  const absl::Time attack_deadline = absl::Now() + absl::Seconds(60);
+  while (bad_sent.load() == 0 && absl::Now() < attack_deadline) {
+    absl::SleepFor(absl::Milliseconds(1));
+  }
+  if (bad_sent.load() == 0) {
+    stop = true;
+    for (std::thread& t : attackers) t.join();
+    FAIL() << "no bad request was answered in 60 s";
   }
   PlanOutcome during = RunPlan(*client_, good);
   v1::EvaluateRiskResponse eval_during;

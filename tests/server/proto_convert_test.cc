@@ -83,7 +83,7 @@ TEST(ProtoConvertTest, TrajectoryPathIsSampledAndEndsAtTheGoal) {
   improvement.length_m = 1234.0;
   improvement.iterations = 42;
   v1::Trajectory t;
-  ASSERT_TRUE(TrajectoryToProto(improvement, ModelParams{}, 25.0, &t).ok());
+  ASSERT_TRUE(TrajectoryToProto(improvement, ModelParams{}, 25.0, nullptr, &t).ok());
   EXPECT_EQ(t.waypoints_size(), 3);
   EXPECT_EQ(t.risk(), 1e-7);
   EXPECT_EQ(t.found_at_iteration(), 42);
@@ -229,7 +229,7 @@ TEST(ProtoConvertTest, FeasibilityResult) {
   v1::TwoTierResult out;
   FeasibilityResult feasible;
   feasible.cells_checked = 42;
-  FeasibilityToProto(feasible, &out);
+  FeasibilityToProto(feasible, nullptr, &out);
   EXPECT_TRUE(out.feasible());
   EXPECT_EQ(out.tier(), v1::FEASIBILITY_TIER_UNSPECIFIED);
   EXPECT_EQ(out.segment(), -1);
@@ -247,7 +247,7 @@ TEST(ProtoConvertTest, FeasibilityResult) {
   collision.position = Point3{1.0, 2.0, 3.0};
   collision.kind = ViolationKind::kTerrainCollision;
   collision.cells_checked = 99;
-  FeasibilityToProto(collision, &out);
+  FeasibilityToProto(collision, nullptr, &out);
   EXPECT_FALSE(out.feasible());
   EXPECT_EQ(out.tier(), v1::COARSE);
   EXPECT_EQ(out.segment(), 3);
@@ -257,7 +257,7 @@ TEST(ProtoConvertTest, FeasibilityResult) {
   EXPECT_EQ(out.kind(), v1::TERRAIN_COLLISION);
   EXPECT_EQ(out.cells_checked(), 99);
   collision.tier = FeasibilityTier::kDetailed;
-  FeasibilityToProto(collision, &out);
+  FeasibilityToProto(collision, nullptr, &out);
   EXPECT_EQ(out.tier(), v1::DETAILED);
 }
 

@@ -1,4 +1,4 @@
-#include "core/tools/layer_writers.h"
+#include "tools/layer_writers.h"
 
 #include <png.h>
 

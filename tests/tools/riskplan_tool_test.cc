@@ -1,6 +1,5 @@
 // riskplan-tool end to end: the real binary on a bundle it wrote itself.
 #include <png.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -20,6 +19,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
+#include "tests/child_process.h"
 
 namespace riskplan {
 namespace {
@@ -32,16 +32,9 @@ struct Output {
 };
 
 Output RunTool(const std::string& args) {
-  const std::string command = std::string(RISKPLAN_BIN_DIR) + "/riskplan-tool " + args + " 2>&1";
-  Output out;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return out;
-  char buffer[4096];
-  size_t n = 0;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) out.text.append(buffer, n);
-  const int status = pclose(pipe);
-  out.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return out;
+  const testing::CommandResult r =
+      testing::RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan-tool " + args + " 2>&1");
+  return Output{r.exit_code, r.output};
 }
 
 // An ESRI ASCII grid as written: its six header fields and its rows, south first.
@@ -157,6 +150,45 @@ TEST_F(RiskplanToolTest, InfoDescribesTheBundle) {
   ASSERT_EQ(out.exit_code, 0) << out.text;
   EXPECT_THAT(out.text, HasSubstr("100 x 100 cells of 10 m"));
   EXPECT_THAT(out.text, HasSubstr("demo-city"));
+}
+
+// write-map on a disk that fills up (here: a file size limit, which root
+// is subject to as well; the tool ignores SIGXFSZ, so the write fails with
+// EFBIG instead of killing it): it says which file, exits 1, and leaves no
+// bundle and no temporary directory. A bundle already at --out is replaced
+// whole, as import does; a directory of other things is left alone.
+TEST_F(RiskplanToolTest, WriteMapFailsCleanlyAndReplacesOnlyABundle) {
+  // Normalised, as the tool names it ("/tmp/" + "/..." has a double slash).
+  const std::string parent = std::filesystem::path(*dir_ + "/write-map").lexically_normal();
+  std::filesystem::create_directories(parent);
+  const std::string out = parent + "/city";
+  const std::string write = "write-map --out=" + out + " --size_m=1000 --res_m=10";
+  // 16 blocks of at most 1 KiB: each layer file is 40 000 bytes.
+  const testing::CommandResult limited =
+      testing::RunCommand("ulimit -f 16 && exec " + std::string(RISKPLAN_BIN_DIR) +
+                          "/riskplan-tool " + write + " 2>&1");
+  EXPECT_EQ(limited.exit_code, 1) << limited.output;
+  EXPECT_THAT(limited.output, HasSubstr("cannot write '" + out + "/density.f32': File too large"));
+  EXPECT_TRUE(std::filesystem::is_empty(parent)) << "a bundle or a temporary directory is left";
+
+  Output r = RunTool(write);
+  ASSERT_EQ(r.exit_code, 0) << r.text;
+  const std::string before = ReadFile(out + "/manifest.json");
+  r = RunTool(write + " --seed=2");
+  ASSERT_EQ(r.exit_code, 0) << r.text;
+  // Another city: other checksums in the manifest.
+  EXPECT_TRUE(ReadFile(out + "/manifest.json") != before) << "the bundle was not replaced";
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(parent)) ++entries;
+  EXPECT_EQ(entries, 1);
+
+  const std::string other = parent + "/other";
+  std::filesystem::create_directories(other);
+  std::ofstream(other + "/README") << "not a map";
+  r = RunTool("write-map --out=" + other + " --size_m=1000 --res_m=10");
+  EXPECT_EQ(r.exit_code, 1) << r.text;
+  EXPECT_THAT(r.text, HasSubstr("'" + other + "' is a directory without manifest.json"));
+  EXPECT_EQ(ReadFile(other + "/README"), "not a map");
 }
 
 TEST_F(RiskplanToolTest, EvaluatePrintsWhatTheLibraryComputes) {

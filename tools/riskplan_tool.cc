@@ -1,7 +1,9 @@
-// riskplan-tool: offline access to riskplan's core (no server needed). Its
-// commands, their synopses and flags are in Help() below (`riskplan-tool
-// --help`, `riskplan-tool COMMAND --help`).
+// riskplan-tool: offline access to riskplan's core (no server needed), and
+// map bundles from real geodata (import). Its commands, their synopses and
+// flags are in Help() below (`riskplan-tool --help`, `riskplan-tool COMMAND
+// --help`).
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -21,8 +23,11 @@
 #include "core/map/map_bundle.h"
 #include "core/risk/risk_layer.h"
 #include "core/risk/risk_model.h"
-#include "core/tools/layer_writers.h"
+#include "geo/geo_frame.h"
+#include "geo/risk_layer_geotiff.h"
 #include "nlohmann/json.hpp"
+#include "tools/import_command.h"
+#include "tools/layer_writers.h"
 
 ABSL_FLAG(std::string, map, "",
           "Map bundle directory (docs/map-bundle.md). Empty: the built-in demo-city.");
@@ -38,15 +43,16 @@ ABSL_FLAG(bool, json, false, "evaluate: print the result as JSON");
 ABSL_FLAG(std::string, params, "",
           "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
           "mass_kg=12,airspeed_mps=20)");
-ABSL_FLAG(std::string, out, "", "write-map: directory to write the bundle into");
+ABSL_FLAG(std::string, out, "",
+          "the bundle's directory (write-map, import), or the output files' prefix (risk-layer)");
 ABSL_FLAG(uint64_t, seed, riskplan::kDemoCitySeed, "write-map: demo-city seed");
-ABSL_FLAG(double, size_m, 8000.0, "write-map: demo-city side in metres");
-ABSL_FLAG(double, res_m, 5.0, "write-map: demo-city cell size in metres");
+ABSL_FLAG(double, size_m, 8000.0, "write-map, import: the map's side in metres");
+ABSL_FLAG(double, res_m, 5.0, "write-map, import: the cell size in metres");
 ABSL_FLAG(double, agl_m, 100.0, "risk-layer: height above the terrain of every cell, m");
 ABSL_FLAG(std::string, heading_deg, "0",
           "risk-layer: heading in degrees counter-clockwise from east, or 'max' for the maximum "
           "over all heading bins");
-ABSL_FLAG(int, threads, 1, "risk-layer: worker threads");
+ABSL_FLAG(int, threads, 1, "risk-layer, import: worker threads");
 ABSL_FLAG(int, stride, 1,
           "risk-layer: layer cell side in map cells; each value is M at the centre of its "
           "stride x stride block, and a partial block at the east or north edge is left out");
@@ -77,6 +83,11 @@ cmdline::ProgramHelp Help() {
        "write the built-in demo-city as a map bundle (--out=DIR)",
        "  riskplan-tool write-map --out=DIR [--seed=N] [--size_m=M] [--res_m=R]\n"
        "\n"
+       "DIR appears complete or not at all: the bundle is written beside it, flushed\n"
+       "to disk, then renamed into place, replacing a map bundle (or an empty\n"
+       "directory) at DIR in one step; anything else there is left alone\n"
+       "(docs/map-bundle.md, \"Writing a bundle\").\n"
+       "\n"
        "Example:\n"
        "  riskplan-tool write-map --out=maps/demo-city",
        {"out", "seed", "size_m", "res_m", "params"}},
@@ -86,12 +97,15 @@ cmdline::ProgramHelp Help() {
        "  riskplan-tool risk-layer [--map=DIR] --out=PREFIX [--agl_m=100] [--heading_deg=0|max]\n"
        "                           [--threads=N] [--stride=1]\n"
        "\n"
-       "Writes a PNG heat map (PREFIX.png) and an ESRI ASCII grid (PREFIX.asc), plus its\n"
-       "projection (PREFIX.prj) when the map has a geo-reference.\n"
+       "Writes a PNG heat map (PREFIX.png), an ESRI ASCII grid (PREFIX.asc), plus its\n"
+       "projection (PREFIX.prj) when the map has a geo-reference, and a Cloud-Optimized\n"
+       "GeoTIFF (PREFIX.tif: Float64 M, NODATA NaN where undefined, and the map's local\n"
+       "frame as its CRS when the map has a geo-reference).\n"
        "\n"
        "Example:\n"
        "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2",
        {"map", "out", "agl_m", "heading_deg", "threads", "stride", "params"}},
+      ImportCommandHelp(),
   };
   help.footer = "Exit codes: 0 success; 1 failure, or a flag unknown or malformed; 2 bad input.";
   return help;
@@ -259,7 +273,13 @@ int WriteMap() {
                           *params);
   if (!map.ok()) return Fail(map.status());
   const double generate_s = absl::ToDoubleSeconds(absl::Now() - start);
-  if (absl::Status s = WriteMapBundle(**map, out); !s.ok()) return Fail(s);
+  // A file size limit (ulimit -f) then fails a write with EFBIG, which is
+  // reported and cleaned up, instead of killing the process mid-bundle.
+  std::signal(SIGXFSZ, SIG_IGN);
+  // As import does: a bundle at --out is replaced, anything else refused.
+  if (absl::Status s = WriteMapBundleAtomically(**map, out, ExistingDirectory::kReplace); !s.ok()) {
+    return Fail(s);
+  }
   std::printf("wrote %s (%d x %d cells, generated in %.2f s) to %s\n", (*map)->name().c_str(),
               (*map)->nx(), (*map)->ny(), generate_s, out.c_str());
   return 0;
@@ -323,10 +343,14 @@ int RiskLayerCommand() {
   // costs nothing.
   const std::optional<GeoReference>& geo = (*map)->header().geo;
   std::string wkt;
+  std::optional<geo::GeoFrame> frame;
   if (geo.has_value()) {
     auto text = LocalAzimuthalEquidistantWkt(*geo, (*map)->name(), (*map)->x0(), (*map)->y0());
     if (!text.ok()) return Fail(text.status());
     wkt = *std::move(text);
+    auto f = geo::FrameOfMap((*map)->header());
+    if (!f.ok()) return Fail(f.status());
+    frame = *std::move(f);
   }
   const absl::Time start = absl::Now();
   auto layer = ComputeRiskLayer(**model, options);
@@ -334,6 +358,15 @@ int RiskLayerCommand() {
   const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
   if (absl::Status s = WriteHeatMapPng(*layer, out + ".png"); !s.ok()) return Fail(s);
   if (absl::Status s = WriteAsciiGrid(*layer, out + ".asc"); !s.ok()) return Fail(s);
+  if (absl::Status s = geo::WriteRiskLayerGeoTiff(
+          *layer, frame.has_value() ? &*frame : nullptr,
+          {(*map)->name(), options.height_agl_m,
+           heading == "max" ? "max over heading bins"
+                            : heading + " deg counter-clockwise from east"},
+          out + ".tif");
+      !s.ok()) {
+    return Fail(s);
+  }
   const std::string prj = out + ".prj";
   bool removed_stale_prj = false;
   if (geo.has_value()) {
@@ -369,6 +402,8 @@ int RiskLayerCommand() {
         out.c_str(), out.c_str(),
         removed_stale_prj ? (" (removed a stale " + prj + ")").c_str() : "");
   }
+  std::printf("wrote %s.tif (Cloud-Optimized GeoTIFF, Float64, NODATA NaN%s)\n", out.c_str(),
+              geo.has_value() ? ", CRS the map's local frame" : ", no CRS");
   return 0;
 }
 
@@ -380,5 +415,6 @@ int main(int argc, char** argv) {
   if (command == "evaluate") return riskplan::Evaluate();
   if (command == "write-map") return riskplan::WriteMap();
   if (command == "info") return riskplan::Info();
+  if (command == "import") return riskplan::ImportCommand(argc, argv);
   return riskplan::RiskLayerCommand();  // ParseCommand allows no other
 }

@@ -1,6 +1,6 @@
 // File formats for risk layers (riskplan-tool risk-layer).
-#ifndef RISKPLAN_CORE_TOOLS_LAYER_WRITERS_H_
-#define RISKPLAN_CORE_TOOLS_LAYER_WRITERS_H_
+#ifndef RISKPLAN_TOOLS_LAYER_WRITERS_H_
+#define RISKPLAN_TOOLS_LAYER_WRITERS_H_
 
 #include <string>
 
@@ -53,4 +53,4 @@ absl::Status WriteTextFile(const std::string& text, const std::string& path);
 
 }  // namespace riskplan
 
-#endif  // RISKPLAN_CORE_TOOLS_LAYER_WRITERS_H_
+#endif  // RISKPLAN_TOOLS_LAYER_WRITERS_H_

@@ -1,0 +1,146 @@
+#include "geo/gdal_util.h"
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal.h>
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+
+namespace riskplan::geo {
+
+void EnsureGdalRegistered() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    // No PROJ grid is fetched from the CDN: an import never depends on the
+    // network (the importer also refuses inputs that are not local files).
+    CPLSetConfigOption("PROJ_NETWORK", "OFF");
+    CPLSetConfigOption("GTIFF_POINT_GEO_IGNORE", "FALSE");
+    GDALAllRegister();
+  });
+}
+
+bool IsRemotePath(const std::string& path) {
+  for (const char* prefix :
+       {"/vsicurl", "/vsis3", "/vsigs", "/vsiaz", "/vsiadls", "/vsioss", "/vsiswift", "/vsihdfs",
+        "/vsiwebhdfs", "http://", "https://", "ftp://"}) {
+    if (absl::StartsWith(path, prefix)) return true;
+  }
+  return false;
+}
+
+GdalErrorCapture::GdalErrorCapture() {
+  CPLErrorReset();
+  CPLPushErrorHandlerEx(&GdalErrorCapture::Handler, this);
+}
+
+GdalErrorCapture::~GdalErrorCapture() { CPLPopErrorHandler(); }
+
+void CPL_STDCALL GdalErrorCapture::Handler(CPLErr level, CPLErrorNum /*number*/,
+                                           const char* message) {
+  auto* self = static_cast<GdalErrorCapture*>(CPLGetErrorHandlerUserData());
+  if (self == nullptr) return;
+  if (level == CE_Failure || level == CE_Fatal) {
+    self->errors_.emplace_back(message == nullptr ? "" : message);
+  } else if (level == CE_Warning) {
+    self->warnings_.emplace_back(message == nullptr ? "" : message);
+  }
+}
+
+std::string GdalErrorCapture::Errors(const std::string& fallback) const {
+  if (errors_.empty()) return fallback;
+  return absl::StrJoin(errors_, "; ");
+}
+
+absl::StatusOr<SpatialReferencePtr> SpatialReferenceFrom(const std::string& text) {
+  EnsureGdalRegistered();
+  GdalErrorCapture errors;
+  SpatialReferencePtr srs(new OGRSpatialReference());
+  if (srs->SetFromUserInput(text.c_str()) != OGRERR_NONE) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("'%s' is not a CRS GDAL knows: %s", text, errors.Errors()));
+  }
+  srs->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  return srs;
+}
+
+SpatialReferencePtr GisOrderCopy(const OGRSpatialReference& srs) {
+  SpatialReferencePtr copy(srs.Clone());
+  copy->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  return copy;
+}
+
+SpatialReferencePtr Wgs84Lonlat() {
+  SpatialReferencePtr srs(new OGRSpatialReference());
+  srs->SetWellKnownGeogCS("WGS84");
+  srs->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  return srs;
+}
+
+absl::StatusOr<CoordinateTransformationPtr> TransformationBetween(const OGRSpatialReference& from,
+                                                                  const OGRSpatialReference& to) {
+  GdalErrorCapture errors;
+  CoordinateTransformationPtr ct(OGRCreateCoordinateTransformation(&from, &to));
+  if (ct == nullptr) {
+    return absl::InvalidArgumentError(absl::StrFormat("no transformation from %s to %s: %s",
+                                                      CrsShortName(&from), CrsShortName(&to),
+                                                      errors.Errors()));
+  }
+  return ct;
+}
+
+std::string CrsShortName(const OGRSpatialReference* srs) {
+  if (srs == nullptr) return "none";
+  const char* authority = srs->GetAuthorityName(nullptr);
+  const char* code = srs->GetAuthorityCode(nullptr);
+  if (authority != nullptr && code != nullptr) return absl::StrCat(authority, ":", code);
+  const char* name = srs->GetName();
+  std::string text = name == nullptr ? "unnamed" : name;
+  const char* method = srs->GetAttrValue("PROJECTION");
+  if (method != nullptr) absl::StrAppend(&text, " (", method, ")");
+  return text;
+}
+
+std::string CrsWkt(const OGRSpatialReference& srs) {
+  char* wkt = nullptr;
+  const char* options[] = {"FORMAT=WKT2_2018", "MULTILINE=NO", nullptr};
+  if (srs.exportToWkt(&wkt, options) != OGRERR_NONE || wkt == nullptr) {
+    CPLFree(wkt);
+    return "";
+  }
+  std::string text(wkt);
+  CPLFree(wkt);
+  return text;
+}
+
+bool IsGeographic(const OGRSpatialReference& srs) { return srs.IsGeographic() != 0; }
+
+absl::StatusOr<GDALDatasetUniquePtr> CreateMemRaster(int nx, int ny, int bands, GDALDataType type,
+                                                     double x_min, double y_max, double res,
+                                                     const OGRSpatialReference& srs) {
+  EnsureGdalRegistered();
+  GdalErrorCapture errors;
+  GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
+  if (mem == nullptr) return absl::InternalError("GDAL has no MEM driver");
+  GDALDatasetUniquePtr ds(mem->Create("", nx, ny, bands, type, nullptr));
+  if (ds == nullptr) {
+    return absl::ResourceExhaustedError(absl::StrFormat(
+        "cannot create an in-memory raster of %d x %d cells: %s", nx, ny, errors.Errors()));
+  }
+  double gt[6] = {x_min, res, 0.0, y_max, 0.0, -res};
+  ds->SetGeoTransform(gt);
+  ds->SetSpatialRef(&srs);
+  return ds;
+}
+
+}  // namespace riskplan::geo

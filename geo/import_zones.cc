@@ -1,0 +1,271 @@
+// The no-fly and landing-site steps: polygons burnt into the grid, and the
+// cells where an emergency landing is possible.
+#include <ogr_api.h>
+#include <ogr_geometry.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "geo/grid_rasterize.h"
+#include "geo/grid_regions.h"
+#include "geo/import_steps.h"
+#include "geo/vector_input.h"
+
+namespace riskplan::geo::internal {
+namespace {
+
+// Landing sites named in a note when they are dropped.
+constexpr int kSitesNamed = 5;
+// Every landing site of a map, however many the inputs hold (the manifest
+// stays a few MB).
+constexpr int kMaxLandingSites = 100'000;
+
+bool IsPoint(const OGRGeometry& g) {
+  const OGRwkbGeometryType t = wkbFlatten(g.getGeometryType());
+  return t == wkbPoint || t == wkbMultiPoint;
+}
+
+// The cell of local point (x, y), or false outside the map.
+bool CellOf(const TargetGrid& g, double x, double y, int* i, int* j) {
+  const double fi = std::floor((x - g.frame.x0()) / g.res_m);
+  const double fj = std::floor((y - g.frame.y0()) / g.res_m);
+  if (!(fi >= 0 && fj >= 0 && fi < g.nx && fj < g.ny)) return false;
+  *i = static_cast<int>(fi);
+  *j = static_cast<int>(fj);
+  return true;
+}
+
+std::string Stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
+
+}  // namespace
+
+absl::StatusOr<std::vector<uint8_t>> ImportNoFly(ImportContext& ctx) {
+  const ImportOptions& o = ctx.options;
+  const double buffer = o.nofly_buffer_m;
+  std::vector<std::unique_ptr<OGRGeometry>> zones;
+  for (const std::string& text : o.nofly) {
+    auto spec = ParseVectorSpec(text);
+    if (!spec.ok()) return spec.status();
+    auto in = OpenVectorInput("no-fly", spec->path, spec->layer_name, spec->where);
+    if (!in.ok()) return in.status();
+    // A zone just outside the map reaches into it once buffered.
+    auto features = ReadFeatures(*in, ctx.grid, buffer, "", "");
+    if (!features.ok()) return features.status();
+    auto ct = ToFrame(*in->srs, ctx.grid);
+    if (!ct.ok()) return ct.status();
+    for (const SourceFeature& f : *features) {
+      if (buffer == 0.0 && !IsPolygonal(*f.geometry)) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "%s: feature %d is a %s, which encloses no area; give --nofly_buffer_m to make a "
+            "zone around it",
+            in->Label(), f.fid, OGRGeometryTypeToName(f.geometry->getGeometryType())));
+      }
+      auto g = Carry(*f.geometry, *in->srs, **ct);
+      if (!g.ok()) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));
+      }
+      if (buffer > 0.0) {
+        // GEOS's buffer in the local frame's metres, 8 segments a quarter circle.
+        GdalErrorCapture errors;
+        std::unique_ptr<OGRGeometry> grown((*g)->Buffer(buffer, 8));
+        if (grown == nullptr) {
+          return absl::InvalidArgumentError(absl::StrFormat("%s: feature %d cannot be buffered: %s",
+                                                            in->Label(), f.fid, errors.Errors()));
+        }
+        zones.push_back(std::move(grown));
+      } else {
+        zones.push_back(*std::move(g));
+      }
+    }
+    ctx.out->inputs.push_back(
+        {"no-fly", spec->path, in->driver, CrsShortName(in->srs.get()), CrsWkt(*in->srs),
+         absl::StrFormat("%s; %d features meet the map%s; every cell a zone touches is no-fly",
+                         in->Summary(), features->size(),
+                         buffer > 0.0 ? absl::StrFormat(", buffered by %.9g m", buffer) : "")});
+  }
+  std::vector<const OGRGeometry*> geometries;
+  for (const auto& z : zones) geometries.push_back(z.get());
+  auto mask = BurnMask(ctx.grid, geometries, /*all_touched=*/true);
+  if (!mask.ok()) return mask.status();
+  int64_t n = 0;
+  for (uint8_t v : *mask) n += v;
+  ctx.out->stats.nofly_cells = n;
+  return mask;
+}
+
+absl::StatusOr<std::vector<LandingSite>> ImportLandingSites(
+    ImportContext& ctx, const std::optional<LandCover>& land_cover,
+    const std::vector<uint8_t>& nofly) {
+  const ImportOptions& o = ctx.options;
+  const TargetGrid& grid = ctx.grid;
+  ImportStats& stats = ctx.out->stats;
+  std::vector<LandingSite> sites;
+  std::vector<std::string> dropped;
+  auto offer = [&](LandingSite site) {
+    if (nofly[static_cast<size_t>(site.j) * grid.nx + site.i] != 0) {
+      ++stats.landing_dropped_nofly;
+      if (dropped.size() < kSitesNamed) dropped.push_back(site.name);
+      return;
+    }
+    sites.push_back(std::move(site));
+  };
+
+  // Polygons of every input, labelled together: the cell deepest inside each.
+  std::vector<std::unique_ptr<OGRGeometry>> polygons;
+  std::vector<std::string> polygon_names;
+  for (const std::string& text : o.landing) {
+    auto spec = ParseVectorSpec(text);
+    if (!spec.ok()) return spec.status();
+    auto in = OpenVectorInput("landing sites", spec->path, spec->layer_name, spec->where);
+    if (!in.ok()) return in.status();
+    auto features = ReadFeatures(*in, grid, 0.0, "", o.landing_name_field);
+    if (!features.ok()) return features.status();
+    auto ct = ToFrame(*in->srs, grid);
+    if (!ct.ok()) return ct.status();
+    int points = 0, areas = 0;
+    for (const SourceFeature& f : *features) {
+      const std::string name =
+          f.text.empty() ? absl::StrFormat("%s-%d", Stem(spec->path), f.fid) : f.text;
+      auto g = Carry(*f.geometry, *in->srs, **ct);
+      if (!g.ok()) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));
+      }
+      if (IsPoint(**g)) {
+        std::vector<const OGRPoint*> pts;
+        if (wkbFlatten((*g)->getGeometryType()) == wkbPoint) {
+          pts.push_back((*g)->toPoint());
+        } else {
+          for (const OGRPoint* p : *(*g)->toMultiPoint()) pts.push_back(p);
+        }
+        for (const OGRPoint* p : pts) {
+          int i = 0, j = 0;
+          if (!CellOf(grid, p->getX(), p->getY(), &i, &j)) {
+            ++stats.landing_outside_map;
+            continue;
+          }
+          ++points;
+          offer({name, i, j});
+        }
+      } else if (IsPolygonal(**g)) {
+        ++areas;
+        polygons.push_back(*std::move(g));
+        polygon_names.push_back(name);
+      } else {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "%s: feature %d is a %s; landing sites are points or polygons", in->Label(), f.fid,
+            OGRGeometryTypeToName(f.geometry->getGeometryType())));
+      }
+    }
+    ctx.out->inputs.push_back(
+        {"landing sites", spec->path, in->driver, CrsShortName(in->srs.get()), CrsWkt(*in->srs),
+         absl::StrFormat("%s; %d points and %d polygons meet the map%s", in->Summary(), points,
+                         areas,
+                         o.landing_name_field.empty()
+                             ? ""
+                             : absl::StrFormat("; names from '%s'", o.landing_name_field))});
+  }
+  if (!polygons.empty()) {
+    std::vector<const OGRGeometry*> geometries;
+    std::vector<int32_t> ids;
+    for (size_t k = 0; k < polygons.size(); ++k) {
+      geometries.push_back(polygons[k].get());
+      ids.push_back(static_cast<int32_t>(k + 1));
+    }
+    auto labels = BurnIds(grid, geometries, ids);
+    if (!labels.ok()) return labels.status();
+    // No-fly cells are outside every field: the deepest cell keeps away from them.
+    for (size_t c = 0; c < labels->size(); ++c) {
+      if (nofly[c] != 0) (*labels)[c] = 0;
+    }
+    std::vector<uint8_t> placed(polygons.size(), 0);
+    for (const Region& r :
+         Regions(*labels, static_cast<int32_t>(polygons.size()), grid.nx, grid.ny, {})) {
+      placed[r.label - 1] = 1;
+      offer({polygon_names[r.label - 1], r.deepest_i, r.deepest_j});
+    }
+    for (size_t k = 0; k < polygons.size(); ++k) {
+      if (placed[k]) continue;
+      // Smaller than a cell, wholly in no-fly cells, or outside the map: the
+      // cell of a point on its surface, if the map holds it.
+      OGRGeometryH point = OGR_G_PointOnSurface(OGRGeometry::ToHandle(polygons[k].get()));
+      int i = 0, j = 0;
+      const bool inside =
+          point != nullptr && CellOf(grid, OGR_G_GetX(point, 0), OGR_G_GetY(point, 0), &i, &j);
+      if (point != nullptr) OGR_G_DestroyGeometry(point);
+      if (inside) {
+        offer({polygon_names[k], i, j});
+      } else {
+        ++stats.landing_outside_map;
+      }
+    }
+  }
+  stats.landing_from_inputs = static_cast<int>(sites.size());
+
+  if (o.landing_min_area_m2 > 0.0) {
+    if (!land_cover.has_value()) {
+      return absl::InvalidArgumentError(
+          "layer 'landing sites': open fields (--landing_min_area_m2) are found in the land "
+          "cover; give --landcover");
+    }
+    std::vector<uint8_t> open(static_cast<size_t>(grid.cells()), 0);
+    ClassRules rules(land_cover->table);
+    for (size_t c = 0; c < open.size(); ++c) {
+      const double v = land_cover->classes[c];
+      if (std::isnan(v) || nofly[c] != 0) continue;
+      open[c] = rules.Find(v)->landing ? 1 : 0;
+    }
+    int32_t count = 0;
+    const std::vector<int32_t> labels = LabelComponents(open, grid.nx, grid.ny, &count);
+    std::vector<Region> fields = Regions(labels, count, grid.nx, grid.ny, {});
+    const int64_t min_cells =
+        static_cast<int64_t>(std::ceil(o.landing_min_area_m2 / ctx.cell_area_m2() - 1e-9));
+    std::erase_if(fields, [&](const Region& r) { return r.cells < min_cells; });
+    std::stable_sort(fields.begin(), fields.end(),
+                     [](const Region& a, const Region& b) { return a.cells > b.cells; });
+    const size_t kept = std::min(fields.size(), static_cast<size_t>(o.max_landing_sites));
+    for (size_t k = 0; k < kept; ++k) {
+      sites.push_back(
+          {absl::StrFormat("field-%d", k + 1), fields[k].deepest_i, fields[k].deepest_j});
+    }
+    stats.landing_from_landcover = static_cast<int>(kept);
+    ctx.Note(absl::StrFormat(
+        "landing sites: %d open fields of at least %.9g m^2 in the land cover ('landing' "
+        "classes, no-fly cells excluded), %d kept (the largest first), each at its cell deepest "
+        "inside the field",
+        fields.size(), o.landing_min_area_m2, kept));
+  }
+
+  // One site per cell (the first named).
+  std::set<std::pair<int, int>> seen;
+  std::erase_if(sites, [&](const LandingSite& s) { return !seen.insert({s.i, s.j}).second; });
+  if (sites.size() > static_cast<size_t>(kMaxLandingSites)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "layer 'landing sites': %d sites; a map holds at most %d", sites.size(), kMaxLandingSites));
+  }
+  if (stats.landing_dropped_nofly > 0) {
+    ctx.Note(absl::StrFormat("landing sites: %d inside no-fly cells dropped (%s%s)",
+                             stats.landing_dropped_nofly, absl::StrJoin(dropped, ", "),
+                             stats.landing_dropped_nofly > kSitesNamed ? ", ..." : ""));
+  }
+  if (stats.landing_outside_map > 0) {
+    ctx.Note(
+        absl::StrFormat("landing sites: %d outside the map left out", stats.landing_outside_map));
+  }
+  return sites;
+}
+
+}  // namespace riskplan::geo::internal

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -27,6 +28,7 @@
 #include "core/map/risk_map.h"
 #include "fuzz/fuzz_support.h"
 #include "fuzz/shim_records.h"
+#include "geo/geo_frame.h"
 #include "nlohmann/json.hpp"
 #include "riskplan/v1/planner.pb.h"
 
@@ -346,6 +348,35 @@ void RequestSeeds(const fs::path& out) {
   params.set_min_update_interval_ms(5);
   params.set_display_step_m(5.0);
   Write(dir, "plan-params", Method('1', params));
+
+  // The same requests in WGS84 on "geo-city", the target's geo-referenced
+  // copy of the map (its origin at 49.6 N, 6.1 E).
+  MapHeader header = map.header();
+  header.geo = GeoReference{49.6, 6.1, "azimuthal equidistant on WGS84 at the origin"};
+  absl::StatusOr<geo::GeoFrame> frame = geo::FrameOfMap(header);
+  if (!frame.ok()) Fail(frame.status().ToString());
+  auto to_wgs84 = [&](const v1::Pose& p, v1::GeoPose* out) {
+    const Pose local{p.x(), p.y(), p.z(), p.theta()};
+    absl::StatusOr<std::vector<geo::GeoPose>> g = frame->ToWgs84(std::span<const Pose>(&local, 1));
+    if (!g.ok()) Fail(g.status().ToString());
+    out->set_lat_deg((*g)[0].lat_deg);
+    out->set_lon_deg((*g)[0].lon_deg);
+    out->set_alt_m((*g)[0].alt_m);
+    out->set_heading_deg((*g)[0].heading_deg);
+  };
+  v1::PlanRequest geo_plan;
+  geo_plan.set_map("geo-city");
+  to_wgs84(PoseAt(map, 300, 300, 0.785), geo_plan.mutable_start_wgs84());
+  to_wgs84(PoseAt(map, 700, 700, 0.785), geo_plan.mutable_goal_wgs84());
+  geo_plan.mutable_budget()->set_iterations(200);
+  geo_plan.set_seed(7);
+  Write(dir, "plan-wgs84", Method('1', geo_plan));
+  v1::EvaluateRiskRequest geo_eval;
+  geo_eval.set_map("geo-city");
+  to_wgs84(PoseAt(map, 300, 300, 0.785), geo_eval.mutable_waypoints_wgs84()->add_poses());
+  to_wgs84(PoseAt(map, 700, 650, 0.785), geo_eval.mutable_waypoints_wgs84()->add_poses());
+  geo_eval.set_path_spacing_m(50.0);
+  Write(dir, "eval-wgs84-path", Method('0', geo_eval));
 }
 
 }  // namespace

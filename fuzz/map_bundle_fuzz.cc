@@ -14,7 +14,8 @@
 // file's bytes run to the next separator). The files are written into a
 // scratch directory and the loader reads the bundle from there, exactly as
 // riskplan-server and riskplan-tool do. A name that is not a plain file name
-// is skipped. A bundle that loads must be written back by WriteMapBundle and
+// is skipped. A bundle that loads must be written back by
+// WriteMapBundleAtomically (what riskplan-tool write-map and import use) and
 // load again bit for bit (docs/map-bundle.md).
 #include <cstdint>
 #include <cstring>
@@ -113,7 +114,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (map.status().message().empty()) fuzz::Fail("a refused bundle without a message");
     return 0;
   }
-  if (absl::Status s = WriteMapBundle(**map, out_dir.string()); !s.ok()) {
+  if (absl::Status s = WriteMapBundleAtomically(**map, out_dir.string()); !s.ok()) {
     fuzz::Fail(s.ToString());
   }
   absl::StatusOr<std::shared_ptr<const RiskMap>> again = LoadMapBundle(out_dir.string());

@@ -2,7 +2,9 @@
 // message to the answer: ParseRequest (server/message_codec.h), the
 // validation of an EvaluateRiskRequest or PlanRequest, and then what the
 // service does with a request that passes, on a small demo-city (1 km at
-// 10 m cells) under small limits, so that every limit can be reached: an
+// 10 m cells; "demo-city" without a geo-reference, and the same layers as
+// "geo-city" with one, so that the WGS84 fields of requests and answers are
+// converted too) under small limits, so that every limit can be reached: an
 // evaluation (RunEvaluation, with the two-tier check) or a plan of a few tens
 // of milliseconds with its improvements and final message converted as the
 // stream would send them; every response is serialised.
@@ -24,6 +26,7 @@
 #include "absl/status/status.h"
 #include "core/base/cancellation.h"
 #include "core/map/demo_city.h"
+#include "core/map/risk_map.h"
 #include "core/planners/planner.h"
 #include "fuzz/fuzz_support.h"
 #include "google/protobuf/stubs/logging.h"
@@ -73,7 +76,14 @@ struct Server {
     absl::StatusOr<std::shared_ptr<const RiskMap>> city =
         MakeDemoCity(DemoCityOptions{.size_m = 1000.0, .res_m = 10.0});
     if (!city.ok()) Fail(city.status().ToString());
-    absl::StatusOr<std::unique_ptr<MapRegistry>> registry = MapRegistry::FromMaps({*city});
+    MapHeader header = (*city)->header();
+    header.name = "geo-city";
+    header.geo = GeoReference{49.6, 6.1, "azimuthal equidistant on WGS84 at the origin"};
+    absl::StatusOr<std::shared_ptr<const RiskMap>> geo_city =
+        RiskMap::Create(std::move(header), (*city)->layers());
+    if (!geo_city.ok()) Fail(geo_city.status().ToString());
+    absl::StatusOr<std::unique_ptr<MapRegistry>> registry =
+        MapRegistry::FromMaps({*city, *geo_city});
     if (!registry.ok()) Fail(registry.status().ToString());
     maps = *std::move(registry);
     absl::StatusOr<std::unique_ptr<RiskModelCache>> cache =
@@ -163,7 +173,7 @@ void PlanTrajectory(Server& server, const grpc::ByteBuffer& raw) {
   absl::StatusOr<PlanResult> result = (*planner)->Plan(
       problem, spec->options, cancel, [&](const PlanImprovement& improvement) {
         absl::StatusOr<v1::PlanUpdate> update =
-            ImprovementToProto(improvement, spec->params, spec->display_step_m);
+            ImprovementToProto(improvement, spec->params, spec->display_step_m, spec->frame.get());
         if (!update.ok()) Fail(update.status().ToString());
         CheckTrajectory(update->trajectory());
         CheckSerialises(*update);
@@ -174,7 +184,7 @@ void PlanTrajectory(Server& server, const grpc::ByteBuffer& raw) {
   }
   absl::StatusOr<v1::PlanUpdate> final_update =
       FinalUpdateToProto(*result, EndReasonToProto(result->reason, false), spec->params,
-                         spec->display_step_m, spec->options.record_tree);
+                         spec->display_step_m, spec->options.record_tree, spec->frame.get());
   if (!final_update.ok()) Fail(final_update.status().ToString());
   if (final_update->has_trajectory()) CheckTrajectory(final_update->trajectory());
   CheckSerialises(*final_update);

@@ -49,12 +49,26 @@ step() {
   fi
 }
 
+# Left out of the ASan pass (gtest's negative filter): the two performance
+# guards of the optimised build, which the normal suite runs. Sanitized at
+# -O1 on a loaded machine the same work took 2.5 to 3 times their bounds,
+# which says nothing about the code (docs/reliability.md):
+#   DemoCityTest.GenerationIsFast             demo-city within 20 s (50.8 s)
+#   RiskMapTest.GlideOnAFullSizeGridIsFast    a 1600 x 1600 glide layer
+#                                             within 10 s (27.8 s)
+ASAN_SKIPPED_TESTS=(
+  DemoCityTest.GenerationIsFast
+  RiskMapTest.GlideOnAFullSizeGridIsFast
+)
+
 asan_pass() {
   configure build-asan -DRISKPLAN_SANITIZE=address,undefined -DRISKPLAN_FUZZ=ON
   step "ASan + UBSan build (build-asan)" cmake --build build-asan -j "$JOBS" || return 0
   # Each CTest test is one whole suite in the sanitized builds (tests/CMakeLists.txt).
-  step "ASan + UBSan suite" ctest --test-dir build-asan --output-on-failure -j "$JOBS" \
-    --timeout 1800 --no-tests=error -LE fuzz || true
+  local skipped
+  skipped=$(IFS=:; echo "${ASAN_SKIPPED_TESTS[*]}")
+  step "ASan + UBSan suite" env GTEST_FILTER="-$skipped" ctest --test-dir build-asan \
+    --output-on-failure -j "$JOBS" --timeout 1800 --no-tests=error -LE fuzz || true
   step "fuzz smoke" ctest --test-dir build-asan --output-on-failure -j "$JOBS" --timeout 300 \
     --no-tests=error -L fuzz || true
 }

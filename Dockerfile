@@ -24,5 +24,5 @@ RUN apt-get update \
  && useradd --system --uid 10001 riskplan
 COPY --from=build /src/build/bin/ /usr/local/bin/
 USER riskplan
-EXPOSE 50051 9464
+EXPOSE 50051 8081 9464
 ENTRYPOINT ["/usr/local/bin/riskplan-server", "--listen=0.0.0.0:50051"]

@@ -1,5 +1,6 @@
 #include "accel/net.h"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <netdb.h>
 #include <netinet/in.h>
@@ -8,10 +9,14 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <openssl/err.h>
+#include <openssl/ssl.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <memory>
+#include <utility>
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -92,9 +97,15 @@ std::string AddressText(const sockaddr_storage& addr) {
 Socket& Socket::operator=(Socket&& other) noexcept {
   if (this != &other) {
     Close();
+    ssl_ = std::exchange(other.ssl_, nullptr);
     fd_ = other.Release();
   }
   return *this;
+}
+
+void Socket::AttachTls(SSL* ssl) {
+  SSL_free(ssl_);
+  ssl_ = ssl;
 }
 
 int Socket::Release() {
@@ -104,12 +115,25 @@ int Socket::Release() {
 }
 
 void Socket::Close() {
+  SSL_free(ssl_);
+  ssl_ = nullptr;
   if (fd_ >= 0) close(fd_);
   fd_ = -1;
 }
 
 void Socket::Shutdown() const {
   if (fd_ >= 0) shutdown(fd_, SHUT_RDWR);
+}
+
+bool IsLoopbackHost(const std::string& host) {
+  std::string h = host;
+  if (h.size() >= 2 && h.front() == '[' && h.back() == ']') h = h.substr(1, h.size() - 2);
+  if (h == "localhost") return true;
+  in_addr v4{};
+  if (inet_pton(AF_INET, h.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  if (inet_pton(AF_INET6, h.c_str(), &v6) == 1) return IN6_IS_ADDR_LOOPBACK(&v6);
+  return false;
 }
 
 absl::Status SplitHostPort(absl::string_view host_port, std::string* host, int* port) {
@@ -207,7 +231,82 @@ absl::StatusOr<Socket> Accept(const Socket& listener, absl::Time deadline) {
   }
 }
 
+absl::Status WaitReady(const Socket& socket, bool write, absl::Time deadline,
+                       absl::string_view what) {
+  return WaitFor(socket.fd(), write ? POLLOUT : POLLIN, deadline, what);
+}
+
+namespace {
+
+// OpenSSL's reason for a failed read or write, the queue emptied.
+absl::Status TlsError(SSL* ssl, int rc, absl::string_view what) {
+  const int e = SSL_get_error(ssl, rc);
+  if (e == SSL_ERROR_ZERO_RETURN) return absl::UnavailableError("connection closed by peer");
+  std::string reason;
+  while (unsigned long code = ERR_get_error()) {
+    char buffer[256];
+    ERR_error_string_n(code, buffer, sizeof(buffer));
+    if (!reason.empty()) reason += "; ";
+    reason += buffer;
+  }
+  if (e == SSL_ERROR_SYSCALL && reason.empty()) {
+    return errno != 0 ? Errno(what) : absl::UnavailableError("connection closed by peer");
+  }
+  return absl::UnavailableError(absl::StrCat(what, " (TLS): ", reason));
+}
+
+absl::Status TlsSendAll(const Socket& socket, absl::string_view data, absl::Time deadline) {
+  size_t sent = 0;
+  while (sent < data.size()) {
+    ERR_clear_error();
+    errno = 0;
+    size_t n = 0;
+    const int rc = SSL_write_ex(socket.ssl(), data.data() + sent, data.size() - sent, &n);
+    if (rc == 1) {
+      sent += n;
+      continue;
+    }
+    const int e = SSL_get_error(socket.ssl(), rc);
+    if (e == SSL_ERROR_WANT_READ || e == SSL_ERROR_WANT_WRITE) {
+      if (absl::Status w = WaitReady(socket, e == SSL_ERROR_WANT_WRITE, deadline, "send"); !w.ok()) {
+        return w;
+      }
+      continue;
+    }
+    return TlsError(socket.ssl(), rc, "send");
+  }
+  return absl::OkStatus();
+}
+
+absl::Status TlsRecvAll(const Socket& socket, void* data, size_t size, absl::Time deadline) {
+  auto* p = static_cast<char*>(data);
+  size_t got = 0;
+  while (got < size) {
+    ERR_clear_error();
+    errno = 0;
+    size_t n = 0;
+    const int rc = SSL_read_ex(socket.ssl(), p + got, size - got, &n);
+    if (rc == 1) {
+      got += n;
+      continue;
+    }
+    const int e = SSL_get_error(socket.ssl(), rc);
+    if (e == SSL_ERROR_WANT_READ || e == SSL_ERROR_WANT_WRITE) {
+      if (absl::Status w = WaitReady(socket, e == SSL_ERROR_WANT_WRITE, deadline, "receive");
+          !w.ok()) {
+        return w;
+      }
+      continue;
+    }
+    return TlsError(socket.ssl(), rc, "receive");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::Status SendAll(const Socket& socket, absl::string_view data, absl::Time deadline) {
+  if (socket.ssl() != nullptr) return TlsSendAll(socket, data, deadline);
   size_t sent = 0;
   while (sent < data.size()) {
     const ssize_t n = send(socket.fd(), data.data() + sent, data.size() - sent, MSG_NOSIGNAL);
@@ -225,6 +324,7 @@ absl::Status SendAll(const Socket& socket, absl::string_view data, absl::Time de
 }
 
 absl::Status RecvAll(const Socket& socket, void* data, size_t size, absl::Time deadline) {
+  if (socket.ssl() != nullptr) return TlsRecvAll(socket, data, size, deadline);
   auto* p = static_cast<char*>(data);
   size_t got = 0;
   while (got < size) {

@@ -15,20 +15,27 @@
 #include "absl/time/time.h"
 #include "accel/shim_protocol.h"
 
+typedef struct ssl_st SSL;
+
 namespace riskplan::accel {
 
-// Owns a file descriptor; closes it on destruction. Move-only.
+// Owns a file descriptor, and the TLS session on it once one is attached
+// (accel/tls_context.h); closes both on destruction. Move-only.
 class Socket {
  public:
   Socket() = default;
   explicit Socket(int fd) : fd_(fd) {}
-  Socket(Socket&& other) noexcept : fd_(other.Release()) {}
+  Socket(Socket&& other) noexcept : fd_(other.Release()), ssl_(other.ssl_) { other.ssl_ = nullptr; }
   Socket& operator=(Socket&& other) noexcept;
   Socket(const Socket&) = delete;
   Socket& operator=(const Socket&) = delete;
   ~Socket() { Close(); }
 
   int fd() const { return fd_; }
+  // The TLS session, or null: plaintext.
+  SSL* ssl() const { return ssl_; }
+  // Takes `ssl`: from now on SendAll and RecvAll go through it.
+  void AttachTls(SSL* ssl);
   bool valid() const { return fd_ >= 0; }
   int Release();
   void Close();
@@ -38,10 +45,15 @@ class Socket {
 
  private:
   int fd_ = -1;
+  SSL* ssl_ = nullptr;
 };
 
 // Splits "host:port" ("[v6]:port" for IPv6). InvalidArgument when malformed.
 absl::Status SplitHostPort(absl::string_view host_port, std::string* host, int* port);
+
+// True for 127.0.0.0/8, ::1 ("[::1]" too) and "localhost": the addresses
+// where plaintext is allowed without being asked for.
+bool IsLoopbackHost(const std::string& host);
 
 // Connects to "host:port" (resolved with getaddrinfo, which does not honour
 // the deadline).
@@ -54,6 +66,11 @@ absl::StatusOr<Socket> ListenTcp(absl::string_view host_port, std::string* bound
 // Waits for a connection until `deadline`.
 absl::StatusOr<Socket> Accept(const Socket& listener, absl::Time deadline);
 
+// Waits until `socket` is writable (`write`) or readable, or `deadline`.
+absl::Status WaitReady(const Socket& socket, bool write, absl::Time deadline,
+                       absl::string_view what);
+
+// Both go through the TLS session when the socket has one.
 absl::Status SendAll(const Socket& socket, absl::string_view data, absl::Time deadline);
 absl::Status RecvAll(const Socket& socket, void* data, size_t size, absl::Time deadline);
 

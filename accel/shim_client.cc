@@ -36,8 +36,19 @@ absl::Status FromShimError(const ErrorMessage& e, absl::string_view endpoint) {
 
 absl::StatusOr<std::unique_ptr<ShimClient>> ShimClient::Connect(const std::string& endpoint,
                                                                 const ShimClientOptions& options) {
-  absl::StatusOr<Socket> socket = ConnectTcp(endpoint, absl::Now() + options.connect_timeout);
+  const absl::Time connect_deadline = absl::Now() + options.connect_timeout;
+  absl::StatusOr<Socket> socket = ConnectTcp(endpoint, connect_deadline);
   if (!socket.ok()) return socket.status();
+  if (options.tls != nullptr) {
+    std::string name = options.tls_server_name;
+    if (name.empty()) {
+      int port = 0;
+      if (absl::Status s = SplitHostPort(endpoint, &name, &port); !s.ok()) return s;
+    }
+    if (absl::Status s = options.tls->Connect(&*socket, name, connect_deadline); !s.ok()) {
+      return absl::Status(s.code(), absl::StrCat("shim ", endpoint, ": ", s.message()));
+    }
+  }
   return Handshake(endpoint, *std::move(socket), options);
 }
 

@@ -28,6 +28,7 @@
 #include "absl/time/time.h"
 #include "accel/net.h"
 #include "accel/shim_protocol.h"
+#include "accel/tls_context.h"
 
 namespace riskplan::accel {
 
@@ -44,6 +45,11 @@ struct ShimClientOptions {
   // Upload chunk size (capped by the shim's max_payload_bytes).
   uint32_t upload_chunk_bytes = 4u << 20;
   std::string client_name = "riskplan";
+  // TLS to the shim (accel/tls_context.h); null: plaintext. The shim's
+  // certificate must be for `tls_server_name`, or for the endpoint's host
+  // when that is empty. The handshake has connect_timeout.
+  std::shared_ptr<TlsContext> tls;
+  std::string tls_server_name;
 };
 
 class ShimClient {

@@ -9,6 +9,12 @@
 // 127.0.0.1:0; pass --shim=HOST:PORT to measure an external one instead.
 // Latency is the wall time of one batch (Evaluate call); the machine is
 // shared, so compare side by side in one run and quote medians.
+//
+// With --tls_dir=DIR (a PKI made by tests/integration/test_pki.sh, with
+// shim.{pem,key} for 127.0.0.1 and client.{pem,key}, both of CA a:
+// scripts/shim-tls-bench.sh makes one) the model backend's batches are also
+// run over mutual TLS (tls:1), and BM_ShimConnect measures a connection with
+// its HELLO exchange, plaintext against TLS (the handshake's cost).
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +26,8 @@
 #include "accel/shim/component_model.h"
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/shim_server.h"
+#include "accel/shim_client.h"
+#include "accel/tls_context.h"
 #include "bench/demo_city_configs.h"
 #include "benchmark/benchmark.h"
 #include "core/map/demo_city.h"
@@ -28,6 +36,23 @@ namespace riskplan {
 namespace {
 
 std::string g_external_shim;
+std::string g_tls_dir;
+
+// The two ends' TLS from --tls_dir (null without it).
+std::shared_ptr<accel::TlsContext> ShimTls(bool listener) {
+  if (g_tls_dir.empty()) return nullptr;
+  const std::string d = g_tls_dir + "/";
+  absl::StatusOr<std::shared_ptr<accel::TlsContext>> tls =
+      listener ? accel::TlsContext::ForListener(
+                     {.cert = d + "shim.pem", .key = d + "shim.key", .ca = d + "ca-a.pem"})
+               : accel::TlsContext::ForClient(
+                     {.cert = d + "client.pem", .key = d + "client.key", .ca = d + "ca-a.pem"});
+  if (!tls.ok()) {
+    std::fprintf(stderr, "--tls_dir: %s\n", std::string(tls.status().message()).c_str());
+    std::exit(1);
+  }
+  return *tls;
+}
 
 const std::shared_ptr<const RiskModel>& Model() {
   static const std::shared_ptr<const RiskModel> model = [] {
@@ -48,9 +73,9 @@ struct Setup {
   std::string endpoint;
 };
 
-Setup& SetupFor(bool mmio) {
-  static Setup setups[2];
-  Setup& s = setups[mmio ? 1 : 0];
+Setup& SetupFor(bool mmio, bool tls = false) {
+  static Setup setups[4];
+  Setup& s = setups[(mmio ? 1 : 0) + (tls ? 2 : 0)];
   if (s.engine != nullptr) return s;
   s.endpoint = g_external_shim;
   if (s.endpoint.empty()) {
@@ -62,7 +87,9 @@ Setup& SetupFor(bool mmio) {
     } else {
       device = std::make_unique<accel::ModelDevice>(accel::NumberFormat::Board());
     }
-    s.server = std::make_unique<accel::ShimServer>(std::move(device), accel::ShimServerOptions{});
+    accel::ShimServerOptions shim_options;
+    if (tls) shim_options.tls = ShimTls(/*listener=*/true);
+    s.server = std::make_unique<accel::ShimServer>(std::move(device), shim_options);
     s.endpoint = *s.server->Start("127.0.0.1:0");
   }
   accel::RiskEngineOptions options;
@@ -71,6 +98,7 @@ Setup& SetupFor(bool mmio) {
   options.max_chunk_configs = 65536;
   options.min_chunk_configs = 65536;  // one chunk per batch: one EVAL
   options.fpga_shims = {s.endpoint};
+  if (tls) options.fpga.client.tls = ShimTls(/*listener=*/false);
   s.engine = *accel::RiskEngine::Create(options);
   while (s.engine->Stats().fpga[0].state != accel::WorkerState::kUp) {
     absl::SleepFor(absl::Milliseconds(5));
@@ -87,7 +115,12 @@ void BM_ShimBatch(benchmark::State& state) {
   const size_t batch = static_cast<size_t>(state.range(0));
   const bool along = state.range(1) == 1;
   const bool mmio = state.range(2) == 1;
-  Setup& s = SetupFor(mmio);
+  const bool tls = state.range(3) == 1;
+  if (tls && g_tls_dir.empty()) {
+    state.SkipWithError("tls:1 needs --tls_dir");
+    return;
+  }
+  Setup& s = SetupFor(mmio, tls);
   const std::vector<Pose> configs = Configurations(along, 65536);
   std::vector<ConfigurationRisk> out(batch);
   const accel::RiskEngineStats before = s.engine->Stats();
@@ -115,11 +148,34 @@ void BM_ShimBatch(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ShimBatch)
-    ->ArgsProduct({{16, 256, 4096, 65536}, {1, 0}, {0}})
-    ->ArgsProduct({{256, 4096}, {1, 0}, {1}})
-    ->ArgNames({"batch", "along", "mmio"})
+    ->ArgsProduct({{16, 256, 4096, 65536}, {1, 0}, {0}, {0, 1}})
+    ->ArgsProduct({{256, 4096}, {1, 0}, {1}, {0}})
+    ->ArgNames({"batch", "along", "mmio", "tls"})
     ->UseRealTime()
     ->Unit(benchmark::kMicrosecond);
+
+// A connection to the model shim and its HELLO exchange: TCP alone (tls:0)
+// or with the mutual TLS handshake (tls:1).
+void BM_ShimConnect(benchmark::State& state) {
+  const bool tls = state.range(0) == 1;
+  if (tls && g_tls_dir.empty()) {
+    state.SkipWithError("tls:1 needs --tls_dir");
+    return;
+  }
+  Setup& s = SetupFor(/*mmio=*/false, tls);
+  accel::ShimClientOptions options;
+  if (tls) options.tls = ShimTls(/*listener=*/false);
+  for (auto _ : state) {
+    absl::StatusOr<std::unique_ptr<accel::ShimClient>> client =
+        accel::ShimClient::Connect(s.endpoint, options);
+    if (!client.ok()) {
+      state.SkipWithError("connect failed");
+      return;
+    }
+  }
+}
+BENCHMARK(BM_ShimConnect)->ArgsProduct({{0, 1}})->ArgNames({"tls"})->UseRealTime()->Unit(
+    benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace riskplan
@@ -132,6 +188,8 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (std::strncmp(argv[i], "--shim=", 7) == 0) {
       riskplan::g_external_shim = argv[i] + 7;
+    } else if (std::strncmp(argv[i], "--tls_dir=", 10) == 0) {
+      riskplan::g_tls_dir = argv[i] + 10;
     } else {
       argv[kept++] = argv[i];
     }
@@ -141,7 +199,9 @@ int main(int argc, char** argv) {
     benchmark::PrintDefaultHelp();
     std::fprintf(stdout,
                  "          [--shim=HOST:PORT] (a running riskplan-fpga-shim to measure instead "
-                 "of one in this process)\n");
+                 "of one in this process)\n"
+                 "          [--tls_dir=DIR] (test_pki.sh certificates: also measure over mutual "
+                 "TLS)\n");
   });
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

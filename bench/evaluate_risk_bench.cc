@@ -38,9 +38,8 @@ const RiskModel& Model() {
 
 // scripts/server-bench.sh's WAYPOINTS.
 const std::vector<Pose>& Waypoints() {
-  static const std::vector<Pose> w = {{1200, 1500, 250, 0.785},
-                                      {4000, 4000, 250, 0.785},
-                                      {6800, 6500, 250, 0.785}};
+  static const std::vector<Pose> w = {
+      {1200, 1500, 250, 0.785}, {4000, 4000, 250, 0.785}, {6800, 6500, 250, 0.785}};
   return w;
 }
 
@@ -53,7 +52,8 @@ const std::vector<TrajectoryPiece>& Pieces() {
 const std::vector<Pose>& Midpoints() {
   static const std::vector<Pose> m = [] {
     std::vector<Pose> out;
-    for (const TrajectoryPiece& p : Pieces()) AppendMidpoints(p, Model().params().sample_step_m, &out);
+    for (const TrajectoryPiece& p : Pieces())
+      AppendMidpoints(p, Model().params().sample_step_m, &out);
     return out;
   }();
   return m;
@@ -81,8 +81,8 @@ void CheckSame() {
     std::fprintf(stderr, "the kernel path's evaluation differs from the core path's\n");
     std::abort();
   }
-  std::fprintf(stderr, "%zu samples, risk %.17g, admissible %d\n", core->samples.size(),
-               core->risk, core->admissible);
+  std::fprintf(stderr, "%zu samples, risk %.17g, admissible %d\n", core->samples.size(), core->risk,
+               core->admissible);
 }
 
 void BM_EvaluateRisk_Core(benchmark::State& state) {

@@ -1,13 +1,72 @@
 #include "client/client.h"
 
 #include <cassert>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
 #include <iterator>
+#include <sstream>
+#include "absl/strings/string_view.h"
 #include <utility>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "grpcpp/support/client_interceptor.h"
 
 namespace riskplan::client {
 
-std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
-                                           const grpc::ChannelArguments& extra) {
+namespace {
+
+// Adds the bearer token to every call's metadata. An interceptor rather than
+// call credentials: gRPC sends call credentials over TLS only, and a token
+// must also reach a plaintext loopback port.
+class TokenInterceptor final : public grpc::experimental::Interceptor {
+ public:
+  explicit TokenInterceptor(const std::string* header) : header_(header) {}
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
+      methods->GetSendInitialMetadata()->emplace("authorization", *header_);
+    }
+    methods->Proceed();
+  }
+
+ private:
+  const std::string* const header_;  // the factory's, which the channel keeps
+};
+
+class TokenInterceptorFactory final
+    : public grpc::experimental::ClientInterceptorFactoryInterface {
+ public:
+  explicit TokenInterceptorFactory(std::string token) : header_("Bearer " + token) {}
+  grpc::experimental::Interceptor* CreateClientInterceptor(
+      grpc::experimental::ClientRpcInfo* /*info*/) override {
+    return new TokenInterceptor(&header_);
+  }
+
+ private:
+  const std::string header_;
+};
+
+absl::StatusOr<std::string> ReadFile(const char* flag, const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in) {
+    return absl::NotFoundError(
+        absl::StrFormat("--%s=%s: cannot read it: %s", flag, path, std::strerror(errno)));
+  }
+  return text.str();
+}
+
+}  // namespace
+
+absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
+                                                           const ConnectionOptions& options,
+                                                           const grpc::ChannelArguments& extra) {
   grpc::ChannelArguments args = extra;
   // gRPC's default limit is 4 MiB, which a final PlanUpdate with its tree or
   // an EvaluateRisk response with every sample can exceed; the server sends
@@ -16,8 +75,41 @@ std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
   // Spreads calls over every address a name resolves to (e.g. the pods of a
   // headless Kubernetes Service); the same as pick_first for one address.
   args.SetLoadBalancingPolicyName("round_robin");
-  // Plaintext, as the server listens: it has no TLS of its own.
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (options.tls()) {
+    if (options.tls_cert.empty() != options.tls_key.empty()) {
+      return absl::InvalidArgumentError("--tls_cert and --tls_key go together");
+    }
+    grpc::SslCredentialsOptions ssl;
+    if (!options.tls_ca.empty()) {
+      absl::StatusOr<std::string> ca = ReadFile("tls_ca", options.tls_ca);
+      if (!ca.ok()) return ca.status();
+      ssl.pem_root_certs = *std::move(ca);
+    }
+    if (!options.tls_cert.empty()) {
+      absl::StatusOr<std::string> cert = ReadFile("tls_cert", options.tls_cert);
+      if (!cert.ok()) return cert.status();
+      absl::StatusOr<std::string> key = ReadFile("tls_key", options.tls_key);
+      if (!key.ok()) return key.status();
+      ssl.pem_cert_chain = *std::move(cert);
+      ssl.pem_private_key = *std::move(key);
+    }
+    if (!options.tls_server_name.empty()) args.SetSslTargetNameOverride(options.tls_server_name);
+    credentials = grpc::SslCredentials(ssl);
+  }
+  std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
+  if (!options.token_file.empty()) {
+    absl::StatusOr<std::string> token = ReadFile("token_file", options.token_file);
+    if (!token.ok()) return token.status();
+    const absl::string_view trimmed = absl::StripAsciiWhitespace(*token);
+    if (trimmed.empty() || trimmed.find_first_of(" \t\r\n") != absl::string_view::npos) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "--token_file=%s: must hold one token (no spaces)", options.token_file));
+    }
+    interceptors.push_back(std::make_unique<TokenInterceptorFactory>(std::string(trimmed)));
+  }
+  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args,
+                                                                 std::move(interceptors));
 }
 
 void SetTimeout(grpc::ClientContext* context, absl::Duration timeout) {
@@ -28,7 +120,9 @@ void SetTimeout(grpc::ClientContext* context, absl::Duration timeout) {
   context->set_deadline(absl::ToChronoTime(absl::Now() + timeout));
 }
 
-RiskplanClient::RiskplanClient(const std::string& address) : RiskplanClient(MakeChannel(address)) {}
+// Plaintext without a token reads no file, so MakeChannel cannot fail.
+RiskplanClient::RiskplanClient(const std::string& address)
+    : RiskplanClient(*MakeChannel(address)) {}
 
 RiskplanClient::RiskplanClient(std::shared_ptr<grpc::Channel> channel)
     : channel_(std::move(channel)),
@@ -104,6 +198,60 @@ grpc::Status RiskplanClient::CheckHealth(
   grpc::Status result = health_->Check(&context, request, &response);
   if (result.ok()) *status = response.status();
   return result;
+}
+
+std::string ExplainStatus(const grpc::Status& status, const ConnectionOptions& options) {
+  const std::string& m = status.error_message();
+  const auto has = [&m](absl::string_view text) { return absl::StrContains(m, text); };
+  std::string hint;
+  switch (status.error_code()) {
+    case grpc::StatusCode::UNAUTHENTICATED:
+      hint = options.token_file.empty()
+                 ? "the server requires a bearer token: give --token_file"
+                 : "the server refused the token of --token_file (unknown to it, or revoked)";
+      break;
+    case grpc::StatusCode::PERMISSION_DENIED:
+      hint = "the server knows the token, but its role may not call this method "
+             "(docs/security.md, \"Roles\")";
+      break;
+    case grpc::StatusCode::UNAVAILABLE:
+      // gRPC passes on OpenSSL's reason when this side refused; when the
+      // server refused, it sends no alert and the client sees only a closed
+      // connection.
+      if (has("CERTIFICATE_VERIFY_FAILED") || has("certificate verify failed")) {
+        hint = "this client refused the server's certificate: it is not signed by --tls_ca (or "
+               "by the system's roots without --tls_ca), or it has expired";
+      } else if (has("Peer name") || has("peer name") || has("not in peer certificate") ||
+                 has("hostname")) {
+        hint = "this client refused the server's certificate: it is not for the name asked "
+               "(the address's host, or --tls_server_name)";
+      } else if (has("WRONG_VERSION_NUMBER") || has("wrong version number") ||
+                 (options.tls() && has("Ssl handshake failed") && has("SSL_ERROR_SSL"))) {
+        hint = "the TLS handshake failed on this side: is the server speaking plaintext (no "
+               "--tls_cert there)?";
+      } else if (options.tls() && (has("Handshake") || has("handshake") ||
+                                   has("Socket closed") || has("Connection reset") ||
+                                   has("failed to connect") || has("Failed to connect") ||
+                                   has("End of TCP stream"))) {
+        hint = options.tls_cert.empty()
+                   ? "the connection closed during the TLS handshake: the server may require a "
+                     "client certificate (mutual TLS: give --tls_cert and --tls_key), or not "
+                     "speak TLS; the server's log (event tls_handshake_failed) says why"
+                   : "the connection closed during the TLS handshake: the server refused this "
+                     "client's certificate (signed by a CA it does not trust, revoked, or "
+                     "expired), or does not speak TLS; the server's log (event "
+                     "tls_handshake_failed) says why";
+      } else if (!options.tls() && (has("Socket closed") || has("Connection reset") ||
+                                    has("failed to connect") || has("Failed to connect") ||
+                                    has("End of TCP stream"))) {
+        hint = "the connection closed at once: if the server speaks TLS, give --tls_ca (and "
+               "--tls_cert/--tls_key for mutual TLS)";
+      }
+      break;
+    default:
+      break;
+  }
+  return hint.empty() ? m : absl::StrCat(m, " (", hint, ")");
 }
 
 std::string StatusCodeName(grpc::StatusCode code) {

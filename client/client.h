@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "absl/status/statusor.h"
 #include "absl/time/time.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpcpp/grpcpp.h"
@@ -24,6 +25,47 @@ inline constexpr int kMaxReceiveBytes = 64 << 20;
 // Called for every PlanUpdate in order. Return false to cancel the call (the
 // plan then ends with status CANCELLED).
 using PlanUpdateCallback = std::function<bool(const v1::PlanUpdate&)>;
+
+// How a client reaches the server (the `riskplan` flags of the same names,
+// and any other program built on this library, e.g. a gateway). Every field
+// empty: plaintext without a token.
+struct ConnectionOptions {
+  // TLS: the CA bundle (PEM) that must have signed the server's certificate;
+  // empty with TLS on: the system's roots.
+  std::string tls_ca;
+  // Mutual TLS: this client's certificate chain and key (PEM), both or none.
+  std::string tls_cert;
+  std::string tls_key;
+  // The name the server's certificate must carry, when it is not the host of
+  // the address (an IP address, a port-forward, a load balancer).
+  std::string tls_server_name;
+  // A file holding one bearer token (surrounding whitespace ignored), sent
+  // as `authorization: Bearer TOKEN` with every call, over TLS or plaintext.
+  std::string token_file;
+
+  // TLS is on when any of the TLS fields is set.
+  bool tls() const {
+    return !tls_ca.empty() || !tls_cert.empty() || !tls_key.empty() || !tls_server_name.empty();
+  }
+};
+
+// The one place a channel to riskplan-server is made (the CLI, the load
+// generator, the tests and the web gateway all come here): large messages,
+// round-robin over every address the target resolves to, the credentials
+// and token of `options`, and `extra` channel arguments on top. Errors name
+// the flag and file that could not be read (nothing connects yet: a server
+// that is down or refuses the handshake shows up as UNAVAILABLE on the first
+// call; ExplainStatus says why).
+absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(
+    const std::string& address, const ConnectionOptions& options = {},
+    const grpc::ChannelArguments& extra = {});
+
+// `status`'s message, followed for a failure to connect or a refusal by what
+// it most likely means with these options (which side refused, and why, as
+// far as gRPC tells: a server that requires TLS or a client certificate, a
+// certificate not signed by --tls_ca or not for the name asked, a missing or
+// unknown token, a role too low).
+std::string ExplainStatus(const grpc::Status& status, const ConnectionOptions& options);
 
 class RiskplanClient {
  public:
@@ -70,12 +112,6 @@ class RiskplanClient {
 // Sets `context`'s deadline to now + `timeout` (nothing for an infinite one).
 // REQUIRES: context != nullptr.
 void SetTimeout(grpc::ClientContext* context, absl::Duration timeout);
-
-// The channel the CLI and the load generator use: plaintext, large messages,
-// round-robin over every address the target resolves to, with `extra`
-// channel arguments applied on top.
-std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
-                                           const grpc::ChannelArguments& extra = {});
 
 // "OK", "CANCELLED", ... "UNAUTHENTICATED": the canonical name of a gRPC
 // status code ("UNKNOWN" for a value outside the canonical set).

@@ -39,9 +39,12 @@ absl::Status InFlag(const char* flag, const absl::Status& status) {
 
 // The code by name, as docs/api.md lists the codes with their meaning and
 // whether a retry can help.
-int RpcError(const char* method, const grpc::Status& status) {
+// A failure to connect or a refusal comes with what it most likely means
+// (ExplainStatus: which side refused the handshake, a token, a role).
+int RpcError(const CliOptions& o, const char* method, const grpc::Status& status) {
   std::fprintf(stderr, "riskplan: %s failed: %s: %s\n", method,
-               StatusCodeName(status.error_code()).c_str(), status.error_message().c_str());
+               StatusCodeName(status.error_code()).c_str(),
+               ExplainStatus(status, o.connection).c_str());
   return 1;
 }
 
@@ -299,7 +302,7 @@ absl::StatusOr<std::pair<v1::Pose, v1::Pose>> LocalEndpoints(RiskplanClient& cli
 // Both are asked for at the same size, so they come on the same grid.
 int FetchPictureLayers(const CliOptions& o, RiskplanClient& client, PictureInput* picture) {
   v1::ListMapsResponse maps;
-  if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError("ListMaps", s);
+  if (grpc::Status s = client.ListMaps(&maps); !s.ok()) return RpcError(o, "ListMaps", s);
   for (const v1::MapInfo& m : maps.maps()) {
     if (m.name() == o.map) picture->map = m;
   }
@@ -308,11 +311,11 @@ int FetchPictureLayers(const CliOptions& o, RiskplanClient& client, PictureInput
   layer.set_max_side_cells(o.picture_size);
   layer.set_layer(v1::POPULATION_DENSITY);
   if (grpc::Status s = client.GetMapLayer(layer, &picture->density); !s.ok()) {
-    return RpcError("GetMapLayer", s);
+    return RpcError(o, "GetMapLayer", s);
   }
   layer.set_layer(v1::NO_FLY);
   if (grpc::Status s = client.GetMapLayer(layer, &picture->nofly); !s.ok()) {
-    return RpcError("GetMapLayer", s);
+    return RpcError(o, "GetMapLayer", s);
   }
   return 0;
 }
@@ -367,7 +370,7 @@ int WritePlanPicture(const CliOptions& o, RiskplanClient& client, const v1::Plan
 int KeepWhatWasReceived(const CliOptions& o, RiskplanClient& client, const v1::PlanRequest& request,
                         const grpc::Status& status, const ExportFiles& exports,
                         PictureInput& picture) {
-  RpcError("PlanTrajectory", status);
+  RpcError(o, "PlanTrajectory", status);
   const std::vector<v1::Trajectory>& improvements = picture.improvements;
   if (improvements.empty()) {
     std::fprintf(stderr, "riskplan: no improvement was received before the stream ended\n");
@@ -403,7 +406,7 @@ int KeepWhatWasReceived(const CliOptions& o, RiskplanClient& client, const v1::P
 int RunMaps(const CliOptions& o, RiskplanClient& client) {
   v1::ListMapsResponse response;
   grpc::Status status = client.ListMaps(&response, TimeoutOr(o, absl::Seconds(10)));
-  if (!status.ok()) return RpcError("ListMaps", status);
+  if (!status.ok()) return RpcError(o, "ListMaps", status);
   if (o.json) {
     std::printf("%s\n", ToJson(response).c_str());
     return 0;
@@ -442,7 +445,7 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
   if (exports->any()) request->set_path_spacing_m(exports->spacing_m);
   v1::EvaluateRiskResponse r;
   grpc::Status status = client.EvaluateRisk(*request, &r, TimeoutOr(o, absl::Seconds(30)));
-  if (!status.ok()) return RpcError("EvaluateRisk", status);
+  if (!status.ok()) return RpcError(o, "EvaluateRisk", status);
   if (o.json) {
     std::printf("%s\n", ToJson(r).c_str());
     return exports->any() ? Export(*exports, r, o.map, "riskplan eval on " + o.map, /*quiet=*/true)
@@ -569,7 +572,7 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
       v1::EvaluateRiskResponse path;
       if (grpc::Status s = client.EvaluateRisk(eval, &path, TimeoutOr(o, absl::Seconds(30)));
           !s.ok()) {
-        return RpcError("EvaluateRisk", s);
+        return RpcError(o, "EvaluateRisk", s);
       }
       const std::string description = absl::StrFormat(
           "riskplan plan on %s: %s, seed %d, %s", o.map, v1::Algorithm_Name(request->algorithm()),
@@ -609,8 +612,17 @@ int RunLoad(const CliOptions& o, RiskplanClient& client) {
     load.plan_request = *request;
   } else if (o.rpc == "ping") {
     load.rpc = LoadRpc::kPing;
+  } else if (o.rpc == "connect") {
+    if (o.mode != "closed") return Usage("--rpc=connect runs in closed loop only");
+    load.rpc = LoadRpc::kConnect;
+    load.new_channel = [&o] {
+      grpc::ChannelArguments own;
+      own.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+      // The files were read once already (main), so this cannot fail.
+      return *MakeChannel(o.server, o.connection, own);
+    };
   } else {
-    return Usage(absl::StrFormat("--rpc=%s: must be eval, plan or ping", o.rpc));
+    return Usage(absl::StrFormat("--rpc=%s: must be eval, plan, ping or connect", o.rpc));
   }
   if (o.mode != "closed" && o.mode != "open") {
     return Usage(absl::StrFormat("--mode=%s: must be closed or open", o.mode));

@@ -20,6 +20,7 @@ namespace riskplan::client {
 
 struct CliOptions {
   std::string server;
+  ConnectionOptions connection;  // TLS and token (--tls_*, --token_file)
   std::string map = "demo-city";
   absl::Duration timeout = absl::ZeroDuration();  // zero: the command's default
   bool json = false;

@@ -120,6 +120,7 @@ void LoadRun::IssueAsync(absl::Time intended) {
                                    });
       return;
     }
+    case LoadRpc::kConnect:  // closed loop only (RunLoad's caller checks)
     case LoadRpc::kPing: {
       auto* context = new grpc::ClientContext;
       auto* response = new v1::PingResponse;
@@ -167,6 +168,13 @@ void LoadRun::CallSync(absl::Time intended) {
     case LoadRpc::kPing: {
       v1::PingResponse response;
       status = stub_->Ping(&context, v1::PingRequest(), &response);
+      break;
+    }
+    case LoadRpc::kConnect: {
+      // Connected on the first call, closed when the channel goes.
+      std::unique_ptr<v1::Planner::Stub> fresh = v1::Planner::NewStub(options_.new_channel());
+      v1::PingResponse response;
+      status = fresh->Ping(&context, v1::PingRequest(), &response);
       break;
     }
   }
@@ -361,6 +369,8 @@ std::string LoadRpcName(LoadRpc rpc) {
       return "PlanTrajectory";
     case LoadRpc::kPing:
       return "Ping";
+    case LoadRpc::kConnect:
+      return "Connect";
   }
   return "?";
 }

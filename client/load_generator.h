@@ -25,10 +25,12 @@
 
 namespace riskplan::client {
 
-enum class LoadRpc { kEvaluateRisk, kPlanTrajectory, kPing };
+// kConnect: every call opens a new connection (TCP, and the TLS handshake
+// when TLS is on) and sends one Ping on it: the cost of connecting.
+enum class LoadRpc { kEvaluateRisk, kPlanTrajectory, kPing, kConnect };
 enum class LoadMode { kClosed, kOpen };
 
-// "EvaluateRisk", "PlanTrajectory", "Ping"; "closed", "open".
+// "EvaluateRisk", "PlanTrajectory", "Ping", "Connect"; "closed", "open".
 std::string LoadRpcName(LoadRpc rpc);
 std::string LoadModeName(LoadMode mode);
 
@@ -44,6 +46,9 @@ struct LoadOptions {
   int max_outstanding = 10000;
   v1::EvaluateRiskRequest eval_request;  // for kEvaluateRisk
   v1::PlanRequest plan_request;          // for kPlanTrajectory
+  // For kConnect (closed loop only): a channel that shares no connection
+  // with any other.
+  std::function<std::shared_ptr<grpc::Channel>()> new_channel;
 };
 
 // Calls that a code name counts but that never reached the server.

@@ -9,6 +9,7 @@
 
 #include "absl/flags/flag.h"
 #include "client/commands.h"
+#include "client/connection_flags.h"
 #include "cmdline/help.h"
 
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server address, HOST:PORT");
@@ -78,7 +79,9 @@ ABSL_FLAG(std::string, plan_firmware, "px4",
 ABSL_FLAG(double, target_level_of_safety, 1e-6,
           "plan, eval: target level of safety, expected casualties per flight hour (SORA: 1e-6); "
           "the risk per flight hour is compared with it");
-ABSL_FLAG(std::string, rpc, "eval", "load: the RPC to load, eval | plan | ping");
+ABSL_FLAG(std::string, rpc, "eval",
+          "load: the RPC to load, eval | plan | ping | connect (a new connection, TLS handshake "
+          "included, and one Ping on it, per call; closed loop only)");
 ABSL_FLAG(std::string, mode, "closed",
           "load: closed (--concurrency callers back to back) or open (--rate calls per second, "
           "latency from the intended send time)");
@@ -118,8 +121,10 @@ riskplan::cmdline::ProgramHelp Help() {
     a.insert(a.end(), b.begin(), b.end());
     return a;
   };
+  const std::vector<std::string> connection = {
+      "server", "tls_ca", "tls_cert", "tls_key", "tls_server_name", "token_file", "timeout_ms"};
   help.commands = {
-      {"maps", "the server's maps", "  riskplan maps [--json]", {"server", "timeout_ms", "json"}},
+      {"maps", "the server's maps", "  riskplan maps [--json]", join(connection, {"json"})},
       {"eval", "risk, length and admissibility of a trajectory",
        "  riskplan eval (--waypoints=... | --polyline=... | --trajectory_file=F) [flags]\n"
        "\n"
@@ -131,7 +136,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "\n"
        "Example:\n"
        "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'",
-       join(join({"server", "map", "timeout_ms", "json"}, trajectory),
+       join(join(join(connection, {"map", "json"}), trajectory),
             join(join({"samples", "params"}, two_tier), exports))},
       {"plan", "plan a trajectory, showing each improvement as it streams",
        "  riskplan plan --start=X,Y,Z,THETA --goal=X,Y,Z,THETA [flags]\n"
@@ -157,7 +162,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "--budget_ms=5000 --picture=plan.svg\n"
        "  riskplan plan --map=lux --start=wgs84:49.6012,6.1034,420,45 "
        "--goal=wgs84:49.6301,6.1625,430,90 --plan_out=mission.plan",
-       join(join({"server", "map", "timeout_ms"}, planning),
+       join(join(join(connection, {"map"}), planning),
             join({"params", "picture", "picture_size", "trajectory_out"}, exports))},
       {"load", "load test of one RPC (eval, plan or ping), closed or open loop",
        "  riskplan load [--rpc=eval|plan|ping] [--mode=closed|open] [flags]\n"
@@ -167,8 +172,8 @@ riskplan::cmdline::ProgramHelp Help() {
        "Example:\n"
        "  riskplan load --rpc=eval --polyline='1000,1000,250;2000,1000,250' --concurrency=4 "
        "--ceiling",
-       join(join({"server", "map", "timeout_ms", "rpc", "mode", "concurrency", "rate", "duration_s",
-                  "max_outstanding", "ceiling", "report_json"},
+       join(join(join(connection, {"map", "rpc", "mode", "concurrency", "rate", "duration_s",
+                                   "max_outstanding", "ceiling", "report_json"}),
                  join(trajectory, join({"samples", "params"}, two_tier))),
             planning)},
   };
@@ -193,6 +198,7 @@ int main(int argc, char** argv) {
 
   riskplan::client::CliOptions o;
   o.server = absl::GetFlag(FLAGS_server);
+  o.connection = riskplan::client::ConnectionOptionsFromFlags();
   o.map = absl::GetFlag(FLAGS_map);
   o.timeout = absl::Milliseconds(absl::GetFlag(FLAGS_timeout_ms));
   o.json = absl::GetFlag(FLAGS_json);
@@ -235,10 +241,17 @@ int main(int argc, char** argv) {
   o.ceiling = absl::GetFlag(FLAGS_ceiling);
   o.report_json = absl::GetFlag(FLAGS_report_json);
 
-  // Creating the client does not connect (gRPC connects on the first call),
+  // Creating the channel does not connect (gRPC connects on the first call),
   // so it costs nothing before the command is known to be valid; a bad
-  // --server shows up as UNAVAILABLE from the first call.
-  riskplan::client::RiskplanClient client(o.server);
+  // --server shows up as UNAVAILABLE from the first call. It reads the TLS
+  // and token files, though: one that cannot be read is bad input.
+  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
+      riskplan::client::MakeChannel(o.server, o.connection);
+  if (!channel.ok()) {
+    std::fprintf(stderr, "riskplan: %s\n", std::string(channel.status().message()).c_str());
+    return 2;
+  }
+  riskplan::client::RiskplanClient client(*std::move(channel));
   if (command == "maps") return riskplan::client::RunMaps(o, client);
   if (command == "eval") return riskplan::client::RunEval(o, client);
   if (command == "plan") return riskplan::client::RunPlan(o, client);

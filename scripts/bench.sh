@@ -2,7 +2,7 @@
 # Runs riskplan's benchmark programs and prints their reports. Results and the
 # commands that produced them are recorded in docs/benchmarks.md.
 #
-#   bash scripts/bench.sh [planner|kernel|rtl|all]   (default: all)
+#   bash scripts/bench.sh [planner|shared|kernel|rtl|all]   (default: all)
 #
 # Benchmarks are measurements, not tests: run them on a quiet machine and quote
 # medians. Extra variables: SEEDS (planner seeds, default 5), BUDGET_S (3).
@@ -23,6 +23,10 @@ fi
 if [ "$what" = planner ] || [ "$what" = all ]; then
   echo "== RISK_RRT_STAR on the demo-city scenarios (bench/planner_bench.cc) =="
   "$BIN/riskplan-bench-planner" --seeds="${SEEDS:-5}" --budget_s="${BUDGET_S:-3}"
+fi
+if [ "$what" = shared ] || [ "$what" = all ]; then
+  echo "== 32 missions to one depot: shared goal tree vs separate plans (bench/shared_tree_bench.cc) =="
+  "$BIN/riskplan-bench-shared-tree"
 fi
 if [ "$what" = rtl ] || [ "$what" = all ]; then
   echo "== the component's RTL under Verilator: cycles by lane count (bench/rtl_bench.cc) =="

@@ -11,6 +11,12 @@ PACKAGES=(
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   prometheus-cpp-dev
   libgdal-dev libproj-dev gdal-bin
+  # riskplan-web: its HTTP server, the page's libraries, and the browser
+  # that its test drives (headless, through selenium and chromedriver).
+  libcpp-httplib-dev libjs-leaflet libjs-chart.js
+  chromium chromium-driver python3-selenium
+  # The TLS tests make their certificates with the openssl CLI.
+  openssl
 )
 # Extra packages a caller asks for (e.g. the benchmark script adds OMPL).
 PACKAGES+=("$@")

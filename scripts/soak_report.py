@@ -30,6 +30,10 @@ WARMUP_MAX_S = 120.0     # and at most 2 minutes
 BOARD_REL = 1e-5         # a board-computed value: within 1e-5 relative (docs/accel.md)
 D_MIN = [0.0]            # the soak's end, minutes (for the plot)
 RISK_KEYS = ("risk", "impact_factor", "expected_shelter", "casualty_probability")
+# An answer's and a piece's risk, and what is derived from it alone (the risk
+# per flight hour: risk / flight time): exact when all their samples are the
+# CPU's bits, else within the board's bound.
+TOTAL_RISK_KEYS = ("risk", "risk_per_flight_hour")
 
 
 def parse_args():
@@ -146,29 +150,29 @@ def compare_answer(ref, got, where, stats):
             piece_exact = all(exact_samples[first:first + n])
             first += n
             for k in set(a) | set(b):
-                if k == "risk":
-                    continue
-                if a.get(k) != b.get(k):
+                if k in TOTAL_RISK_KEYS:
+                    problems += risk_problem(f"{where} piece {i}", k, a.get(k, 0.0),
+                                             b.get(k, 0.0), piece_exact)
+                elif a.get(k) != b.get(k):
                     problems.append(f"{where} piece {i}: {k} = {b.get(k)!r}, reference {a.get(k)!r}")
-            problems += risk_problem(f"{where} piece {i}", a.get("risk", 0.0), b.get("risk", 0.0),
-                                     piece_exact)
     for k in set(ref) | set(got):
         if k in ("samples", "pieces"):
             continue
-        if k == "risk":
-            problems += risk_problem(where, ref.get(k, 0.0), got.get(k, 0.0), all(exact_samples))
+        if k in TOTAL_RISK_KEYS:
+            problems += risk_problem(where, k, ref.get(k, 0.0), got.get(k, 0.0),
+                                     all(exact_samples))
         elif ref.get(k) != got.get(k):
             problems.append(f"{where}: {k} = {got.get(k)!r}, reference {ref.get(k)!r}")
     return problems
 
 
-def risk_problem(where, ref, got, must_be_exact):
+def risk_problem(where, key, ref, got, must_be_exact):
     if must_be_exact:
-        return [] if ref == got else [f"{where}: risk {got!r}, reference {ref!r} (all its samples "
-                                      "were the CPU's bits, so it must be too)"]
+        return [] if ref == got else [f"{where}: {key} = {got!r}, reference {ref!r} (all its "
+                                      "samples were the CPU's bits, so it must be too)"]
     if abs(got - ref) <= BOARD_REL * abs(ref):
         return []
-    return [f"{where}: risk {got!r}, reference {ref!r} (beyond {BOARD_REL:g} relative)"]
+    return [f"{where}: {key} = {got!r}, reference {ref!r} (beyond {BOARD_REL:g} relative)"]
 
 
 def plot(path, samples, events, soak_start, warm_end, soak_end, rss_med):

@@ -1,5 +1,6 @@
 #include "server/connection_acceptor.h"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <netdb.h>
 #include <netinet/in.h>
@@ -18,6 +19,7 @@
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "accel/net.h"
+#include "server/grpc_log.h"
 #include "server/rpc_log.h"
 
 namespace riskplan::server {
@@ -56,6 +58,22 @@ std::string ErrorText(int error) {
                      : error == ENOMEM  ? "ENOMEM: "
                                         : "";
   return absl::StrCat(name, std::strerror(error));
+}
+
+// "ipv4:127.0.0.1:51234" or "ipv6:[::1]:51234", as gRPC names peers.
+std::string PeerText(const sockaddr_storage& peer) {
+  char host[INET6_ADDRSTRLEN] = "";
+  if (peer.ss_family == AF_INET) {
+    const auto* a = reinterpret_cast<const sockaddr_in*>(&peer);
+    inet_ntop(AF_INET, &a->sin_addr, host, sizeof(host));
+    return absl::StrFormat("ipv4:%s:%d", host, ntohs(a->sin_port));
+  }
+  if (peer.ss_family == AF_INET6) {
+    const auto* a = reinterpret_cast<const sockaddr_in6*>(&peer);
+    inet_ntop(AF_INET6, &a->sin6_addr, host, sizeof(host));
+    return absl::StrFormat("ipv6:[%s]:%d", host, ntohs(a->sin6_port));
+  }
+  return "unknown";
 }
 
 }  // namespace
@@ -162,8 +180,13 @@ void ConnectionAcceptor::Run() {
   int64_t failures = 0;
   absl::Time first_failure, last_logged;
   while (WaitReadable(pause_ms)) {
-    const int fd = accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+    sockaddr_storage peer{};
+    socklen_t peer_length = sizeof(peer);
+    const int fd = accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &peer_length,
+                           SOCK_CLOEXEC | SOCK_NONBLOCK);
     if (fd >= 0) {
+      // For the attribution of TLS handshake failures (server/grpc_log.h).
+      NoteAcceptedPeer(PeerText(peer));
       if (failures > 0) {
         LogEvent("accept_resumed",
                  absl::StrFormat("failures=%d seconds=%.3f", failures,

@@ -27,6 +27,11 @@ ServerMetrics::ServerMetrics() : registry_(std::make_shared<prometheus::Registry
                .Name("riskplan_rpcs_total")
                .Help("RPCs finished, by method and status code")
                .Register(*registry_);
+  rpcs_by_identity_ = &prometheus::BuildCounter()
+                          .Name("riskplan_rpcs_by_identity_total")
+                          .Help("RPCs finished, by caller identity (token identity or client "
+                                "certificate; at most 64 values, then \"other\"), method and code")
+                          .Register(*registry_);
   rpc_duration_ = &prometheus::BuildHistogram()
                        .Name("riskplan_rpc_duration_seconds")
                        .Help("Time from the start of an RPC to its status, by method")
@@ -82,8 +87,13 @@ absl::StatusOr<std::string> ServerMetrics::Expose(const std::string& address) {
 }
 
 void ServerMetrics::RecordRpc(std::string_view method, grpc::StatusCode code,
-                              absl::Duration duration) {
+                              absl::Duration duration, std::string_view identity_label) {
   rpcs_->Add({{"method", std::string(method)}, {"code", std::string(GrpcCodeName(code))}})
+      .Increment();
+  rpcs_by_identity_
+      ->Add({{"identity", identity_label.empty() ? "anonymous" : std::string(identity_label)},
+             {"method", std::string(method)},
+             {"code", std::string(GrpcCodeName(code))}})
       .Increment();
   // Leaked on purpose: never destroyed, so a call recorded while the
   // process exits cannot read freed boundaries.

@@ -2,6 +2,9 @@
 // served over HTTP at /metrics.
 //
 //   riskplan_rpcs_total{method, code}             counter
+//   riskplan_rpcs_by_identity_total{identity, method, code}
+//                                                  counter (identity: at most 64 values and
+//                                                  "other", "anonymous"; server/auth.h)
 //   riskplan_rpc_duration_seconds{method}          histogram
 //   riskplan_running_plans                         gauge (admitted plans, queued or planning)
 //   riskplan_plan_duration_seconds{end_reason}     histogram (planner time of finished plans)
@@ -40,7 +43,10 @@ class ServerMetrics {
   // picks one). Returns the bound "host:port", or an error when it cannot bind.
   absl::StatusOr<std::string> Expose(const std::string& address);
 
-  void RecordRpc(std::string_view method, grpc::StatusCode code, absl::Duration duration);
+  // `identity_label` is Caller::label (bounded cardinality); "" counts as
+  // "anonymous".
+  void RecordRpc(std::string_view method, grpc::StatusCode code, absl::Duration duration,
+                 std::string_view identity_label = "");
   void PlanAdmitted() { running_plans_->Increment(); }
   void PlanReleased() { running_plans_->Decrement(); }
   // The riskplan_running_plans gauge (for checks of the admission bookkeeping).
@@ -62,6 +68,7 @@ class ServerMetrics {
   std::shared_ptr<prometheus::Registry> registry_;
   std::unique_ptr<prometheus::Exposer> exposer_;
   prometheus::Family<prometheus::Counter>* rpcs_;
+  prometheus::Family<prometheus::Counter>* rpcs_by_identity_;
   prometheus::Family<prometheus::Histogram>* rpc_duration_;
   prometheus::Gauge* running_plans_;
   prometheus::Family<prometheus::Histogram>* plan_duration_;

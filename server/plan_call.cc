@@ -78,8 +78,8 @@ std::string PeerOf(grpc::CallbackServerContext* ctx) { return ctx == nullptr ? "
 }  // namespace
 
 std::shared_ptr<PlanCall> PlanCall::Create(const PlanCallEnv& env, grpc::CallbackServerContext* ctx,
-                                           PlanSpec spec) {
-  std::shared_ptr<PlanCall> call(new PlanCall(env, ctx, std::move(spec)));
+                                           PlanSpec spec, Caller caller) {
+  std::shared_ptr<PlanCall> call(new PlanCall(env, ctx, std::move(spec), std::move(caller)));
   // gRPC holds a raw pointer to the reactor until OnDone: self_ is the
   // reference that stands for it.
   call->self_ = call;
@@ -87,12 +87,14 @@ std::shared_ptr<PlanCall> PlanCall::Create(const PlanCallEnv& env, grpc::Callbac
   return call;
 }
 
-PlanCall::PlanCall(const PlanCallEnv& env, grpc::CallbackServerContext* ctx, PlanSpec spec)
+PlanCall::PlanCall(const PlanCallEnv& env, grpc::CallbackServerContext* ctx, PlanSpec spec,
+                   Caller caller)
     : env_(env),
       ctx_(ctx),
       spec_(std::move(spec)),
       started_(absl::Now()),
       peer_(PeerOf(ctx)),
+      caller_(std::move(caller)),
       state_(spec_.min_update_interval) {}
 
 absl::Status PlanCall::CheckEndpointsIfModelReady() {
@@ -356,13 +358,14 @@ void PlanCall::OnDone() {
     replaced = state_.replaced();
   }
   const absl::Duration duration = absl::Now() - started_;
-  env_.metrics->RecordRpc("PlanTrajectory", status.error_code(), duration);
+  env_.metrics->RecordRpc("PlanTrajectory", status.error_code(), duration, caller_.label);
   env_.metrics->RecordUpdates(sent, replaced);
   if (!detail.empty()) detail += absl::StrFormat(" sent=%d replaced=%d", sent, replaced);
   LogRpc({.method = "PlanTrajectory",
           .status = status,
           .duration = duration,
           .peer = peer_,
+          .identity = caller_.identity,
           .map = spec_.map ? spec_.map->name() : "",
           .detail = detail});
   // Counted down only after the log line: the drain waits for open calls, so

@@ -43,6 +43,7 @@
 #include "core/planners/planner.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
+#include "server/auth.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
 #include "server/open_calls.h"
@@ -94,8 +95,9 @@ class PlanCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
                        public std::enable_shared_from_this<PlanCall> {
  public:
   // A call for a validated request. Call Start() next.
+  // `caller` is who made it (server/auth.h), for the log and the metrics.
   static std::shared_ptr<PlanCall> Create(const PlanCallEnv& env, grpc::CallbackServerContext* ctx,
-                                          PlanSpec spec);
+                                          PlanSpec spec, Caller caller = {});
 
   // Checks the endpoints at once when the risk model is cached (so a bad
   // start or goal fails before any queueing). Returns an error status, with
@@ -127,7 +129,8 @@ class PlanCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
   using State = PlanCallState<v1::PlanUpdate>;
   using Step = State::Step;
 
-  PlanCall(const PlanCallEnv& env, grpc::CallbackServerContext* ctx, PlanSpec spec);
+  PlanCall(const PlanCallEnv& env, grpc::CallbackServerContext* ctx, PlanSpec spec,
+           Caller caller);
 
   // The planning step: model, endpoints, planner, plan. A call cancelled
   // while queued returns an empty result with StopReason::kCancelled.
@@ -155,6 +158,7 @@ class PlanCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
   const PlanSpec spec_;
   const absl::Time started_;
   const std::string peer_;
+  const Caller caller_;
   std::shared_ptr<PlanCall> self_;  // gRPC's reference, dropped in OnDone
   // Cancelled only by Perform, for Steps with stop_planner; read by the
   // planner without any lock.

@@ -48,6 +48,9 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   // The response Complete(OK) sends. Written by one thread at a time (the
   // handler, then the task it queues), until Complete.
   Response* response() { return &response_; }
+  // Who called (for the log line and the metrics); set by the handler
+  // before Complete.
+  void set_caller(Caller caller) { caller_ = std::move(caller); }
   // Cancelled when the client cancels the call or its deadline passes.
   const CancellationToken& cancelled() const { return cancelled_; }
 
@@ -67,11 +70,12 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
     // The call ends even when it cannot be logged (out of memory).
     try {
       const absl::Duration duration = absl::Now() - started_;
-      metrics_->RecordRpc(method_, status.error_code(), duration);
+      metrics_->RecordRpc(method_, status.error_code(), duration, caller_.label);
       LogRpc({.method = method_,
               .status = status,
               .duration = duration,
               .peer = ctx_->peer(),
+              .identity = caller_.identity,
               .map = std::move(map),
               .detail = ""});
     } catch (const std::exception&) {
@@ -94,9 +98,24 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   OpenCalls* const open_calls_;
   grpc::ByteBuffer* const raw_response_;  // gRPC's, valid until OnDone
   Response response_;
+  Caller caller_;
   CancellationToken cancelled_;
   std::atomic<bool> completed_{false};
 };
+
+// Checks that the caller may call `method` (server/auth.h), records who it
+// is on `call`, and ends the call with UNAUTHENTICATED or PERMISSION_DENIED
+// if not: false then.
+template <typename Call>
+bool Authorize(Authorizer& authorizer, grpc::CallbackServerContext* ctx, const char* method,
+               Call* call) {
+  Caller caller;
+  grpc::Status status = authorizer.Check(*ctx, method, &caller);
+  call->set_caller(std::move(caller));
+  if (status.ok()) return true;
+  call->Complete(status);
+  return false;
+}
 
 // Runs `body` (a handler's or a task's work for `call`), ending the call with
 // StatusFromException if it throws: no exception leaves a request's thread.
@@ -222,6 +241,8 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
       models_(models),
       metrics_(metrics),
       options_(options),
+      authorizer_(options.authorizer != nullptr ? options.authorizer
+                                                : std::make_shared<Authorizer>(nullptr)),
       checkers_(std::make_shared<FeasibilityCache>(options.max_cached_checkers)),
       active_(options.max_running_plans),
       eval_pool_(options.eval_threads, options.max_queued_evals),
@@ -248,12 +269,20 @@ void PlannerService::StopEvaluations() {
 grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanTrajectory(
     grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* raw_request) {
   // Every check comes before admission, so a request that will fail never
-  // holds a slot: a draining server refuses first, then parsing, validation,
-  // the endpoints (when the model is ready), admission and the plan pool.
+  // holds a slot: the caller's token and role first (an unauthorised caller
+  // learns nothing of the server's state), then a draining server refuses,
+  // then parsing, validation, the endpoints (when the model is ready),
+  // admission and the plan pool.
+  Caller caller;
+  const grpc::Status authorized = authorizer_->Check(*ctx, "PlanTrajectory", &caller);
   v1::PlanRequest request;
-  absl::Status parsed = ParseRequest(*raw_request, &request);
+  absl::Status parsed = authorized.ok() ? ParseRequest(*raw_request, &request) : absl::OkStatus();
   absl::StatusOr<PlanSpec> spec =
-      parsed.ok() ? ValidatePlanRequest(request, maps_, options_.limits) : parsed;
+      // Not parsed nor validated for a refused caller; `authorized` is the
+      // status the call ends with.
+      !authorized.ok() ? absl::PermissionDeniedError("not authorized")
+      : parsed.ok()    ? ValidatePlanRequest(request, maps_, options_.limits)
+                       : parsed;
   // A call that fails before admission still goes through a PlanCall, so
   // that every PlanTrajectory is logged and counted the same way.
   PlanSpec call_spec;
@@ -264,7 +293,11 @@ grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanTrajectory(
                                                                 .active = &active_,
                                                                 .engine = options_.engine,
                                                                 .open_calls = &open_calls_},
-                                                    ctx, std::move(call_spec));
+                                                    ctx, std::move(call_spec), std::move(caller));
+  if (!authorized.ok()) {
+    call->Reject(authorized);
+    return call.get();
+  }
   if (draining()) {
     call->Reject(kDraining);
     return call.get();
@@ -304,6 +337,7 @@ grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerConte
   auto* call = new UnaryCall<v1::EvaluateRiskResponse>("EvaluateRisk", ctx, &metrics_, &open_calls_,
                                                        raw_response);
   Guarded(call, "EvaluateRisk", "", [&] {
+    if (!Authorize(*authorizer_, ctx, "EvaluateRisk", call)) return;
     if (draining()) {
       call->Complete(kDraining);
       return;
@@ -352,6 +386,7 @@ grpc::ServerUnaryReactor* PlannerService::ListMaps(grpc::CallbackServerContext* 
   auto* call =
       new UnaryCall<v1::ListMapsResponse>("ListMaps", ctx, &metrics_, &open_calls_, raw_response);
   Guarded(call, "ListMaps", "", [&] {
+    if (!Authorize(*authorizer_, ctx, "ListMaps", call)) return;
     if (draining()) {
       call->Complete(kDraining);
       return;
@@ -373,6 +408,7 @@ grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContex
   auto* call = new UnaryCall<v1::GetMapLayerResponse>("GetMapLayer", ctx, &metrics_, &open_calls_,
                                                       raw_response);
   Guarded(call, "GetMapLayer", "", [&] {
+    if (!Authorize(*authorizer_, ctx, "GetMapLayer", call)) return;
     if (draining()) {
       call->Complete(kDraining);
       return;
@@ -431,6 +467,7 @@ grpc::ServerUnaryReactor* PlannerService::GetRiskLayer(grpc::CallbackServerConte
   auto* call = new UnaryCall<v1::GetRiskLayerResponse>("GetRiskLayer", ctx, &metrics_, &open_calls_,
                                                        raw_response);
   Guarded(call, "GetRiskLayer", "", [&] {
+    if (!Authorize(*authorizer_, ctx, "GetRiskLayer", call)) return;
     if (draining()) {
       call->Complete(kDraining);
       return;
@@ -476,6 +513,7 @@ grpc::ServerUnaryReactor* PlannerService::Ping(grpc::CallbackServerContext* ctx,
   // behind evaluations would say nothing about the server's liveness.
   auto* call = new UnaryCall<v1::PingResponse>("Ping", ctx, &metrics_, &open_calls_, raw_response);
   Guarded(call, "Ping", "", [&] {
+    if (!Authorize(*authorizer_, ctx, "Ping", call)) return;
     v1::PingRequest request;
     absl::Status parsed = ParseRequest(*raw_request, &request);
     call->Complete(draining() ? kDraining : ToGrpcStatus(parsed));

@@ -16,6 +16,7 @@
 #include <memory>
 
 #include "accel/risk_engine.h"
+#include "server/auth.h"
 #include "core/base/cancellation.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
@@ -42,6 +43,9 @@ struct ServiceOptions {
   // boards); null: each call computes its own on its thread. Not owned; must
   // outlive the service.
   accel::RiskEngine* engine = nullptr;
+  // Decides who may call what (server/auth.h); null: everyone may call
+  // everything.
+  std::shared_ptr<Authorizer> authorizer;
 };
 
 // The work of an EvaluateRisk call once ValidateEvaluateRequest has passed
@@ -111,6 +115,7 @@ class PlannerService final : public RawPlannerService {
   RiskModelCache& models_;
   ServerMetrics& metrics_;
   const ServiceOptions options_;
+  const std::shared_ptr<Authorizer> authorizer_;  // never null
   const std::shared_ptr<FeasibilityCache> checkers_;
   v1::ListMapsResponse map_list_;  // built once
   std::atomic<bool> draining_{false};

@@ -53,6 +53,9 @@ void LogRpc(const RpcLogRecord& record) {
       {"duration_ms", absl::ToDoubleMilliseconds(record.duration)},
       {"peer", record.peer},
   };
+  // Never a token: the identity the token file gives it, or a certificate's
+  // subject.
+  if (!record.identity.empty()) line["identity"] = record.identity;
   if (!record.map.empty()) line["map"] = record.map;
   if (!record.status.ok()) {
     line["detail"] = record.status.error_message();

@@ -1,6 +1,7 @@
 // Structured logs: one JSON line per finished RPC on stderr, e.g.
 //   {"ts":"2024-05-01T10:00:00.123Z","event":"rpc","method":"EvaluateRisk",
-//    "code":"OK","duration_ms":1.84,"peer":"ipv4:127.0.0.1:51234","map":"demo-city"}
+//    "code":"OK","duration_ms":1.84,"peer":"ipv4:127.0.0.1:51234","identity":"ground-1",
+//    "map":"demo-city"}
 // plus "detail" (the status message, or a plan's end reason and counts).
 // Lines are written whole (one write per line) so concurrent RPCs never
 // interleave. Thread-safe.
@@ -20,6 +21,7 @@ struct RpcLogRecord {
   grpc::Status status;
   absl::Duration duration;
   std::string peer;
+  std::string identity;  // the caller (server/auth.h Caller); may be empty
   std::string map;     // may be empty
   std::string detail;  // may be empty
 };

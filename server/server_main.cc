@@ -22,7 +22,9 @@
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "accel/engine_metrics.h"
+#include "accel/net.h"
 #include "accel/risk_engine.h"
+#include "accel/tls_context.h"
 #include "cmdline/help.h"
 #include "core/planners/planner.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
@@ -31,11 +33,13 @@
 #include "server/accel_metrics.h"
 #include "server/cache_metrics.h"
 #include "server/connection_acceptor.h"
+#include "server/grpc_log.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
 #include "server/planner_service.h"
 #include "server/rpc_log.h"
+#include "server/server_security.h"
 
 ABSL_FLAG(std::string, listen, "0.0.0.0:50051",
           "Address to serve on, HOST:PORT. Port 0 picks a free port; the line "
@@ -88,6 +92,31 @@ ABSL_FLAG(int64_t, grace_period_ms, 10000,
 ABSL_FLAG(int64_t, max_connection_age_ms, 0,
           "Close client connections after this age so that load rebalances across replicas "
           "(0: never)");
+ABSL_FLAG(std::string, tls_cert, "",
+          "TLS: the server's certificate chain (PEM, leaf first); with --tls_key the port speaks "
+          "TLS only. Re-read every --tls_reload_s; rotate by swapping its directory "
+          "(docs/security.md)");
+ABSL_FLAG(std::string, tls_key, "", "TLS: the private key of --tls_cert (PEM, unencrypted)");
+ABSL_FLAG(std::string, tls_client_ca, "",
+          "Mutual TLS: CA bundle (PEM) that must have signed every client's certificate; "
+          "clients without one are refused");
+ABSL_FLAG(std::string, tls_crl_dir, "",
+          "Mutual TLS: directory of certificate revocation lists named by hash (openssl rehash); "
+          "a revoked client certificate is refused");
+ABSL_FLAG(int, tls_reload_s, 10,
+          "TLS: seconds between reads of --tls_cert, --tls_key and --tls_client_ca (a rotated "
+          "certificate is served to new connections within this time)");
+ABSL_FLAG(std::string, token_file, "",
+          "Bearer tokens: file of 'SHA256_HEX IDENTITY ROLE' lines (roles viewer, planner, "
+          "operator; docs/security.md); calls without a listed token get UNAUTHENTICATED, calls "
+          "beyond their role PERMISSION_DENIED. Re-read when it changes");
+ABSL_FLAG(bool, allow_plaintext, false,
+          "Serve plaintext on a --listen address that is not loopback (without TLS flags the "
+          "server refuses to, so that plaintext is a decision)");
+ABSL_FLAG(std::string, health_listen, "",
+          "Also serve grpc.health.v1.Health alone, plaintext and without tokens, on HOST:PORT "
+          "(for Kubernetes' gRPC probes, which speak no TLS; port 0 picks one, logged as event "
+          "health_listening). Empty: off");
 ABSL_FLAG(std::string, metrics_listen, "",
           "Serve Prometheus metrics at http://HOST:PORT/metrics (empty: off)");
 ABSL_FLAG(bool, rpc_log, true, "Log one JSON line per RPC on stderr");
@@ -98,6 +127,17 @@ ABSL_FLAG(std::string, fpga_shims, "",
           "Accelerator engine: riskplan-fpga-shim endpoints HOST:PORT,... (docs/shim-protocol.md); "
           "their workers' states are logged (event accel_worker) and exported as "
           "riskplan_accel_* metrics");
+ABSL_FLAG(std::string, fpga_tls_ca, "",
+          "Accelerator engine: TLS to the shims; the CA that signed their certificates (any "
+          "--fpga_tls_* flag turns TLS on; plaintext to a shim that is not on loopback needs "
+          "--allow_plaintext)");
+ABSL_FLAG(std::string, fpga_tls_cert, "",
+          "Accelerator engine: this server's client certificate for the shims (PEM; they "
+          "require one)");
+ABSL_FLAG(std::string, fpga_tls_key, "", "Accelerator engine: the private key of --fpga_tls_cert");
+ABSL_FLAG(std::string, fpga_tls_server_name, "",
+          "Accelerator engine: the name the shims' certificates must carry (default: each "
+          "endpoint's host)");
 ABSL_FLAG(bool, accel_caller_runs, true,
           "Accelerator engine: callers compute chunks of their own batches too (false: every "
           "chunk goes to the workers and boards)");
@@ -162,6 +202,7 @@ int Fail(int code, absl::string_view message) {
 // What the flags ask for, once checked.
 struct ServerConfig {
   ServiceOptions options;  // `engine` is set once the engine exists
+  ServerSecurityOptions security;
   int64_t grace_ms = 0;
   accel::KernelPrecision cpu_kernel = accel::KernelPrecision::kExact;
 };
@@ -245,6 +286,13 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
   }
   config.options.max_cached_checkers =
       static_cast<size_t>(absl::GetFlag(FLAGS_feasibility_cache_size));
+  config.security = ServerSecurityOptions{.tls_cert = absl::GetFlag(FLAGS_tls_cert),
+                                          .tls_key = absl::GetFlag(FLAGS_tls_key),
+                                          .tls_client_ca = absl::GetFlag(FLAGS_tls_client_ca),
+                                          .tls_crl_dir = absl::GetFlag(FLAGS_tls_crl_dir),
+                                          .tls_reload_s = absl::GetFlag(FLAGS_tls_reload_s),
+                                          .token_file = absl::GetFlag(FLAGS_token_file),
+                                          .allow_plaintext = absl::GetFlag(FLAGS_allow_plaintext)};
   return config;
 }
 
@@ -307,6 +355,28 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(accel::KernelPreci
   for (absl::string_view s : absl::StrSplit(shims, ',', absl::SkipWhitespace())) {
     engine_options.fpga_shims.emplace_back(s);
   }
+  const accel::TlsFiles shim_tls{.cert = absl::GetFlag(FLAGS_fpga_tls_cert),
+                                 .key = absl::GetFlag(FLAGS_fpga_tls_key),
+                                 .ca = absl::GetFlag(FLAGS_fpga_tls_ca),
+                                 .crl = "",
+                                 .flag_prefix = "fpga_"};
+  if (shim_tls.enabled() || !absl::GetFlag(FLAGS_fpga_tls_server_name).empty()) {
+    absl::StatusOr<std::shared_ptr<accel::TlsContext>> tls = accel::TlsContext::ForClient(shim_tls);
+    if (!tls.ok()) return tls.status();
+    engine_options.fpga.client.tls = *std::move(tls);
+    engine_options.fpga.client.tls_server_name = absl::GetFlag(FLAGS_fpga_tls_server_name);
+  } else if (!absl::GetFlag(FLAGS_allow_plaintext)) {
+    for (const std::string& endpoint : engine_options.fpga_shims) {
+      std::string host;
+      int port = 0;
+      if (accel::SplitHostPort(endpoint, &host, &port).ok() && !accel::IsLoopbackHost(host)) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "--fpga_shims: %s is not on loopback and no --fpga_tls_* flags were given: "
+            "plaintext to it needs --allow_plaintext (docs/security.md)",
+            endpoint));
+      }
+    }
+  }
   // Worker state changes (a board going down, coming back) go to the same
   // structured log as the RPCs, so one stream tells what happened when.
   engine_options.on_worker_event = [](const accel::WorkerEvent& e) {
@@ -316,9 +386,10 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(accel::KernelPreci
       accel::RiskEngine::Create(engine_options);
   if (!engine.ok()) return engine.status();
   LogEvent("accel_engine",
-           absl::StrFormat("cpu_workers=%d fpga_shims=[%s] caller_runs=%d cpu_kernel=%s",
-                           engine_options.cpu_workers, shims, engine_options.caller_runs,
-                           accel::KernelPrecisionName(cpu_kernel)));
+           absl::StrFormat("cpu_workers=%d fpga_shims=[%s] fpga_tls=%s caller_runs=%d cpu_kernel=%s",
+                           engine_options.cpu_workers, shims,
+                           engine_options.fpga.client.tls != nullptr ? "on" : "off",
+                           engine_options.caller_runs, accel::KernelPrecisionName(cpu_kernel)));
   return engine;
 }
 
@@ -338,6 +409,8 @@ absl::Status StartMetrics(accel::RiskEngine* engine, ServerMetrics& metrics) {
 // of file descriptors, which gRPC's own listener does not).
 struct Serving {
   std::unique_ptr<grpc::Server> server;
+  // Health alone, plaintext (--health_listen); null when off.
+  std::unique_ptr<grpc::Server> health_server;
   std::string host;  // of --listen
   int port = 0;      // the bound one (--listen may ask for port 0)
   // Declared after the server, so destroyed before it: no connection is
@@ -345,7 +418,35 @@ struct Serving {
   std::unique_ptr<ConnectionAcceptor> acceptor;
 };
 
-absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& metrics) {
+// Every health service the process serves (the main port's, and the health
+// port's when there is one).
+void SetHealth(const Serving& serving, bool serving_status) {
+  for (grpc::Server* server : {serving.server.get(), serving.health_server.get()}) {
+    if (server == nullptr) continue;
+    grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
+    health->SetServingStatus("", serving_status);
+    health->SetServingStatus("riskplan.v1.Planner", serving_status);
+  }
+}
+
+// The plaintext health port: a server of its own, with no Planner service,
+// so that nothing but health is ever served without TLS and tokens.
+absl::StatusOr<std::unique_ptr<grpc::Server>> StartHealthServer(const std::string& address) {
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &port);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (server == nullptr || port == 0) {
+    return absl::UnavailableError(
+        absl::StrFormat("cannot start: cannot listen on --health_listen=%s", address));
+  }
+  LogEvent("health_listening",
+           absl::StrFormat("%s:%d", address.substr(0, address.rfind(':')), port));
+  return server;
+}
+
+absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& metrics,
+                                      const ServerSecurity& security) {
   const std::string listen = absl::GetFlag(FLAGS_listen);
   absl::StatusOr<std::unique_ptr<ConnectionAcceptor>> acceptor = ConnectionAcceptor::Listen(listen);
   if (!acceptor.ok()) {
@@ -361,7 +462,7 @@ absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& me
   std::unique_ptr<grpc::experimental::ExternalConnectionAcceptor> connections =
       builder.experimental().AddExternalConnectionAcceptor(
           grpc::ServerBuilder::experimental_type::ExternalConnectionType::FROM_FD,
-          grpc::InsecureServerCredentials());
+          security.credentials);
   builder.SetMaxReceiveMessageSize(absl::GetFlag(FLAGS_max_request_bytes));
   // Responses are bounded by the request limits (samples, tree edges, layer
   // side); 64 MiB is the client library's receive limit too.
@@ -377,9 +478,12 @@ absl::StatusOr<Serving> BuildAndStart(PlannerService& service, ServerMetrics& me
   }
   serving.acceptor = *std::move(acceptor);
   serving.acceptor->Start(std::move(connections), [&metrics] { metrics.RecordAcceptError(); });
-  grpc::HealthCheckServiceInterface* health = serving.server->GetHealthCheckService();
-  health->SetServingStatus("", true);
-  health->SetServingStatus("riskplan.v1.Planner", true);
+  if (const std::string health = absl::GetFlag(FLAGS_health_listen); !health.empty()) {
+    absl::StatusOr<std::unique_ptr<grpc::Server>> health_server = StartHealthServer(health);
+    if (!health_server.ok()) return health_server.status();
+    serving.health_server = *std::move(health_server);
+  }
+  SetHealth(serving, true);
   serving.host = listen.substr(0, listen.rfind(':'));
   serving.port = serving.acceptor->port();
   return serving;
@@ -411,7 +515,7 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, Serving
   const absl::Duration stop_margin = std::min(absl::Seconds(1), grace / 2);
   // Draining first: a client that sees NOT_SERVING is sure to be refused.
   service.StartDraining();
-  server.GetHealthCheckService()->SetServingStatus(false);
+  SetHealth(serving, false);
   ActivePlans& plans = service.active_plans();
   LogEvent("draining", absl::StrFormat("signal=%d running_plans=%d grace_ms=%d", signal_number,
                                        plans.running(), grace_ms));
@@ -446,6 +550,7 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, Serving
   server.Shutdown(absl::ToChronoTime(
       none_open ? absl::Now()
                 : std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
+  if (serving.health_server != nullptr) serving.health_server->Shutdown(absl::ToChronoTime(absl::Now()));
   LogEvent("stopped",
            absl::StrFormat("seconds=%.3f", absl::ToDoubleSeconds(absl::Now() - drain_start)));
 }
@@ -460,7 +565,18 @@ int Main() {
   if (!config.ok()) return Fail(2, config.status().message());
   SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
   RouteProtobufLogs();
+  InstallGrpcLogHook();
   const sigset_t stop_signals = BlockStopSignals();
+  // Before the maps load (seconds): a bad certificate, key or token file
+  // stops start-up at once, naming the file.
+  const std::string listen = absl::GetFlag(FLAGS_listen);
+  absl::StatusOr<ServerSecurity> security =
+      MakeServerSecurity(config->security, listen.substr(0, listen.rfind(':')));
+  if (!security.ok()) {
+    return Fail(1, absl::StrFormat("cannot start: %s", security.status().message()));
+  }
+  config->options.authorizer = security->authorizer;
+  LogEvent("security", security->summary);
 
   absl::StatusOr<LoadedMaps> maps = LoadMaps(config->options.limits);
   if (!maps.ok()) return Fail(1, absl::StrFormat("cannot start: %s", maps.status().message()));
@@ -477,7 +593,7 @@ int Main() {
   metrics.AddCollectable(std::make_shared<CacheMetrics>(
       maps->models.get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
       service.checkers()));
-  absl::StatusOr<Serving> serving = BuildAndStart(service, metrics);
+  absl::StatusOr<Serving> serving = BuildAndStart(service, metrics, *security);
   if (!serving.ok()) return Fail(1, serving.status().message());
   AnnounceServing(*serving, config->options);
   WaitAndDrain(stop_signals, service, *serving, config->grace_ms);

@@ -4,14 +4,15 @@
 # parts listed for it, and nothing of the parts above it. Third-party headers
 # are checked where a part must stay free of them (cmdline, core, accel and
 # geo/export: no gRPC, Protobuf, GDAL, PROJ, HTTP or Prometheus; geo and tools:
-# no gRPC, Protobuf, HTTP or Prometheus; client: no GDAL or PROJ).
+# no gRPC, Protobuf, HTTP or Prometheus; client: no GDAL or PROJ; web: no GDAL,
+# PROJ or Prometheus).
 # Usage: layering_test.sh SOURCE_DIR. Prints every offending include; exits 1
 # if there is one, or if it found too few includes to have checked anything.
 set -euo pipefail
 cd "$1"
 
 # Every #include line of the checked folders, as FILE<TAB>HEADER.
-includes=$(find cmdline core accel geo tools server client -name '*.h' -o -name '*.cc' | sort |
+includes=$(find cmdline core accel geo tools server client web -name '*.h' -o -name '*.cc' | sort |
   xargs grep -HE '^#include [<"]' |
   sed -E 's/^([^:]+):#include [<"]([^>"]+)[>"].*/\1\t\2/')
 
@@ -39,8 +40,10 @@ BEGIN {
   allowed["accel"] = "core accel cmdline"
   allowed["server"] = "core accel geo server riskplan cmdline"
   allowed["client"] = "client riskplan cmdline geo/export"
+  # riskplan-web: a client of the server through the public API only.
+  allowed["web"] = "web client riskplan cmdline geo/export"
   # An include whose first folder is one of these is the project'"'"'s own.
-  split("cmdline core accel geo tools server client riskplan tests bench", roots, " ")
+  split("cmdline core accel geo tools server client web riskplan tests bench", roots, " ")
   for (r in roots) own[roots[r]] = 1
   # Third-party prefixes a top-level part must not include.
   forbidden["cmdline"] = "grpc grpcpp google/protobuf gdal ogr cpl_ proj httplib prometheus"
@@ -51,6 +54,8 @@ BEGIN {
   forbidden["tools"] = "grpc grpcpp google/protobuf httplib prometheus"
   # The client links no map projection: WGS84 comes from the server.
   forbidden["client"] = "gdal ogr cpl_ proj geodesic"
+  # Nor does the gateway, which also serves no metrics of its own.
+  forbidden["web"] = "gdal ogr cpl_ proj geodesic prometheus"
   failures = 0; checked = 0
 }
 {

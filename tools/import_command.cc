@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/flags/declare.h"
@@ -18,8 +19,8 @@
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
+#include "core/map/map_bundle.h"
 #include "core/map/risk_map.h"
-#include "geo/bundle_output.h"
 #include "geo/map_importer.h"
 
 ABSL_DECLARE_FLAG(std::string, out);
@@ -276,7 +277,12 @@ int ImportCommand(int argc, char** argv) {
   auto map = RiskMap::Create(std::move(header), std::move(imported->layers));
   if (!map.ok()) return Fail(map.status());
   const std::string out = absl::GetFlag(FLAGS_out);
-  if (absl::Status st = geo::WriteBundleReplacing(**map, out, imported->provenance_json);
+  std::vector<std::pair<std::string, std::string>> private_fields;
+  if (!imported->provenance_json.empty()) {
+    private_fields.emplace_back("x_import", imported->provenance_json);
+  }
+  if (absl::Status st =
+          WriteMapBundleAtomically(**map, out, ExistingDirectory::kReplace, private_fields);
       !st.ok()) {
     return Fail(st);
   }

@@ -273,9 +273,6 @@ int WriteMap() {
                           *params);
   if (!map.ok()) return Fail(map.status());
   const double generate_s = absl::ToDoubleSeconds(absl::Now() - start);
-  // A file size limit (ulimit -f) then fails a write with EFBIG, which is
-  // reported and cleaned up, instead of killing the process mid-bundle.
-  std::signal(SIGXFSZ, SIG_IGN);
   // As import does: a bundle at --out is replaced, anything else refused.
   if (absl::Status s = WriteMapBundleAtomically(**map, out, ExistingDirectory::kReplace); !s.ok()) {
     return Fail(s);
@@ -411,6 +408,10 @@ int RiskLayerCommand() {
 }  // namespace riskplan
 
 int main(int argc, char** argv) {
+  // A file size limit (ulimit -f) fails a write with EFBIG, which is reported
+  // and cleaned up, instead of killing the process mid-bundle (write-map,
+  // import) or mid-raster (risk-layer).
+  std::signal(SIGXFSZ, SIG_IGN);
   const std::string command = riskplan::cmdline::ParseCommand(argc, argv, riskplan::Help());
   if (command == "evaluate") return riskplan::Evaluate();
   if (command == "write-map") return riskplan::WriteMap();

@@ -35,6 +35,7 @@
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/register_bus.h"
 #include "accel/shim/shim_server.h"
+#include "accel/tls_context.h"
 #include "cmdline/help.h"
 #ifdef RISKPLAN_HAVE_VERILATOR
 #include "accel/rtl/verilated_component.h"
@@ -65,6 +66,18 @@ ABSL_FLAG(double, report_clock_hz, 0,
 ABSL_FLAG(int, store_mb, 1024, "room for blobs (maps and kernel tables, quantised), MiB");
 ABSL_FLAG(int, max_sites, 65536, "largest EVAL, in sites");
 ABSL_FLAG(int, idle_timeout_s, 600, "close connections idle this long, seconds");
+ABSL_FLAG(std::string, tls_cert, "",
+          "TLS: this shim's certificate chain (PEM); with --tls_key and --tls_client_ca every "
+          "connection is mutual TLS. Re-read when it changes (rotate by swapping its directory)");
+ABSL_FLAG(std::string, tls_key, "", "TLS: the private key of --tls_cert (PEM, unencrypted)");
+ABSL_FLAG(std::string, tls_client_ca, "",
+          "TLS: CA bundle that must have signed the server's certificate (required with TLS: "
+          "the shim refuses a server it cannot authenticate)");
+ABSL_FLAG(std::string, tls_crl, "",
+          "TLS: revocation list (PEM) checked on the server's certificate");
+ABSL_FLAG(bool, allow_plaintext, false,
+          "listen in plaintext on an address that is not loopback (without TLS flags the shim "
+          "refuses to)");
 
 namespace riskplan::accel {
 namespace {
@@ -150,6 +163,35 @@ absl::StatusOr<OpenedDevice> MakeDevice() {
   return absl::InvalidArgumentError("--device must be model, mmio or verilator");
 }
 
+// The listener's TLS from the flags (null: plaintext, only on loopback
+// unless --allow_plaintext).
+absl::StatusOr<std::shared_ptr<TlsContext>> ListenerTls() {
+  TlsFiles files{.cert = absl::GetFlag(FLAGS_tls_cert),
+                 .key = absl::GetFlag(FLAGS_tls_key),
+                 .ca = absl::GetFlag(FLAGS_tls_client_ca),
+                 .crl = absl::GetFlag(FLAGS_tls_crl),
+                 .flag_prefix = ""};
+  if (!files.enabled()) {
+    std::string host;
+    int port = 0;
+    if (absl::Status s = SplitHostPort(absl::GetFlag(FLAGS_listen), &host, &port); !s.ok()) {
+      return s;
+    }
+    if (!files.crl.empty()) return absl::InvalidArgumentError("--tls_crl needs TLS");
+    if (!IsLoopbackHost(host) && !absl::GetFlag(FLAGS_allow_plaintext)) {
+      return absl::InvalidArgumentError(
+          "--listen is not a loopback address and no --tls_cert/--tls_key/--tls_client_ca were "
+          "given: plaintext there needs --allow_plaintext (docs/security.md)");
+    }
+    return std::shared_ptr<TlsContext>();
+  }
+  if (files.ca.empty()) {
+    return absl::InvalidArgumentError(
+        "--tls_client_ca is required with TLS: the shim must authenticate the server");
+  }
+  return TlsContext::ForListener(files);
+}
+
 int Main() {
   // Block the stop signals before any thread starts, and wait for them here.
   sigset_t stop;
@@ -178,6 +220,15 @@ int Main() {
     device = std::make_unique<ReportedClockDevice>(std::move(device), wanted_clock_hz);
   }
   ShimServerOptions options;
+  absl::StatusOr<std::shared_ptr<TlsContext>> tls = ListenerTls();
+  if (!tls.ok()) {
+    std::cerr << "riskplan-fpga-shim: cannot start: " << tls.status().message() << "\n";
+    return 1;
+  }
+  options.tls = *std::move(tls);
+  options.on_tls_event = [](const std::string& line) {
+    std::cerr << "riskplan-fpga-shim: " + line + "\n" << std::flush;
+  };
   options.limits.store_bytes = uint64_t(absl::GetFlag(FLAGS_store_mb)) << 20;
   options.limits.max_sites_per_eval = static_cast<uint32_t>(absl::GetFlag(FLAGS_max_sites));
   options.idle_timeout = absl::Seconds(absl::GetFlag(FLAGS_idle_timeout_s));

@@ -1,8 +1,33 @@
 #include "accel/shim/shim_server.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
 #include <utility>
 
+#include "absl/strings/str_cat.h"
+
 namespace riskplan::accel {
+namespace {
+
+// "127.0.0.1:51234" or "[::1]:51234", for the log of a refused handshake.
+std::string PeerName(const Socket& socket) {
+  sockaddr_storage peer{};
+  socklen_t length = sizeof(peer);
+  if (getpeername(socket.fd(), reinterpret_cast<sockaddr*>(&peer), &length) != 0) return "?";
+  char host[INET6_ADDRSTRLEN] = "";
+  if (peer.ss_family == AF_INET6) {
+    const auto* a = reinterpret_cast<const sockaddr_in6*>(&peer);
+    inet_ntop(AF_INET6, &a->sin6_addr, host, sizeof(host));
+    return absl::StrCat("[", host, "]:", ntohs(a->sin6_port));
+  }
+  const auto* a = reinterpret_cast<const sockaddr_in*>(&peer);
+  inet_ntop(AF_INET, &a->sin_addr, host, sizeof(host));
+  return absl::StrCat(host, ":", ntohs(a->sin_port));
+}
+
+}  // namespace
 
 ShimServer::ShimServer(std::unique_ptr<EwmmDevice> device, const ShimServerOptions& options)
     : device_(std::move(device)), options_(options) {
@@ -55,6 +80,23 @@ void ShimServer::AcceptLoop() {
 }
 
 void ShimServer::Serve(Connection* connection) {
+  if (options_.tls != nullptr) {
+    absl::Status handshake = options_.tls->Accept(
+        &connection->socket, absl::Now() + options_.handshake_timeout);
+    if (options_.on_tls_event) {
+      for (const std::string& line : options_.tls->TakeReloadLog()) options_.on_tls_event(line);
+      if (!handshake.ok()) {
+        options_.on_tls_event(absl::StrCat("refused ", PeerName(connection->socket), ": ",
+                                           handshake.message()));
+      }
+    }
+    if (!handshake.ok()) {
+      connection->socket.Shutdown();
+      absl::MutexLock lock(&mu_);
+      connection->finished = true;
+      return;
+    }
+  }
   ShimSession session(&context_);
   std::string payload;
   while (true) {

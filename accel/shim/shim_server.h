@@ -9,6 +9,7 @@
 #ifndef RISKPLAN_ACCEL_SHIM_SHIM_SERVER_H_
 #define RISKPLAN_ACCEL_SHIM_SHIM_SERVER_H_
 
+#include <functional>
 #include <list>
 #include <memory>
 #include <string>
@@ -19,6 +20,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "accel/net.h"
+#include "accel/tls_context.h"
 #include "accel/shim/device.h"
 #include "accel/shim/shim_session.h"
 
@@ -28,6 +30,13 @@ struct ShimServerOptions {
   ShimLimits limits;
   absl::Duration idle_timeout = absl::Minutes(10);
   int max_connections = 64;
+  // TLS on every connection (accel/tls_context.h); null: plaintext. With a
+  // client CA the shim refuses a server whose certificate it cannot verify.
+  std::shared_ptr<TlsContext> tls;
+  absl::Duration handshake_timeout = absl::Seconds(10);
+  // Called on a connection's thread for every refused handshake and every
+  // certificate reload (the daemon prints them); may be null.
+  std::function<void(const std::string&)> on_tls_event;
 };
 
 class ShimServer {

@@ -119,8 +119,8 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
   // window rule without locating q again.
   auto check = [&](size_t p, const Pose& q, double s, const ConfigurationRisk* m = nullptr) {
     double limit = 0.0;
-    const ViolationKind kind =
-        m != nullptr ? model.CheckConfiguration(q, *m, &limit) : model.CheckConfiguration(q, &limit);
+    const ViolationKind kind = m != nullptr ? model.CheckConfiguration(q, *m, &limit)
+                                            : model.CheckConfiguration(q, &limit);
     if (kind == ViolationKind::kNone) return;
     out.pieces[p].admissible = false;
     out.admissible = false;

@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <set>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/string_view.h"
 #include "core/map/staged_directory.h"
@@ -380,7 +382,9 @@ using BundleFileSink =
     std::function<absl::Status(const std::string& name, const char* data, size_t size)>;
 
 // The bundle's files, layers first and the manifest last, each into `sink`.
-absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink);
+using PrivateFields = std::vector<std::pair<std::string, std::string>>;
+absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink,
+                              const PrivateFields& private_fields = {});
 
 }  // namespace
 
@@ -466,7 +470,23 @@ absl::Status WriteMapBundle(const RiskMap& map, const std::string& dir) {
 }
 
 absl::Status WriteMapBundleAtomically(const RiskMap& map, const std::string& dir,
-                                      ExistingDirectory existing) {
+                                      ExistingDirectory existing,
+                                      const PrivateFields& private_fields) {
+  std::set<std::string> names;
+  for (const auto& [name, json] : private_fields) {
+    if (!names.insert(name).second) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("map bundle: private manifest field '", name, "' is given twice"));
+    }
+    if (!absl::StartsWith(name, "x_")) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("map bundle: private manifest field '", name, "' must start with \"x_\""));
+    }
+    if (!Json::accept(json)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("map bundle: private manifest field '", name, "' is not JSON"));
+    }
+  }
   absl::StatusOr<std::unique_ptr<StagedDirectory>> staged =
       StagedDirectory::Create(dir, existing, kManifestName);
   if (!staged.ok()) {
@@ -474,8 +494,11 @@ absl::Status WriteMapBundleAtomically(const RiskMap& map, const std::string& dir
                         absl::StrCat("map bundle: ", staged.status().message()));
   }
   if (absl::Status s = WriteBundleFiles(
-          map, [&](const std::string& name, const char* data,
-                   size_t size) { return (*staged)->WriteFile(name, data, size); });
+          map,
+          [&](const std::string& name, const char* data, size_t size) {
+            return (*staged)->WriteFile(name, data, size);
+          },
+          private_fields);
       !s.ok()) {
     return s;
   }
@@ -484,7 +507,8 @@ absl::Status WriteMapBundleAtomically(const RiskMap& map, const std::string& dir
 
 namespace {
 
-absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink) {
+absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink,
+                              const PrivateFields& private_fields) {
   const MapHeader& h = map.header();
   const MapLayers& l = map.layers();
 
@@ -530,6 +554,9 @@ absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink) {
                            {"sha256", Sha256Hex(bytes.data(), bytes.size())}};
   }
   manifest["layers"] = std::move(layer_entries);
+  for (const auto& [name, json] : private_fields) {
+    manifest[name] = OrderedJson::parse(json);
+  }
   // Invalid UTF-8 in a name or provenance is replaced rather than thrown on.
   const std::string text =
       manifest.dump(2, ' ', false, OrderedJson::error_handler_t::replace) + "\n";

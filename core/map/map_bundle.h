@@ -10,6 +10,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -39,8 +40,16 @@ absl::StatusOr<std::shared_ptr<const RiskMap>> LoadMapBundle(const std::string& 
 // 'maps/city/density.f32': No space left on device". The written bundle
 // loads back bit for bit. Every program that writes bundles for others to
 // load (riskplan-tool write-map, importers) writes them with this.
-absl::Status WriteMapBundleAtomically(const RiskMap& map, const std::string& dir,
-                                      ExistingDirectory existing = ExistingDirectory::kRefuse);
+//
+// `private_fields` adds members to the manifest after the format's own, each
+// a name starting with "x_" (the prefix readers ignore, docs/map-bundle.md)
+// and its value as JSON text, e.g. an importer's {"x_import", "{...}"}
+// (provenance). A name without the prefix, a name given twice or a value that
+// is not JSON is refused (InvalidArgument) before anything is written.
+absl::Status WriteMapBundleAtomically(
+    const RiskMap& map, const std::string& dir,
+    ExistingDirectory existing = ExistingDirectory::kRefuse,
+    const std::vector<std::pair<std::string, std::string>>& private_fields = {});
 
 // Writes `map` as a bundle into `dir` in place (created if missing; existing
 // bundle files are replaced, other files are left): each file through its own

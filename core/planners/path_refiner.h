@@ -65,6 +65,10 @@ class PathRefiner {
         chunk_(std::max<int64_t>(1, chunk)),
         stop_(stop) {}
 
+  // Replaces the StopCondition polled between chunks (a run whose earliest
+  // deadline changes).
+  void set_stop(const StopCondition& stop) { stop_ = stop; }
+
   // Draws one edit of the trajectory `waypoints` (start ... goal, at least 2)
   // whose piece i (waypoints[i] -> waypoints[i + 1]) has the exact risk
   // piece_risks[i], and evaluates it. Returns true and sets *edit when it
@@ -181,7 +185,7 @@ class PathRefiner {
   RiskEvaluator* evaluator_;
   const double scale_m_;
   const int64_t chunk_;
-  const StopCondition stop_;
+  StopCondition stop_;
   TrajectoryPiece pieces_[2];
   std::vector<Pose> poses_;
   std::vector<ConfigurationRisk> risks_;

@@ -72,8 +72,6 @@ const std::vector<PlannerParamInfo>& PlannerParams(PlannerAlgorithm algorithm) {
   return *empty;
 }
 
-namespace {
-
 absl::Status CheckEndpoint(const RiskModel& model, const Pose& pose, const char* which) {
   for (auto [field, value] :
        {std::pair{"x", pose.x}, {"y", pose.y}, {"z", pose.z}, {"theta", pose.theta}}) {
@@ -96,8 +94,6 @@ absl::Status CheckEndpoint(const RiskModel& model, const Pose& pose, const char*
       absl::StrFormat("%s pose (%.1f, %.1f, %.1f) on map '%s' is not admissible: %s", which, pose.x,
                       pose.y, pose.z, model.map().name(), detail));
 }
-
-}  // namespace
 
 absl::Status CheckEndpoints(const PlanningProblem& problem) {
   if (problem.model == nullptr) return absl::InvalidArgumentError("planning problem has no model");

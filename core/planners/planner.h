@@ -174,6 +174,11 @@ const std::vector<PlannerParamInfo>& PlannerParams(PlannerAlgorithm algorithm);
 // section 6. InvalidArgument naming "start" or "goal" and the violation.
 absl::Status CheckEndpoints(const PlanningProblem& problem);
 
+// The check of one pose that CheckEndpoints makes: finite, and admissible
+// under spec section 6. InvalidArgument naming `which` ("start", "goal") and
+// the violation.
+absl::Status CheckEndpoint(const RiskModel& model, const Pose& pose, const char* which);
+
 // Checks the request-carried obstacles of `options` for `algorithm`: finite
 // coordinates, x0_m < x1_m and y0_m < y1_m, at_iteration >= 0, at most
 // kMaxObstaclePoints points and kMaxDynamicObstacles areas, and support:

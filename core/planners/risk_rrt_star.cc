@@ -90,21 +90,24 @@ absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
     return s;
   }
   // Without an evaluator of the caller's: direct evaluation, or on request an
-  // exact cache of kernel sites. (On demo-city about 40 % of the requests of a
-  // run repeat a site, but a table large enough to hold them misses the CPU
-  // caches, and measured no faster than recomputing.)
+  // exact cache of kernel sites.
   std::unique_ptr<RiskEvaluator> own;
   RiskEvaluator* evaluator = evaluator_;
   if (evaluator == nullptr) {
-    if (params->risk_cache_log2 > 0) {
-      own = std::make_unique<CachingRiskEvaluator>(params->risk_cache_log2);
-    } else {
-      own = std::make_unique<DirectRiskEvaluator>();
-    }
+    own = rrt_star::OwnEvaluator(*params);
     evaluator = own.get();
   }
-  rrt_star::Run run(problem, options, *params, evaluator, cancel, on_improvement);
-  return run.Execute();
+  // The single-start planner is the shared goal tree with one mission.
+  absl::StatusOr<PlanResult> result = absl::InternalError("the run gave no result");
+  rrt_star::RunCallbacks callbacks;
+  if (on_improvement) {
+    callbacks.on_improvement = [&](size_t, const PlanImprovement& i) { on_improvement(i); };
+  }
+  callbacks.on_result = [&](size_t, absl::StatusOr<PlanResult> r) { result = std::move(r); };
+  rrt_star::Run run(*problem.model, problem.goal, {{problem.start, options.budget}}, options.seed,
+                    options.record_tree, *params, evaluator, cancel, std::move(callbacks));
+  run.Execute();
+  return result;
 }
 
 }  // namespace riskplan

@@ -28,6 +28,9 @@
 //   new pieces is lower, are written into the tree.
 // Every reported risk stays the sum of exact piece risks: bit for bit what
 // EvaluateTrajectory gives for the reported waypoints.
+//
+// Several missions to one goal share one such tree through
+// core/planners/shared_goal_tree.h; this planner is its one-mission case.
 #ifndef RISKPLAN_CORE_PLANNERS_RISK_RRT_STAR_H_
 #define RISKPLAN_CORE_PLANNERS_RISK_RRT_STAR_H_
 

@@ -14,7 +14,7 @@ int32_t Run::NearestNode(const Pose& q) const {
   double best_length = kInf;
   const ModelParams& mp = model_.params();
   for (const auto& [d2, id] : candidates) {
-    if (id == kStart) continue;
+    if (IsStart(id)) continue;  // a start is never a parent
     const double length =
         DubinsAirplanePath(q, nodes_[id].pose, mp.turn_radius_m, mp.max_climb_rad).Length();
     if (length < best_length) {
@@ -195,7 +195,7 @@ std::vector<int32_t> Run::KNearestFrom(const Pose& from, const std::vector<int32
   const ModelParams& mp = model_.params();
   std::vector<std::pair<double, int32_t>> ranked;
   for (int32_t id : near) {
-    if (id == kStart || nodes_[id].cost >= max_cost) continue;
+    if (IsStart(id) || nodes_[id].cost >= max_cost) continue;
     const double length =
         DubinsAirplanePath(from, nodes_[id].pose, mp.turn_radius_m, mp.max_climb_rad).Length();
     ranked.push_back({length, id});

@@ -28,11 +28,12 @@ bool Run::SampleUniform(Pose* q) {
   return false;
 }
 
-bool Run::SamplePathBiased(Pose* q) {
-  const double length = best_->length_m;
+bool Run::SamplePathBiased(size_t m, Pose* q) {
+  const MissionRun& r = missions_[m];
+  const double length = r.best->length_m;
   double s = rng_.Uniform() * length;
-  Pose base = best_pieces_.back().End();
-  for (const TrajectoryPiece& piece : best_pieces_) {
+  Pose base = r.best_pieces.back().End();
+  for (const TrajectoryPiece& piece : r.best_pieces) {
     if (s <= piece.Length()) {
       base = piece.PoseAt(s);
       break;
@@ -45,32 +46,37 @@ bool Run::SamplePathBiased(Pose* q) {
   return Admissible(*q);
 }
 
-Pose Run::Sample(bool* is_start) {
-  *is_start = false;
+Pose Run::Sample(int* start_of) {
+  *start_of = -1;
   const double u = rng_.Uniform();
   if (u < params_.goal_bias) {
-    *is_start = true;
-    return problem_.start;
+    *start_of = NextMission(&start_cursor_, Pick::kRunning);
+    return missions_[*start_of].spec.start;
   }
   Pose q;
-  if (best_.has_value() && u < params_.goal_bias + params_.path_bias && SamplePathBiased(&q)) {
-    return q;
+  if (u < params_.goal_bias + params_.path_bias) {
+    const int m = NextMission(&path_cursor_, Pick::kWithBest);
+    if (m >= 0 && SamplePathBiased(m, &q)) return q;
   }
   if (SampleUniform(&q)) return q;
-  *is_start = true;  // a map with almost nothing flyable: head for the start
-  return problem_.start;
+  // A map with almost nothing flyable: head for a start.
+  *start_of = NextMission(&start_cursor_, Pick::kRunning);
+  return missions_[*start_of].spec.start;
 }
 
-absl::Status Run::ConnectStart() {
-  const Pose& start = problem_.start;
+absl::Status Run::ConnectStart(size_t m) {
+  const Pose& start = missions_[m].spec.start;
+  const int32_t node = StartNode(m);
+  // Only a parent that lowers this mission's own risk is of use to it.
+  const double own = nodes_[node].cost;
   int32_t parent = -1;
   double edge_risk = kInf;
-  if (absl::Status s = BestParent(start, KNearestFrom(start, NearCandidates(start), BestCost()),
-                                  BestCost(), &parent, &edge_risk);
+  if (absl::Status s = BestParent(start, KNearestFrom(start, NearCandidates(start), own), own,
+                                  &parent, &edge_risk);
       !s.ok()) {
     return s;
   }
-  if (parent >= 0) SetParent(kStart, parent, edge_risk);
+  if (parent >= 0) SetParent(node, parent, edge_risk);
   return absl::OkStatus();
 }
 
@@ -79,11 +85,13 @@ absl::Status Run::Extend(const Pose& q_new) {
   const std::vector<int32_t> near = NearCandidates(q_new);
 
   // Parent: the k nearest by Dubins length q_new -> n, best by accumulated
-  // risk; branch and bound: a node at or above the best solution is useless.
+  // risk; branch and bound: a node at or above every running mission's
+  // solution is useless.
+  const double bound = Bound();
   int32_t parent = -1;
   double edge_risk = kInf;
   if (absl::Status s =
-          BestParent(q_new, KNearestFrom(q_new, near, BestCost()), BestCost(), &parent, &edge_risk);
+          BestParent(q_new, KNearestFrom(q_new, near, bound), bound, &parent, &edge_risk);
       !s.ok()) {
     return s;
   }
@@ -95,10 +103,12 @@ absl::Status Run::Extend(const Pose& q_new) {
   SetParent(id, parent, edge_risk);
   grid_.Insert(id, q_new.x, q_new.y);
 
-  // Rewire: neighbours (the start included) that get cheaper through q_new.
+  // Rewire: neighbours (running missions' starts included) that get cheaper
+  // through q_new.
   std::vector<std::pair<double, int32_t>> ranked;
   for (int32_t n : near) {
     if (n == kGoal || n == parent || !(cost < nodes_[n].cost)) continue;
+    if (IsStart(n) && !Running(n - kFirstStart)) continue;  // its result is out
     const double length =
         DubinsAirplanePath(nodes_[n].pose, q_new, mp.turn_radius_m, mp.max_climb_rad).Length();
     ranked.push_back({length, n});
@@ -120,58 +130,19 @@ absl::Status Run::Extend(const Pose& q_new) {
   return absl::OkStatus();
 }
 
-absl::Status Run::MaybeReport() {
-  if (!std::isfinite(BestCost())) return absl::OkStatus();
-  if (best_.has_value() && !(BestCost() < best_->risk)) return absl::OkStatus();
-  std::vector<Pose> waypoints;
-  // The trajectory's risk as EvaluateTrajectory computes it: the sum of its
-  // piece risks from start to goal. Each edge risk was computed exactly as
-  // that piece's risk (same manoeuvre, same samples, same formula), so the
-  // total is bit for bit what an independent evaluation gives; the tree's
-  // R(start) may differ from it in the last bits (other order of additions).
-  double risk = 0.0;
-  double length = 0.0;
-  const ModelParams& mp = model_.params();
-  for (int32_t n = kStart; n >= 0; n = nodes_[n].parent) {
-    waypoints.push_back(nodes_[n].pose);
-    if (nodes_[n].parent >= 0) risk += nodes_[n].edge_risk;
-  }
-  if (best_.has_value() && !(risk < best_->risk)) return absl::OkStatus();
-  best_pieces_.clear();
-  for (size_t i = 0; i + 1 < waypoints.size(); ++i) {
-    best_pieces_.push_back(TrajectoryPiece::Manoeuvre(waypoints[i], waypoints[i + 1],
-                                                      mp.turn_radius_m, mp.max_climb_rad));
-    length += best_pieces_.back().Length();
-  }
-  PlanImprovement improvement;
-  improvement.waypoints = std::move(waypoints);
-  improvement.risk = risk;
-  improvement.length_m = length;
-  improvement.iterations = iterations_;
-  improvement.tree_size = static_cast<int64_t>(nodes_.size());
-  improvement.elapsed_s = limits_.Elapsed();
-  best_ = improvement;
-  if (on_improvement_) on_improvement_(improvement);
-  return absl::OkStatus();
-}
-
 absl::Status Run::Refine() {
-  if (!std::isfinite(BestCost())) return absl::OkStatus();
+  size_t probe = refine_cursor_;
+  if (NextMission(&probe, Pick::kWithCost) < 0) return absl::OkStatus();
   refine_credit_ += params_.refine_edits;
-  bool stale = true;
+  // The path of the mission last traced, while no edit has changed the tree.
+  int traced = -1;
   for (; refine_credit_ >= 1.0; refine_credit_ -= 1.0) {
     if (static_cast<int64_t>(nodes_.size()) >= params_.max_nodes) break;
-    if (stale) {
-      // The best trajectory as the tree holds it: start ... goal.
-      path_nodes_.clear();
-      path_poses_.clear();
-      path_risks_.clear();
-      for (int32_t n = kStart; n >= 0; n = nodes_[n].parent) {
-        path_nodes_.push_back(n);
-        path_poses_.push_back(nodes_[n].pose);
-        if (nodes_[n].parent >= 0) path_risks_.push_back(nodes_[n].edge_risk);
-      }
-      stale = false;
+    // Edits go round-robin over the running missions with a solution.
+    const int m = NextMission(&refine_cursor_, Pick::kWithCost);
+    if (m != traced) {
+      TracePath(m);
+      traced = m;
     }
     PathRefiner::Edit edit;
     absl::StatusOr<bool> improved = refiner_.TryEdit(path_poses_, path_risks_, refine_rng_, &edit);
@@ -185,88 +156,78 @@ absl::Status Run::Refine() {
       grid_.Insert(id, edit.waypoint.x, edit.waypoint.y);
       target = id;
     }
-    // The nodes between keep their other children; only the trajectory leaves them.
+    // The nodes between keep their other children; only the trajectory
+    // leaves them. Their R, and that of every mission flying through them,
+    // only falls.
     SetParent(path_nodes_[edit.first], target, edit.risk_in);
-    stale = true;
+    traced = -1;
   }
-  return MaybeReport();
+  MaybeReport();
+  return absl::OkStatus();
 }
 
-absl::Status Run::Guide() {
+absl::Status Run::Guide(size_t m) {
   if (params_.guide_cell_m <= 0.0) return absl::OkStatus();
-  absl::StatusOr<std::vector<Pose>> route = CoarseRiskRoute(
-      model_, problem_.start, problem_.goal, params_.guide_cell_m, params_.step_m, evaluator_);
-  if (!route.ok()) return route.status();
-  for (auto it = route->rbegin(); it != route->rend(); ++it) {
+  // The coarse grid depends on the model alone: built once for every start.
+  if (!guide_grid_.has_value()) {
+    absl::StatusOr<CoarseRiskGrid> grid =
+        CoarseRiskGrid::Build(model_, params_.guide_cell_m, evaluator_);
+    if (!grid.ok()) return grid.status();
+    guide_grid_ = std::move(*grid);
+  }
+  const std::vector<Pose> route =
+      guide_grid_->Route(missions_[m].spec.start, goal_, params_.step_m);
+  for (auto it = route.rbegin(); it != route.rend(); ++it) {
     if (!Admissible(*it)) continue;
     if (absl::Status s = Extend(*it); !s.ok()) return s;
   }
-  if (absl::Status s = ConnectStart(); !s.ok()) return s;
-  return MaybeReport();
+  if (absl::Status s = ConnectStart(m); !s.ok()) return s;
+  MaybeReport();
+  return absl::OkStatus();
 }
 
-absl::StatusOr<PlanResult> Run::Execute() {
-  nodes_.push_back(Node{problem_.goal, -1, 0.0, 0.0, {}});
-  nodes_.push_back(Node{problem_.start, -1, kInf, kInf, {}});
-  grid_.Insert(kGoal, problem_.goal.x, problem_.goal.y);
-  grid_.Insert(kStart, problem_.start.x, problem_.start.y);
+absl::Status Run::Iterate() {
   const ModelParams& mp = model_.params();
+  ++iterations_;
+  int start_of = -1;
+  const Pose q_rand = Sample(&start_of);
+  const int32_t near = NearestNode(q_rand);
+  if (near < 0) return absl::OkStatus();
+  const DubinsAirplanePath to_near(q_rand, nodes_[near].pose, mp.turn_radius_m, mp.max_climb_rad);
+  if (start_of >= 0 && to_near.Length() <= params_.step_m) {
+    if (absl::Status s = ConnectStart(start_of); !s.ok()) return s;
+  } else {
+    // Steer: the configuration step_m before q_near on the way from q_rand.
+    const Pose q_new = to_near.Length() <= params_.step_m
+                           ? q_rand
+                           : to_near.PoseAt(to_near.Length() - params_.step_m);
+    if (!Admissible(q_new)) return absl::OkStatus();
+    if (absl::Status s = Extend(q_new); !s.ok()) return s;
+  }
+  MaybeReport();
+  return Refine();
+}
 
-  PlanResult result;
-  result.reason = StopReason::kBudgetExhausted;
-  // A step stopped by the budget or the token inside its loops (RunStopped)
-  // ends the run as the checks at the top of the loop would have.
-  absl::Status step = Guide();
-  while (step.ok()) {
-    if (cancel_.IsCancelled()) {
-      result.reason = StopReason::kCancelled;
-      break;
-    }
-    if (!BudgetLeft()) break;
-    if (best_.has_value() && best_->risk <= 0.0) {
-      result.reason = StopReason::kConverged;
-      break;
-    }
-    ++iterations_;
-    bool is_start = false;
-    const Pose q_rand = Sample(&is_start);
-    const int32_t near = NearestNode(q_rand);
-    if (near < 0) continue;
-    const DubinsAirplanePath to_near(q_rand, nodes_[near].pose, mp.turn_radius_m, mp.max_climb_rad);
-    absl::Status status;
-    if (is_start && to_near.Length() <= params_.step_m) {
-      status = ConnectStart();
-    } else {
-      // Steer: the configuration step_m before q_near on the way from q_rand.
-      const Pose q_new = to_near.Length() <= params_.step_m
-                             ? q_rand
-                             : to_near.PoseAt(to_near.Length() - params_.step_m);
-      if (!Admissible(q_new)) continue;
-      status = Extend(q_new);
-    }
-    if (status.ok()) status = MaybeReport();
-    if (status.ok()) status = Refine();
-    step = status;
+void Run::Execute() {
+  nodes_.push_back(Node{goal_, -1, 0.0, 0.0, {}});
+  grid_.Insert(kGoal, goal_.x, goal_.y);
+  for (size_t m = 0; m < missions_.size(); ++m) {
+    const Pose& start = missions_[m].spec.start;
+    nodes_.push_back(Node{start, -1, kInf, kInf, {}});
+    grid_.Insert(StartNode(m), start.x, start.y);
   }
-  if (!step.ok()) {
-    if (!IsRunStopped(step)) return step;
-    if (cancel_.IsCancelled()) result.reason = StopReason::kCancelled;
+  // A step stopped by the StopCondition inside its loops (RunStopped) is
+  // dropped, as an iteration the budget would not have begun; UpdateMissions
+  // then ends the missions it stopped for (the token: all; a deadline: the
+  // earliest) and the others go on.
+  for (size_t m = 0; m < missions_.size(); ++m) {
+    if (!UpdateMissions()) return;
+    if (!Running(m)) continue;
+    if (absl::Status s = Guide(m); !s.ok() && !IsRunStopped(s)) return FailRunning(s);
   }
-  if (!best_.has_value() && result.reason != StopReason::kCancelled) {
-    result.reason = StopReason::kNoSolution;
+  while (UpdateMissions()) {
+    if (absl::Status s = Iterate(); !s.ok() && !IsRunStopped(s)) return FailRunning(s);
   }
-  result.best = best_;
-  result.iterations = iterations_;
-  result.tree_size = static_cast<int64_t>(nodes_.size());
-  result.elapsed_s = limits_.Elapsed();
-  result.configurations_evaluated = evaluator_->evaluated();
-  if (options_.record_tree) {
-    for (size_t n = 0; n < nodes_.size(); ++n) {
-      if (nodes_[n].parent >= 0)
-        result.tree.push_back({nodes_[n].pose, nodes_[nodes_[n].parent].pose});
-    }
-  }
-  return result;
 }
 
 }  // namespace riskplan::rrt_star

@@ -1,15 +1,21 @@
-// The internals of RISK_RRT_STAR (core/planners/risk_rrt_star.h): its
-// parameters, its tree and candidate edges, and the Run that holds one Plan()
-// call's state. The Run's methods live in risk_rrt_star_run.cc (sampling and
-// the main loop, extension, rewiring, reporting, refinement, the guide route)
-// and risk_rrt_star_edges.cc (neighbours, candidate edges evaluated in risk
-// batches against a bound, the choice of parent). Not part of core's API.
+// The internals of RISK_RRT_STAR (core/planners/risk_rrt_star.h) and of the
+// shared goal tree (core/planners/shared_goal_tree.h): the parameters, the
+// tree and candidate edges, and the Run that holds one planning call's state.
+// The Run's methods live in risk_rrt_star_run.cc (sampling and the main loop,
+// extension, rewiring, reporting, refinement, the guide route),
+// risk_rrt_star_missions.cc (the missions: their budgets, the bound, their
+// results) and risk_rrt_star_edges.cc (neighbours, candidate edges evaluated
+// in risk batches against a bound, the choice of parent). Not part of core's
+// API.
 #ifndef RISKPLAN_CORE_PLANNERS_RISK_RRT_STAR_RUN_H_
 #define RISKPLAN_CORE_PLANNERS_RISK_RRT_STAR_RUN_H_
 
+#include <chrono>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,6 +29,7 @@
 #include "core/planners/path_refiner.h"
 #include "core/planners/planner.h"
 #include "core/planners/planner_support.h"
+#include "core/planners/risk_guide.h"
 #include "core/planners/spatial_grid.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
@@ -85,44 +92,94 @@ struct CandidateEdge {
   double risk = kInf;      // set when complete: exactly the piece risk of EvaluateTrajectory
 };
 
-// One planning run: all state of a Plan() call.
+// One start of a Run: a mission's start pose and its own budget.
+struct RunMission {
+  Pose start;
+  PlannerBudget budget;  // checked by CheckBudget before the run
+};
 
-// One planning run: all state of a Plan() call.
+// What a Run reports, each with the index of the mission in the Run's list:
+// improvements (strictly decreasing risk per mission) and exactly one result
+// per mission, in the order the missions end.
+struct RunCallbacks {
+  std::function<void(size_t mission, const PlanImprovement&)> on_improvement;
+  std::function<void(size_t mission, absl::StatusOr<PlanResult> result)> on_result;
+};
+
+// One planning run: one tree grown from the goal for one or more starts, all
+// state of a Plan() call (one start) or of a shared goal tree
+// (core/planners/shared_goal_tree.h, several). Node 0 is the goal, nodes
+// 1 ... M the missions' starts, never parents; R(start m) is mission m's
+// solution. With one mission every step is exactly that of the single-start
+// planner: the rules below reduce to it and draw the same random numbers.
+// - Branch and bound uses Bound(): the largest R(start) among running
+//   missions, +inf while any of them has none, so nothing a running mission
+//   could still use is refused.
+// - The goal-biased samples (a start) and the path-biased samples and
+//   refinement edits (around a mission's best trajectory) go round-robin over
+//   the running missions (those with a solution for the last two); each
+//   mission gets its own guide route, added in mission order before the first
+//   iteration.
+// - Each mission ends by its own budget (iterations of the shared tree,
+//   and/or wall time since the run began) or when its risk is 0; then it gets
+//   its result while the tree grows on for the others. The node bound, the
+//   token and an evaluator's error end every running mission.
+// Single-threaded; callbacks run on the caller's thread and must not re-enter.
 class Run {
  public:
-  Run(const PlanningProblem& problem, const PlanOptions& options, const Params& params,
-      RiskEvaluator* evaluator, const CancellationToken& cancel,
-      const ImprovementCallback& on_improvement)
-      : problem_(problem),
-        model_(*problem.model),
-        options_(options),
-        params_(params),
-        evaluator_(evaluator),
-        cancel_(cancel),
-        on_improvement_(on_improvement),
-        limits_(options.budget, cancel),
-        stop_(limits_.Stop()),
-        rng_(options.seed),
-        refine_rng_(options.seed ^ 0x5265666e65526e67ULL),
-        refiner_(model_, evaluator, params.refine_scale_m, params.MidpointsPerBatch(), stop_),
-        grid_(model_.map().x0(), model_.map().y0(), model_.map().width_m(), model_.map().height_m(),
-              std::max(50.0, params.near_radius_m / 2.0)) {}
+  // REQUIRES: at least one mission; every start and the goal admissible,
+  // every budget valid (the callers check them first). `model`, `evaluator` and `cancel`
+  // must outlive the Run.
+  Run(const RiskModel& model, const Pose& goal, std::vector<RunMission> missions, uint64_t seed,
+      bool record_tree, const Params& params, RiskEvaluator* evaluator,
+      const CancellationToken& cancel, RunCallbacks callbacks);
 
-  absl::StatusOr<PlanResult> Execute();
+  // Plans until every mission has ended; each gets exactly one on_result:
+  // its PlanResult, or the evaluator's error.
+  void Execute();
 
  private:
+  enum class MissionState { kRunning, kDone };
+  struct MissionRun {
+    RunMission spec;
+    std::optional<std::chrono::steady_clock::time_point> deadline;
+    MissionState state = MissionState::kRunning;
+    std::optional<PlanImprovement> best;
+    std::vector<TrajectoryPiece> best_pieces;
+  };
+
   bool Admissible(const Pose& q) const {
     return model_.CheckConfiguration(q) == ViolationKind::kNone;
   }
-  bool BudgetLeft() const {
-    if (limits_.OutOfIterations(iterations_) || limits_.OutOfTime()) return false;
-    return static_cast<int64_t>(nodes_.size()) < params_.max_nodes;
+  static int32_t StartNode(size_t mission) { return static_cast<int32_t>(mission) + kFirstStart; }
+  bool IsStart(int32_t node) const {
+    return node >= kFirstStart && node < kFirstStart + static_cast<int32_t>(missions_.size());
   }
-  double BestCost() const { return nodes_[kStart].cost; }
+  bool Running(size_t m) const { return missions_[m].state == MissionState::kRunning; }
+  // The branch-and-bound limit: the largest R(start) among running missions
+  // (+inf while one of them has none).
+  double Bound() const;
+  double Elapsed() const;
+
+  // Ends the missions that must end now (the token: all; the node bound:
+  // all; then each by its budget or a zero risk), in mission order, and
+  // narrows the StopCondition to the earliest deadline left. False when no
+  // mission runs any more.
+  bool UpdateMissions();
+  void Finish(size_t m, StopReason reason);
+  void FailRunning(const absl::Status& status);
+  void ResetStop();
+  // Which missions a round-robin pick may choose.
+  enum class Pick { kRunning, kWithBest, kWithCost };
+  // The next running mission at or after *cursor that `pick` allows (kWithBest:
+  // one with a reported trajectory; kWithCost: with a finite R(start)), and
+  // *cursor moved past it; -1 when there is none.
+  int NextMission(size_t* cursor, Pick pick) const;
 
   bool SampleUniform(Pose* q);
-  bool SamplePathBiased(Pose* q);
-  Pose Sample(bool* is_start);
+  bool SamplePathBiased(size_t m, Pose* q);
+  // A sample; *start_of is the mission whose start it is, or -1.
+  Pose Sample(int* start_of);
   int32_t NearestNode(const Pose& q) const;
   std::vector<int32_t> NearCandidates(const Pose& q) const;
   // Appends the edge flown from `from` to `to`; its midpoints are generated
@@ -136,7 +193,7 @@ class Run {
   // An edge that completes is admissible and has exactly the risk a full
   // evaluation of admissible edges alone would give it, so the outcome does
   // not depend on when an inadmissible edge is found out. RunStopped() when
-  // the run's budget ends or its token is cancelled between two batches.
+  // the run's StopCondition is reached between two batches.
   absl::Status EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
                                   int32_t* winner);
   void SetParent(int32_t child, int32_t parent, double edge_risk);
@@ -146,39 +203,51 @@ class Run {
                           int32_t* parent, double* edge_risk);
   std::vector<int32_t> KNearestFrom(const Pose& from, const std::vector<int32_t>& near,
                                     double max_cost) const;
-  absl::Status ConnectStart();
+  absl::Status ConnectStart(size_t m);
   absl::Status Extend(const Pose& q_new);
-  absl::Status MaybeReport();
-  // Local improvement of the best trajectory between tree iterations
+  // Reports every running mission whose R(start) dropped below its best.
+  void MaybeReport();
+  void MaybeReportMission(size_t m);
+  // The tree's path from mission m's start to the goal, into path_nodes_,
+  // path_poses_ and path_risks_.
+  void TracePath(size_t m);
+  // Local improvement of the best trajectories between tree iterations
   // (core/planners/path_refiner.h): an accepted edit becomes part of the tree (a new
   // node for its waypoint, the trajectory's nodes re-parented), so the tree's
   // R(start) is the improved risk and later samples build on it.
   absl::Status Refine();
-  // Seeds the tree with the coarse guide route (core/planners/risk_guide.h), its
-  // waypoints added from the goal's side by the ordinary extension.
-  absl::Status Guide();
+  // Seeds the tree with mission m's coarse guide route (core/planners/risk_guide.h),
+  // its waypoints added from the goal's side by the ordinary extension.
+  absl::Status Guide(size_t m);
+  // One iteration: a sample, an extension (or a start's connection), the
+  // reports and the refinement.
+  absl::Status Iterate();
 
   static constexpr int32_t kGoal = 0;
-  static constexpr int32_t kStart = 1;
+  static constexpr int32_t kFirstStart = 1;
 
-  const PlanningProblem& problem_;
   const RiskModel& model_;
-  const PlanOptions& options_;
+  const Pose goal_;
+  const bool record_tree_;
   const Params params_;
   RiskEvaluator* evaluator_;
   const CancellationToken& cancel_;
-  const ImprovementCallback& on_improvement_;
-  RunLimits limits_;  // the budget's clock starts when the run is made
-  const StopCondition stop_;  // limits_'s, polled between risk batches
+  const RunCallbacks callbacks_;
+  const std::chrono::steady_clock::time_point begin_;  // every time budget counts from here
+  std::vector<MissionRun> missions_;
+  size_t running_ = 0;
+  StopCondition stop_;  // the token and the earliest deadline of a running mission
   Rng rng_;
   Rng refine_rng_;  // the refiner's own stream: the tree's samples do not depend on it
   PathRefiner refiner_;
   double refine_credit_ = 0.0;
+  size_t start_cursor_ = 0;                   // round-robin of the goal-biased samples
+  size_t path_cursor_ = 0;                    // ... of the path-biased samples
+  size_t refine_cursor_ = 0;                  // ... of the refinement edits
+  std::optional<CoarseRiskGrid> guide_grid_;  // built for the first guide route
   SpatialGrid grid_;
   std::vector<Node> nodes_;
   int64_t iterations_ = 0;
-  std::optional<PlanImprovement> best_;
-  std::vector<TrajectoryPiece> best_pieces_;
   // Scratch buffers reused between iterations.
   std::vector<int32_t> path_nodes_;
   std::vector<Pose> path_poses_;
@@ -186,6 +255,10 @@ class Run {
   std::vector<Pose> batch_poses_;
   std::vector<ConfigurationRisk> batch_risks_;
 };
+
+// The evaluator a plan uses when its caller gives none: direct evaluation,
+// or with params.risk_cache_log2 > 0 the exact cache of kernel sites.
+std::unique_ptr<RiskEvaluator> OwnEvaluator(const Params& params);
 
 }  // namespace riskplan::rrt_star
 

@@ -3,8 +3,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
@@ -143,8 +145,37 @@ TEST(ImportCommandTest, RefusalsExitTwoAndWriteNothing) {
       "import --out=%s/precious --center=49.6,6.1 --size_m=1000 --res_m=10 --terrain=%s", dir,
       big_dem));
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("neither a map bundle nor an empty directory"));
+  EXPECT_THAT(r.output, HasSubstr("is a directory without manifest.json; not replacing it"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/precious/notes.txt"));
+}
+
+// A disk that fills up during the write (here a file size limit, which root
+// is subject to too): the import says which file, exits 1, and the bundle
+// already at --out is left whole, with no temporary directory beside it.
+TEST(ImportCommandTest, AFailedWriteLeavesTheOldBundleWhole) {
+  const std::string dir = FreshDir("command-full-disk");
+  const std::string dem = Dem(dir, 6.0, 49.5, 0.2);
+  const std::string out = dir + "/maps/town";
+  const std::string args = absl::StrFormat(
+      "import --out=%s --center=49.6,6.1 --size_m=2000 --res_m=10 --terrain=%s", out, dem);
+  ASSERT_EQ(Tool(args).exit_code, 0);
+  std::ifstream in(out + "/manifest.json");
+  const std::string before((std::istreambuf_iterator<char>(in)), {});
+  // 16 blocks of at most 1 KiB; each layer file is 160 000 bytes.
+  const auto r = RunCommand("ulimit -f 16 && exec " + std::string(RISKPLAN_BIN_DIR) +
+                            "/riskplan-tool " + args + " --base_shelter=4 2>&1");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("cannot write '" + out + "/density.f32': File too large"));
+  std::ifstream again(out + "/manifest.json");
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(again)), {}), before);
+  auto map = LoadMapBundle(out);
+  ASSERT_TRUE(map.ok()) << map.status();
+  EXPECT_EQ((*map)->shelter(0, 0), 2.5f) << "the old bundle's shelter (--base_shelter's default)";
+  std::vector<std::string> entries;
+  for (const auto& e : std::filesystem::directory_iterator(dir + "/maps")) {
+    entries.push_back(e.path().filename());
+  }
+  EXPECT_THAT(entries, ::testing::ElementsAre("town"));
 }
 
 }  // namespace

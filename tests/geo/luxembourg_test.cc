@@ -220,9 +220,9 @@ TEST(LuxembourgTest, CityMapPlannedEndToEnd) {
   ASSERT_TRUE(server.ok()) << server.status();
   const std::string trajectory = maps + "/plan.json";
   r = RunCommand(absl::StrFormat(
-      "%s/riskplan --server=%s plan --map=luxembourg-city --start=%s --goal=%s --budget_ms=4000 "
+      "%s/riskplan %s plan --map=luxembourg-city --start=%s --goal=%s --budget_ms=4000 "
       "--seed=7 --trajectory_out=%s 2>&1",
-      RISKPLAN_BIN_DIR, (*server)->address(), start, goal, trajectory));
+      RISKPLAN_BIN_DIR, (*server)->CliServerFlags(), start, goal, trajectory));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const size_t at = r.output.find("best: risk ");
   ASSERT_NE(at, std::string::npos) << r.output;

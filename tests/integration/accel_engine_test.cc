@@ -34,8 +34,8 @@ TEST(AccelEngineTest, PlansAndEvaluationsThroughCpuWorkersMatchTheDirectPath) {
   const std::string metrics_address = MetricsAddress(log);
   ASSERT_FALSE(metrics_address.empty()) << log;
 
-  client::RiskplanClient a((*plain)->address());
-  client::RiskplanClient b((*with_engine)->address());
+  client::RiskplanClient a((*plain)->Channel());
+  client::RiskplanClient b((*with_engine)->Channel());
   // An iteration budget: bit-for-bit reproducible.
   const v1::PlanRequest request = SmallCityPlan(0, 400);
   PlanOutcome direct = RunPlan(a, request);
@@ -133,8 +133,8 @@ TEST(AccelEngineTest, PlansAndEvaluationsThroughAnFpgaShim) {
   ASSERT_EQ(MetricValue(metrics(), up), 1.0) << metrics();
   EXPECT_THAT(WorkerTransitions((*server)->Stderr()), Contains(worker + " probing->up"));
 
-  client::RiskplanClient a((*plain)->address());
-  client::RiskplanClient b((*server)->address());
+  client::RiskplanClient a((*plain)->Channel());
+  client::RiskplanClient b((*server)->Channel());
   v1::EvaluateRiskRequest eval = SmallCityPolyline();
   eval.set_include_samples(true);
   v1::EvaluateRiskResponse exact;

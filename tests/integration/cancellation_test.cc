@@ -37,7 +37,7 @@ class CancellationTest : public ::testing::Test {
         {"--plan_threads=1", "--max_running_plans=1", "--grace_period_ms=120000"});
     ASSERT_TRUE(server.ok()) << server.status();
     server_ = *std::move(server);
-    client_ = std::make_unique<client::RiskplanClient>(server_->address());
+    client_ = std::make_unique<client::RiskplanClient>(server_->Channel());
   }
 
   // Whether a new plan is admitted within `limit`: plans of one iteration are

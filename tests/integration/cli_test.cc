@@ -33,7 +33,7 @@ class CliTest : public ::testing::Test {
   }
 
   static CommandResult Cli(const std::string& args) {
-    return RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan --server=" + server_->address() +
+    return RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan " + server_->CliServerFlags() +
                       " " + args + " 2>&1");
   }
   static std::string Read(const std::string& path) {

@@ -56,7 +56,7 @@ TEST(FdExhaustionTest, ServesOpenCallsAndAcceptsAgainOnceDescriptorsAreFree) {
                                       absl::Seconds(60), /*max_open_files=*/64);
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
-  client::RiskplanClient client(server->address());
+  client::RiskplanClient client(server->Channel());
 
   // Plan A holds the planning thread until this test cancels it; plan B is
   // admitted and waits for the thread: both are in flight on the server.
@@ -106,8 +106,8 @@ TEST(FdExhaustionTest, ServesOpenCallsAndAcceptsAgainOnceDescriptorsAreFree) {
   for (int k = 0; k < 8; ++k) {
     grpc::ChannelArguments own_connection;
     own_connection.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-    client::RiskplanClient newcomer(grpc::CreateCustomChannel(
-        server->address(), grpc::InsecureChannelCredentials(), own_connection));
+    client::RiskplanClient newcomer(
+        *client::MakeChannel(server->address(), server->connection(), own_connection));
     const grpc::Status ping = newcomer.Ping(absl::Seconds(60));
     EXPECT_TRUE(ping.ok()) << "new client " << k << ": " << ping.error_message();
   }

@@ -24,8 +24,8 @@ TEST(Float32KernelTest, PlanRiskIsWithin1e5OfTheExactReevaluation) {
   const std::string log = (*float32)->Stderr();
   EXPECT_THAT(log, HasSubstr("cpu_kernel=float32"));
 
-  client::RiskplanClient a((*exact)->address());
-  client::RiskplanClient b((*float32)->address());
+  client::RiskplanClient a((*exact)->Channel());
+  client::RiskplanClient b((*float32)->Channel());
   PlanOutcome plan = RunPlan(b, SmallCityPlan(0, 400));
   ASSERT_TRUE(plan.status.ok()) << plan.status.error_message();
   ASSERT_FALSE(plan.updates.empty());

@@ -74,11 +74,11 @@ class GeoExportsTest : public ::testing::Test {
   }
   void SetUp() override {
     ASSERT_NE(server_, nullptr);
-    client_ = std::make_unique<client::RiskplanClient>(server_->address());
+    client_ = std::make_unique<client::RiskplanClient>(server_->Channel());
   }
 
   static CommandResult Cli(const std::string& args) {
-    return RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan --server=" + server_->address() +
+    return RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan " + server_->CliServerFlags() +
                       " " + args + " 2>&1");
   }
   static std::string Read(const std::string& path) {

@@ -318,7 +318,7 @@ TEST_F(HardLimitsTest, AFloodBesideAGoodPlanLeavesItBitIdentical) {
   std::vector<std::thread> flood;
   for (int t = 0; t < 3; ++t) {
     flood.emplace_back([&, t] {
-      client::RiskplanClient client(server_->address());
+      client::RiskplanClient client(server_->Channel());
       for (int k = t; !done.load() || k < t + 12; ++k) {
         std::string failure;
         switch (k % 4) {
@@ -394,7 +394,7 @@ TEST(HardLimitsShutdownTest, DrainEndsLongWorkInFlight) {
       {"--grace_period_ms=3000", "--eval_threads=1", "--max_eval_samples=100000000"});
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
-  const std::string address = server->address();
+  const ServerProcess& target = *server;
 
   // The evaluations are sent first, then the plan; the signal comes once
   // the plan has streamed (it runs) and every evaluation is on its way.
@@ -405,7 +405,7 @@ TEST(HardLimitsShutdownTest, DrainEndsLongWorkInFlight) {
   std::vector<std::thread> evals;
   for (size_t i = 0; i < eval_status.size(); ++i) {
     evals.emplace_back([&, i] {
-      client::RiskplanClient client(address);
+      client::RiskplanClient client(target.Channel());
       v1::EvaluateRiskResponse response;
       {
         absl::MutexLock lock(&mu);
@@ -414,7 +414,7 @@ TEST(HardLimitsShutdownTest, DrainEndsLongWorkInFlight) {
       eval_status[i] = client.EvaluateRisk(HeavyEval(), &response, absl::Seconds(120));
     });
   }
-  client::RiskplanClient client(address);
+  client::RiskplanClient client(target.Channel());
   PlanOutcome plan;
   std::thread planner([&] {
     plan.status = client.Plan(

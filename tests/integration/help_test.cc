@@ -196,6 +196,14 @@ TEST(HelpTest, RiskplanFpgaShim) {
               {}});
 }
 
+TEST(HelpTest, RiskplanWeb) {
+  ExpectHelp({"riskplan-web",
+              {"listen", "server", "assets_dir", "leaflet_dir", "chartjs_dir", "max_viewers",
+               "request_threads", "max_running_plans", "max_kept_plans", "max_events_per_plan",
+               "heartbeat_ms", "rpc_timeout_ms"},
+              {}});
+}
+
 // Benchmarks with Abseil flags share the programs' help.
 TEST(HelpTest, BenchPlannerAndCompareAndFingerprint) {
 #if !defined(HAVE_RISKPLAN_BENCH_PLANNER) || !defined(HAVE_RISKPLAN_BENCH_COMPARE) || \
@@ -231,18 +239,20 @@ TEST(HelpTest, BenchRtl) {
 // Google Benchmark's programs answer --help themselves (exit 0, its own
 // flags); riskplan-bench-shim adds its --shim.
 TEST(HelpTest, GoogleBenchmarkPrograms) {
-#if !defined(HAVE_RISKPLAN_BENCH_RISK) || !defined(HAVE_RISKPLAN_BENCH_SHIM)
+#if !defined(HAVE_RISKPLAN_BENCH_RISK) || !defined(HAVE_RISKPLAN_BENCH_SHIM) || \
+    !defined(HAVE_RISKPLAN_BENCH_SHARED_TREE)
   GTEST_SKIP() << "the benchmarks are not built (RISKPLAN_BUILD_BENCH=OFF)";
 #endif
-  for (const char* program : {"riskplan-bench-risk", "riskplan-bench-accel", "riskplan-bench-shim",
-                              "riskplan-bench-seeds", "riskplan-bench-evaluate"}) {
+  for (const char* program :
+       {"riskplan-bench-risk", "riskplan-bench-accel", "riskplan-bench-shim",
+        "riskplan-bench-seeds", "riskplan-bench-evaluate", "riskplan-bench-shared-tree"}) {
     CommandResult r = RunProgram(std::string(program) + " --help");
     EXPECT_EQ(r.exit_code, 0) << program << "\n" << r.output;
     EXPECT_THAT(r.output, HasSubstr("--benchmark_filter")) << program;
     ExpectNoBuildPaths(r.output, program);
     r = RunProgram(std::string(program) + " --no_such_flag");
     EXPECT_NE(r.exit_code, 0) << program;
-    EXPECT_THAT(r.output, HasSubstr("--no_such_flag")) << program;
+    EXPECT_THAT(r.output, HasSubstr("no_such_flag")) << program;
   }
   EXPECT_THAT(RunProgram("riskplan-bench-shim --help").output, HasSubstr("--shim=HOST:PORT"));
 }

@@ -19,7 +19,7 @@ TEST(MetricsTest, CountsRpcsByMethodAndCodeAndPlans) {
   const std::string metrics_address = MetricsAddress(server->Stderr());
   ASSERT_FALSE(metrics_address.empty()) << server->Stderr();
 
-  client::RiskplanClient client(server->address());
+  client::RiskplanClient client(server->Channel());
   ASSERT_TRUE(client.Ping().ok());
   ASSERT_TRUE(client.Ping().ok());
   v1::EvaluateRiskRequest bad = SmallCityPolyline();
@@ -60,7 +60,7 @@ TEST(MetricsTest, ReportsTheMemoryAndBoundsOfTheServersCaches) {
   EXPECT_EQ(metric("riskplan_feasibility_cache_bytes"), 0.0);
   EXPECT_EQ(metric("riskplan_feasibility_cache_limit_checkers"), 2.0);
 
-  client::RiskplanClient client(server->address());
+  client::RiskplanClient client(server->Channel());
   // An evaluation with the two-tier check builds a checker (8 bytes per
   // cell of the 400 x 400 map and its coarse tier); one with overridden
   // glide parameters builds a model with its own glide layer.

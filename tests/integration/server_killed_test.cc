@@ -34,10 +34,10 @@ TEST(ServerKilledTest, PlanKeepsTheBestTrajectoryItReceived) {
   const std::string dir = dir_template;
   auto server = ServerProcess::Start();
   ASSERT_TRUE(server.ok()) << server.status();
-  const std::string cli = std::string(RISKPLAN_BIN_DIR) + "/riskplan --server=";
+  const std::string cli = std::string(RISKPLAN_BIN_DIR) + "/riskplan ";
 
   // A plan of ten minutes (the server's cap), so only the kill ends it.
-  auto plan = ChildProcess::Start(cli + (*server)->address() + " plan --start=" + kSmallCityStart +
+  auto plan = ChildProcess::Start(cli + (*server)->CliServerFlags() + " plan --start=" + kSmallCityStart +
                                   " --goal=" + kSmallCityGoal +
                                   " --budget_ms=600000 --min_update_interval_ms=0" +
                                   " --trajectory_out=" + dir + "/best.json --picture=" + dir +
@@ -76,7 +76,7 @@ TEST(ServerKilledTest, PlanKeepsTheBestTrajectoryItReceived) {
   EXPECT_THAT(ReadFile(dir + "/plan.svg"), HasSubstr("UNAVAILABLE"));  // in the caption
   auto again = ServerProcess::Start();
   ASSERT_TRUE(again.ok()) << again.status();
-  const CommandResult eval = RunCommand(cli + (*again)->address() +
+  const CommandResult eval = RunCommand(cli + (*again)->CliServerFlags() +
                                         " eval --json --trajectory_file=" + dir + "/best.json");
   ASSERT_EQ(eval.exit_code, 0) << eval.output;
   EXPECT_NEAR(nlohmann::json::parse(eval.output)["risk"].get<double>(), printed_risk,

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cerrno>
 #include <cstdio>
 #include <fstream>
@@ -32,7 +33,74 @@ int PollMs(absl::Duration left) {
   return static_cast<int>(std::max<int64_t>(0, absl::ToInt64Milliseconds(left)));
 }
 
+// RISKPLAN_TEST_SECURITY=tls: the PKI and token of this test process, made
+// on first use (and left in /tmp for the process's servers; they are small).
+struct TestSecurity {
+  std::vector<std::string> server_flags;
+  client::ConnectionOptions connection;
+};
+
+const TestSecurity* Security() {
+  static const TestSecurity* security = []() -> const TestSecurity* {
+    const char* mode = std::getenv("RISKPLAN_TEST_SECURITY");
+    if (mode == nullptr || std::string(mode) != "tls") return nullptr;
+    char dir_template[] = "/tmp/riskplan-test-security-XXXXXX";
+    if (mkdtemp(dir_template) == nullptr) std::abort();
+    const std::string dir = dir_template;
+    const std::string pki = std::string(RISKPLAN_SOURCE_DIR) + "/tests/integration/test_pki.sh";
+    const std::string from = absl::FormatTime("%Y%m%d%H%M%SZ", absl::Now() - absl::Hours(1),
+                                              absl::UTCTimeZone());
+    const std::string until = absl::FormatTime("%Y%m%d%H%M%SZ", absl::Now() + absl::Hours(48),
+                                               absl::UTCTimeZone());
+    const std::string token = "integration-suite-operator-token";
+    for (const std::string& command :
+         {absl::StrCat("bash ", pki, " init ", dir),
+          absl::StrCat("bash ", pki, " issue ", dir, " server a localhost 'DNS:localhost,IP:127.0.0.1' server ",
+                       from, " ", until),
+          absl::StrCat("bash ", pki, " issue ", dir, " client a integration-suite '' client ", from, " ",
+                       until),
+          absl::StrCat("printf %s '", token, "' > ", dir, "/operator.token"),
+          absl::StrCat("printf '%s suite operator\n' \"$(printf %s '", token,
+                       "' | sha256sum | cut -c1-64)\" > ", dir, "/tokens.txt")}) {
+      if (std::system(command.c_str()) != 0) {
+        std::fprintf(stderr, "RISKPLAN_TEST_SECURITY=tls: '%s' failed\n", command.c_str());
+        std::abort();
+      }
+    }
+    auto* s = new TestSecurity;
+    s->server_flags = {"--tls_cert=" + dir + "/server.pem", "--tls_key=" + dir + "/server.key",
+                       "--tls_client_ca=" + dir + "/ca-a.pem",
+                       "--token_file=" + dir + "/tokens.txt"};
+    s->connection.tls_ca = dir + "/ca-a.pem";
+    s->connection.tls_cert = dir + "/client.pem";
+    s->connection.tls_key = dir + "/client.key";
+    s->connection.token_file = dir + "/operator.token";
+    return s;
+  }();
+  return security;
+}
+
 }  // namespace
+
+std::shared_ptr<grpc::Channel> ServerProcess::Channel() const {
+  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
+      client::MakeChannel(address_, connection_);
+  if (!channel.ok()) {
+    std::fprintf(stderr, "ServerProcess::Channel: %s\n",
+                 std::string(channel.status().message()).c_str());
+    std::abort();
+  }
+  return *channel;
+}
+
+std::string ServerProcess::CliServerFlags() const {
+  std::string flags = "--server=" + address_;
+  if (!connection_.tls_ca.empty()) {
+    absl::StrAppend(&flags, " --tls_ca=", connection_.tls_ca, " --tls_cert=", connection_.tls_cert,
+                    " --tls_key=", connection_.tls_key, " --token_file=", connection_.token_file);
+  }
+  return flags;
+}
 
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<std::string> flags,
                                                                     absl::Duration timeout,
@@ -42,8 +110,16 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Start(std::vector<
   bool has_maps = false;
   for (const std::string& f : flags) has_maps = has_maps || absl::StartsWith(f, "--maps=");
   if (!has_maps) args.push_back(absl::StrCat("--demo_city_size_m=", kSmallCitySizeM));
+  const TestSecurity* security = Security();
+  if (security != nullptr) {
+    args.insert(args.end(), security->server_flags.begin(), security->server_flags.end());
+  }
+  // The test's own flags last: they win (a test of TLS flags sets its own).
   args.insert(args.end(), flags.begin(), flags.end());
-  return Spawn(std::move(args), "riskplan-server listening on ", timeout, max_open_files);
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+      Spawn(std::move(args), "riskplan-server listening on ", timeout, max_open_files);
+  if (server.ok() && security != nullptr) (*server)->connection_ = security->connection;
+  return server;
 }
 
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartShim(
@@ -52,6 +128,23 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartShim(
                                    "--listen=127.0.0.1:0"};
   args.insert(args.end(), flags.begin(), flags.end());
   return Spawn(std::move(args), "riskplan-fpga-shim listening on ", timeout);
+}
+
+absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::StartWeb(
+    const std::string& server_address, std::vector<std::string> flags, absl::Duration timeout) {
+  std::vector<std::string> args = {std::string(RISKPLAN_BIN_DIR) + "/riskplan-web",
+                                   "--listen=127.0.0.1:0", "--server=" + server_address};
+  // RISKPLAN_TEST_SECURITY=tls: the gateway is a client of a server that
+  // wants mutual TLS and a token, like the suite's other clients.
+  if (const TestSecurity* security = Security(); security != nullptr) {
+    const client::ConnectionOptions& c = security->connection;
+    for (std::string flag : {"--tls_ca=" + c.tls_ca, "--tls_cert=" + c.tls_cert,
+                             "--tls_key=" + c.tls_key, "--token_file=" + c.token_file}) {
+      args.push_back(std::move(flag));
+    }
+  }
+  args.insert(args.end(), flags.begin(), flags.end());
+  return Spawn(std::move(args), "riskplan-web listening on ", timeout);
 }
 
 absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Spawn(std::vector<std::string> args,

@@ -1,6 +1,13 @@
 // ServerProcess: the real riskplan-server binary, started for a test on
 // 127.0.0.1 port 0. Start() returns once the server has printed its readiness
 // line (the port is read from it); no fixed ports, no sleeps.
+//
+// With RISKPLAN_TEST_SECURITY=tls in the environment, every server Start()
+// runs serves mutual TLS and requires a token (certificates made once per
+// test process by tests/integration/test_pki.sh, the token of role
+// operator), and Channel() and CliServerFlags() connect with them: the
+// integration suite runs unchanged with security on
+// (docs/security.md, "The integration suite with TLS and tokens").
 #ifndef RISKPLAN_TESTS_INTEGRATION_SERVER_PROCESS_H_
 #define RISKPLAN_TESTS_INTEGRATION_SERVER_PROCESS_H_
 
@@ -13,6 +20,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "client/client.h"
 #include "tests/child_process.h"
 
 namespace riskplan::testing {
@@ -31,10 +39,25 @@ class ServerProcess {
   static absl::StatusOr<std::unique_ptr<ServerProcess>> StartShim(
       std::vector<std::string> flags, absl::Duration timeout = absl::Seconds(60));
 
+  // Starts RISKPLAN_BIN_DIR/riskplan-web --listen=127.0.0.1:0
+  // --server=`server_address` with `flags`, up to its readiness line (with
+  // RISKPLAN_TEST_SECURITY=tls, also the client's TLS and token flags).
+  static absl::StatusOr<std::unique_ptr<ServerProcess>> StartWeb(
+      const std::string& server_address, std::vector<std::string> flags = {},
+      absl::Duration timeout = absl::Seconds(60));
+
   // Kills the server (SIGKILL) if it still runs.
   ~ServerProcess();
 
   const std::string& address() const { return address_; }
+  // How a client reaches this server: plaintext, or (RISKPLAN_TEST_SECURITY
+  // =tls) mutual TLS with the operator's token.
+  const client::ConnectionOptions& connection() const { return connection_; }
+  // A channel to it with connection() (client::MakeChannel).
+  std::shared_ptr<grpc::Channel> Channel() const;
+  // "--server=ADDRESS" and, with security on, the riskplan CLI's TLS and
+  // token flags.
+  std::string CliServerFlags() const;
   pid_t pid() const { return pid_; }
 
   void Signal(int signal_number);
@@ -57,6 +80,7 @@ class ServerProcess {
   int pidfd_ = -1;
   bool reaped_ = false;
   std::string address_;
+  client::ConnectionOptions connection_;
   std::string stderr_path_;
 };
 

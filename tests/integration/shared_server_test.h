@@ -31,7 +31,7 @@ class SharedServerTest : public ::testing::Test {
   }
   void SetUp() override {
     ASSERT_NE(server_, nullptr);
-    client_ = std::make_unique<client::RiskplanClient>(server_->address());
+    client_ = std::make_unique<client::RiskplanClient>(server_->Channel());
   }
 
   static inline ServerProcess* server_ = nullptr;

@@ -23,7 +23,7 @@ TEST(ShutdownTest, DrainsOnSigterm) {
   auto started = ServerProcess::Start({"--grace_period_ms=2000"});
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
-  client::RiskplanClient client(server->address());
+  client::RiskplanClient client(server->Channel());
 
   HealthCheckResponse::ServingStatus health = HealthCheckResponse::UNKNOWN;
   ASSERT_TRUE(client.CheckHealth("", &health).ok());

@@ -117,7 +117,7 @@ TEST_F(TwoTierTest, BadOptionsAreInvalidArgumentNamingTheField) {
 
 TEST_F(TwoTierTest, CliPrintsTheTier) {
   const std::string cli = std::string(RISKPLAN_BIN_DIR) +
-                          "/riskplan --server=" + server_->address() + " eval --polyline='" +
+                          "/riskplan " + server_->CliServerFlags() + " eval --polyline='" +
                           kHigh + "; 1500,1100,-50' --two_tier";
   CommandResult r = RunCommand(cli + " 2>&1");
   EXPECT_EQ(r.exit_code, 0) << r.output;
@@ -126,7 +126,7 @@ TEST_F(TwoTierTest, CliPrintsTheTier) {
   r = RunCommand(cli + " --two_tier_detailed_segments=10 --two_tier_rule=terrain_only 2>&1");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("NOT feasible: DETAILED tier, TERRAIN_COLLISION in piece 3"));
-  r = RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan --server=" + server_->address() +
+  r = RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan " + server_->CliServerFlags() +
                  " eval --polyline='" + kHigh + "' --two_tier --two_tier_bresenham 2>&1");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("two-tier check: feasible"));

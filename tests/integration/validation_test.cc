@@ -212,7 +212,7 @@ TEST_F(ValidationTest, BadRequestsNeverDisturbConcurrentGoodOnes) {
   std::vector<std::thread> attackers;
   for (int t = 0; t < 3; ++t) {
     attackers.emplace_back([&, t] {
-      client::RiskplanClient attacker(server_->address());
+      client::RiskplanClient attacker(server_->Channel());
       while (!stop.load()) {
         v1::PlanRequest plan = SmallCityPlan(300);
         plan.mutable_start()->set_z(t == 0 ? kNaN : 5.0);

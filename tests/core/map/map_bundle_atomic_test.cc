@@ -11,8 +11,11 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/map/map_bundle.h"
 #include "gmock/gmock.h"
@@ -185,6 +188,37 @@ TEST(MapBundleAtomicTest, LoadMapDirectorySkipsAnInterruptedWrite) {
   ASSERT_TRUE(loaded.ok()) << loaded.status();
   ASSERT_EQ(loaded->size(), 1u);
   EXPECT_EQ((*loaded)[0]->name(), "city");
+}
+
+// Private manifest fields (an importer's provenance) are written after the
+// format's own and ignored by the loader; bad ones are refused before
+// anything is written.
+TEST(MapBundleAtomicTest, PrivateFieldsGoIntoTheManifestAndBadOnesWriteNothing) {
+  const fs::path parent = TestDir();
+  const fs::path dir = parent / "city";
+  ASSERT_TRUE(WriteMapBundleAtomically(*TinyMap("city", 0.01f), dir.string(),
+                                       ExistingDirectory::kRefuse,
+                                       {{"x_import", R"({"command": "import", "inputs": [1, 2]})"}})
+                  .ok());
+  std::ifstream in(dir / "manifest.json");
+  const std::string manifest((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_THAT(manifest, HasSubstr("\"x_import\": {"));
+  EXPECT_THAT(manifest, HasSubstr("\"command\": \"import\""));
+  EXPECT_LT(manifest.find("\"layers\""), manifest.find("\"x_import\""));
+  auto loaded = LoadMapBundle(dir.string());
+  ASSERT_TRUE(loaded.ok()) << loaded.status();
+
+  const std::vector<std::pair<std::vector<std::pair<std::string, std::string>>, std::string>>
+      refused = {{{{"import", "{}"}}, "'import' must start with \"x_\""},
+                 {{{"x_a", "{not json"}}, "'x_a' is not JSON"},
+                 {{{"x_a", "1"}, {"x_a", "2"}}, "'x_a' is given twice"}};
+  for (const auto& [fields, message] : refused) {
+    const absl::Status s = WriteMapBundleAtomically(
+        *TinyMap("other", 0.01f), (parent / "other").string(), ExistingDirectory::kRefuse, fields);
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << s;
+    EXPECT_THAT(s.message(), HasSubstr(message));
+    EXPECT_EQ(Entries(parent), std::set<std::string>{"city"});
+  }
 }
 
 }  // namespace

@@ -1,0 +1,271 @@
+// riskplan-bench-shared-tree: missions from scattered starts to one depot on
+// demo-city, planned on one shared goal tree (core/planners/shared_goal_tree.h)
+// against one separate RISK_RRT_STAR plan per mission (issue 19, part 2).
+//
+// BM_SeparatePlans runs each mission alone with a 1-s wall-time budget
+// (--separate_s) and keeps its final risk. BM_SharedTree then plans all the
+// missions on one tree and records, at every improvement, the CPU time of the
+// planning thread; it stops when every mission has reached the risk of its
+// separate plan (or at --cap_factor x the separate plans' CPU time). Both
+// report CPU time, not wall time: the machine may be shared, and a loaded
+// core stretches wall time but not the work done. Counters of BM_SharedTree:
+//   reach_cpu_s     CPU time at which the last mission reached its separate risk
+//   reach_ratio     that / the separate plans' total CPU time (target <= 0.25)
+//   reached         missions that reached it (of --missions)
+//   q_median, q_max each mission's risk at 0.25 x the separate total CPU,
+//                   relative to its separate plan's risk (1: equal)
+// A per-mission table follows the benchmark output.
+//
+//   riskplan-bench-shared-tree [--missions=32] [--separate_s=1] [--seed=1]
+//                              [--separate_iterations=0] [--shared_params=path_bias=0.5]
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/strings/str_split.h"
+#include "bench/scenarios.h"
+#include "benchmark/benchmark.h"
+#include "core/base/random.h"
+#include "core/map/demo_city.h"
+#include "core/planners/planner.h"
+#include "core/planners/shared_goal_tree.h"
+
+ABSL_FLAG(int, missions, 32, "missions, from scattered starts to one depot");
+ABSL_FLAG(double, separate_s, 1.0, "wall-time budget of each separate plan, s");
+ABSL_FLAG(int64_t, separate_iterations, 0,
+          "iteration budget of each separate plan instead of wall time (0: wall time)");
+ABSL_FLAG(double, cap_factor, 1.0,
+          "the shared tree stops at this many times the separate plans' total CPU time");
+ABSL_FLAG(uint64_t, seed, 1, "seed of every plan");
+ABSL_FLAG(std::string, shared_params, "",
+          "RISK_RRT_STAR parameters of the shared tree only, name=value,... (the separate plans "
+          "keep the defaults)");
+
+namespace riskplan {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+const std::shared_ptr<const RiskModel>& Model() {
+  static const std::shared_ptr<const RiskModel> model = [] {
+    auto map = MakeDemoCity();
+    return *RiskModel::Create(*map, ModelParams{});
+  }();
+  return model;
+}
+
+// The depot in the south-east suburbs; starts drawn uniformly over the city
+// (fixed generator), at least 2 km from it and 200 m from each other.
+struct Fleet {
+  Pose depot;
+  std::vector<Pose> starts;
+};
+
+const Fleet& TheFleet() {
+  static const Fleet fleet = [] {
+    const RiskModel& model = *Model();
+    Fleet f;
+    f.depot = *bench::FindFlyablePose(model, 6500, 1500, kPi / 2);
+    Rng rng(20261202);
+    const double w = model.map().width_m();
+    while (static_cast<int>(f.starts.size()) < absl::GetFlag(FLAGS_missions)) {
+      const double x = model.map().x0() + 600 + rng.Uniform() * (w - 1200);
+      const double y = model.map().y0() + 600 + rng.Uniform() * (w - 1200);
+      const double theta = rng.Uniform() * kTwoPi;
+      if (std::hypot(x - f.depot.x, y - f.depot.y) < 2000.0) continue;
+      std::optional<Pose> p = bench::FindFlyablePose(model, x, y, theta);
+      if (!p.has_value()) continue;
+      bool crowded = false;
+      for (const Pose& s : f.starts) crowded |= std::hypot(s.x - p->x, s.y - p->y) < 200.0;
+      if (!crowded) f.starts.push_back(*p);
+    }
+    return f;
+  }();
+  return fleet;
+}
+
+struct Separate {
+  double risk = kInf;
+  double cpu_s = 0.0;
+  int64_t iterations = 0;
+};
+std::vector<Separate>& SeparateResults() {
+  static std::vector<Separate> results;
+  return results;
+}
+
+void RunSeparate() {
+  const Fleet& fleet = TheFleet();
+  std::vector<Separate>& out = SeparateResults();
+  out.clear();
+  for (const Pose& start : fleet.starts) {
+    auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar);
+    PlanOptions options;
+    options.seed = absl::GetFlag(FLAGS_seed);
+    const int64_t iterations = absl::GetFlag(FLAGS_separate_iterations);
+    options.budget.max_time_s = iterations > 0 ? 0.0 : absl::GetFlag(FLAGS_separate_s);
+    options.budget.max_iterations = iterations;
+    CancellationToken cancel;
+    const double before = ThreadCpuSeconds();
+    auto result = (*planner)->Plan({Model(), start, fleet.depot}, options, cancel, nullptr);
+    Separate s;
+    s.cpu_s = ThreadCpuSeconds() - before;
+    if (result.ok() && result->best.has_value()) s.risk = result->best->risk;
+    if (result.ok()) s.iterations = result->iterations;
+    out.push_back(s);
+  }
+}
+
+void BM_SeparatePlans(benchmark::State& state) {
+  for (auto _ : state) RunSeparate();
+  double cpu = 0.0;
+  int solved = 0;
+  for (const Separate& s : SeparateResults()) {
+    cpu += s.cpu_s;
+    solved += std::isfinite(s.risk) ? 1 : 0;
+  }
+  state.counters["plans_cpu_s"] = cpu;
+  state.counters["solved"] = solved;
+}
+BENCHMARK(BM_SeparatePlans)->Unit(benchmark::kSecond)->Iterations(1);
+
+struct SharedMission {
+  double reach_cpu_s = kInf;      // CPU time when it first reached its separate risk
+  double risk_at_quarter = kInf;  // its risk at 0.25 x the separate total CPU
+  double final_risk = kInf;
+};
+std::vector<SharedMission>& SharedResults() {
+  static std::vector<SharedMission> results;
+  return results;
+}
+int64_t shared_iterations = 0;
+int64_t shared_tree_size = 0;
+
+void BM_SharedTree(benchmark::State& state) {
+  if (SeparateResults().empty()) {
+    state.PauseTiming();
+    RunSeparate();
+    state.ResumeTiming();
+  }
+  const Fleet& fleet = TheFleet();
+  const std::vector<Separate>& separate = SeparateResults();
+  double separate_cpu = 0.0;
+  for (const Separate& s : separate) separate_cpu += s.cpu_s;
+  const double quarter = 0.25 * separate_cpu;
+  const double cap = absl::GetFlag(FLAGS_cap_factor) * separate_cpu;
+  std::vector<SharedMission>& missions = SharedResults();
+  double cpu_used = 0.0;
+  for (auto _ : state) {
+    missions.assign(fleet.starts.size(), SharedMission{});
+    SharedTreeProblem problem;
+    problem.model = Model();
+    problem.goal = fleet.depot;
+    for (const Pose& start : fleet.starts) {
+      SharedTreeMission m;
+      m.start = start;
+      // A wall-time safety net well past the CPU cap (the callback cancels).
+      m.budget.max_time_s = 4.0 * cap + 10.0;
+      m.budget.max_iterations = 0;
+      problem.missions.push_back(m);
+    }
+    SharedTreeOptions options;
+    options.seed = absl::GetFlag(FLAGS_seed);
+    for (absl::string_view kv :
+         absl::StrSplit(absl::GetFlag(FLAGS_shared_params), ',', absl::SkipEmpty())) {
+      std::vector<std::string> parts = absl::StrSplit(kv, '=');
+      if (parts.size() == 2) options.params[parts[0]] = std::stod(parts[1]);
+    }
+    CancellationToken cancel;
+    size_t reached = 0;
+    const double before = ThreadCpuSeconds();
+    SharedGoalTreePlanner planner;
+    auto results = planner.Plan(
+        problem, options, cancel,
+        [&](size_t m, const PlanImprovement& i) {
+          const double cpu = ThreadCpuSeconds() - before;
+          SharedMission& sm = missions[m];
+          sm.final_risk = i.risk;
+          if (cpu <= quarter) sm.risk_at_quarter = i.risk;
+          if (!std::isfinite(sm.reach_cpu_s) && i.risk <= separate[m].risk) {
+            sm.reach_cpu_s = cpu;
+            ++reached;
+          }
+          shared_iterations = i.iterations;
+          shared_tree_size = i.tree_size;
+          // Every mission there, or the cap: nothing more to measure.
+          if (reached == missions.size() || cpu >= cap) cancel.Cancel();
+        },
+        nullptr);
+    cpu_used = ThreadCpuSeconds() - before;
+    if (!results.ok()) state.SkipWithError(std::string(results.status().message()).c_str());
+  }
+  double reach = 0.0;
+  int reached = 0;
+  std::vector<double> q;
+  for (size_t m = 0; m < missions.size(); ++m) {
+    if (std::isfinite(missions[m].reach_cpu_s)) {
+      ++reached;
+      reach = std::max(reach, missions[m].reach_cpu_s);
+    } else {
+      reach = kInf;
+    }
+    q.push_back(missions[m].risk_at_quarter / separate[m].risk);
+  }
+  std::sort(q.begin(), q.end());
+  state.counters["separate_cpu_s"] = separate_cpu;
+  state.counters["shared_cpu_s"] = cpu_used;
+  state.counters["reach_cpu_s"] = reach;
+  state.counters["reach_ratio"] = reach / separate_cpu;
+  state.counters["reached"] = reached;
+  state.counters["q_median"] = q[q.size() / 2];
+  state.counters["q_max"] = q.back();
+}
+BENCHMARK(BM_SharedTree)->Unit(benchmark::kSecond)->Iterations(1);
+
+void PrintTable() {
+  const std::vector<Separate>& separate = SeparateResults();
+  const std::vector<SharedMission>& shared = SharedResults();
+  if (separate.empty() || shared.size() != separate.size()) return;
+  const Fleet& fleet = TheFleet();
+  std::printf("\ndepot (%.0f, %.0f); shared tree: %lld iterations, %lld nodes at its last report\n",
+              fleet.depot.x, fleet.depot.y, static_cast<long long>(shared_iterations),
+              static_cast<long long>(shared_tree_size));
+  std::printf("%3s %14s %12s %8s %11s %11s %10s %11s\n", "#", "start", "separate", "cpu_s",
+              "iterations", "@quarter", "reach_s", "final");
+  for (size_t m = 0; m < separate.size(); ++m) {
+    std::printf("%3zu (%5.0f,%5.0f) %12.4e %8.3f %11lld %11.4f %10.3f %11.4f\n", m,
+                fleet.starts[m].x, fleet.starts[m].y, separate[m].risk, separate[m].cpu_s,
+                static_cast<long long>(separate[m].iterations),
+                shared[m].risk_at_quarter / separate[m].risk, shared[m].reach_cpu_s,
+                shared[m].final_risk / separate[m].risk);
+  }
+  std::printf(
+      "(@quarter and final: the shared tree's risk / the separate plan's; reach_s: CPU s\n"
+      " of the shared tree when the mission first reached its separate plan's risk)\n");
+}
+
+}  // namespace
+}  // namespace riskplan
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  absl::ParseCommandLine(argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  riskplan::PrintTable();
+  benchmark::Shutdown();
+  return 0;
+}

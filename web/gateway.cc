@@ -1,0 +1,460 @@
+#include "web/gateway.h"
+
+#include <httplib.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "client/exports.h"
+#include "geo/export/geojson.h"
+#include "geo/export/kml.h"
+#include "geo/export/qgc_plan.h"
+#include "nlohmann/json.hpp"
+#include "web/proto_json.h"
+#include "web/sse.h"
+
+namespace riskplan::web {
+namespace {
+
+using Json = nlohmann::json;
+
+constexpr int kMaxLayerSideCells = 1024;
+
+// What the page sees of a failed request: the code, the message exactly as
+// its author wrote it, and who wrote it ("server" or "gateway").
+void SendError(httplib::Response& res, int http_status, const std::string& code,
+               const std::string& message, const char* source) {
+  res.status = http_status;
+  res.set_content(Json{{"code", code}, {"message", message}, {"source", source}}.dump(
+                      -1, ' ', false, Json::error_handler_t::replace),
+                  "application/json");
+}
+
+int HttpStatusOf(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::INVALID_ARGUMENT:
+    case grpc::StatusCode::OUT_OF_RANGE:
+      return 400;
+    case grpc::StatusCode::UNAUTHENTICATED:
+      return 401;
+    case grpc::StatusCode::PERMISSION_DENIED:
+      return 403;
+    case grpc::StatusCode::NOT_FOUND:
+      return 404;
+    case grpc::StatusCode::FAILED_PRECONDITION:
+      return 412;
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+      return 429;
+    case grpc::StatusCode::UNAVAILABLE:
+      return 503;
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+      return 504;
+    default:
+      return 502;
+  }
+}
+
+void SendServerError(httplib::Response& res, const grpc::Status& status) {
+  SendError(res, HttpStatusOf(status.error_code()), client::StatusCodeName(status.error_code()),
+            status.error_message(), "server");
+}
+
+int HttpStatusOf(const absl::Status& status) {
+  switch (status.code()) {
+    case absl::StatusCode::kInvalidArgument:
+      return 400;
+    case absl::StatusCode::kNotFound:
+      return 404;
+    case absl::StatusCode::kFailedPrecondition:
+      return 412;
+    case absl::StatusCode::kResourceExhausted:
+      return 429;
+    case absl::StatusCode::kUnavailable:
+      return 503;
+    default:
+      return 500;
+  }
+}
+
+void SendGatewayError(httplib::Response& res, const absl::Status& status) {
+  SendError(res, HttpStatusOf(status), std::string(absl::StatusCodeToString(status.code())),
+            std::string(status.message()), "gateway");
+}
+
+void SendJson(httplib::Response& res, std::string json, int http_status = 200) {
+  res.status = http_status;
+  res.set_header("Cache-Control", "no-store");
+  res.set_content(std::move(json), "application/json");
+}
+
+// "HOST:PORT", "[V6]:PORT".
+absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& address) {
+  const size_t colon = address.rfind(':');
+  int port = -1;
+  if (colon == std::string::npos || colon == 0 ||
+      !absl::SimpleAtoi(address.substr(colon + 1), &port) || port < 0 || port > 65535) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--listen has value '%s'; it must be HOST:PORT, port in [0, 65535]", address));
+  }
+  std::string host = address.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+    host = host.substr(1, host.size() - 2);
+  }
+  return std::make_pair(host, port);
+}
+
+// The page's files and the libraries' directories must exist.
+bool IsDirectory(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+}  // namespace
+
+absl::Status CheckGatewayOptions(const GatewayOptions& o) {
+  if (auto hp = SplitHostPort(o.listen); !hp.ok()) return hp.status();
+  if (o.server.address.empty()) return absl::InvalidArgumentError("--server must not be empty");
+  if (o.max_viewers < 1 || o.max_viewers > 4096) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("--max_viewers has value %d; it must be in [1, 4096]", o.max_viewers));
+  }
+  if (o.request_threads < 2 || o.request_threads > 1024) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--request_threads has value %d; it must be in [2, 1024]", o.request_threads));
+  }
+  if (o.plans.max_running < 1 || o.plans.max_running > 256) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--max_running_plans has value %d; it must be in [1, 256]", o.plans.max_running));
+  }
+  if (o.plans.max_kept < o.plans.max_running || o.plans.max_kept > 4096) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--max_kept_plans has value %d; it must be in [--max_running_plans (%d), 4096]",
+        o.plans.max_kept, o.plans.max_running));
+  }
+  if (o.plans.events.max_events < 1) {
+    return absl::InvalidArgumentError("--max_events_per_plan must be at least 1");
+  }
+  if (o.heartbeat < absl::Milliseconds(10) || o.heartbeat > absl::Minutes(5)) {
+    return absl::InvalidArgumentError("--heartbeat_ms must be in [10, 300000]");
+  }
+  for (const auto& [flag, dir] :
+       {std::pair<const char*, const std::string*>{"assets_dir", &o.assets_dir},
+        {"leaflet_dir", &o.leaflet_dir},
+        {"chartjs_dir", &o.chartjs_dir}}) {
+    if (!IsDirectory(*dir)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("--%s has value '%s', which is not a directory", flag, *dir));
+    }
+  }
+  return absl::OkStatus();
+}
+
+Gateway::Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel)
+    : options_(std::move(options)),
+      client_(std::move(channel)),
+      plans_(&client_.stub(), options_.plans),
+      http_(std::make_unique<httplib::Server>()) {
+  // One thread per connection for as long as it lives: event streams hold
+  // theirs, so the pool is sized for every viewer plus the other requests.
+  const size_t threads =
+      static_cast<size_t>(options_.max_viewers) + static_cast<size_t>(options_.request_threads);
+  http_->new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  http_->set_payload_max_length(options_.max_body_bytes);
+  // cpp-httplib's default sets SO_REUSEPORT, with which a second gateway on
+  // the same port would start silently and take half the connections;
+  // SO_REUSEADDR only, and the listening socket is kept for Bind().
+  http_->set_socket_options([this](int sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+    listen_socket_ = sock;
+  });
+  // An idle keep-alive connection holds a request thread; a browser keeps up
+  // to six, so they are let go soon.
+  http_->set_keep_alive_timeout(2);
+  http_->set_exception_handler(
+      [](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+        std::string what = "unknown exception";
+        try {
+          std::rethrow_exception(ep);
+        } catch (const std::exception& e) {
+          what = e.what();
+        } catch (...) {
+        }
+        SendError(res, 500, "INTERNAL", what, "gateway");
+      });
+  Routes();
+}
+
+Gateway::~Gateway() { Stop(); }
+
+absl::StatusOr<int> Gateway::Bind() {
+  auto hp = SplitHostPort(options_.listen);
+  if (!hp.ok()) return hp.status();
+  const auto& [host, port] = *hp;
+  int bound = port;
+  if (port == 0) {
+    bound = http_->bind_to_any_port(host);
+    if (bound <= 0) return absl::UnavailableError(absl::StrCat("cannot bind ", options_.listen));
+  } else if (!http_->bind_to_port(host, port)) {
+    return absl::UnavailableError(absl::StrCat("cannot bind ", options_.listen));
+  }
+  // cpp-httplib 0.11 listens with a backlog of 5: a page opening its event
+  // stream and its calls, or a few viewers arriving together, would wait for
+  // SYN retransmissions (1 s, then 3 s). Listening again sets the backlog.
+  if (listen_socket_ >= 0) ::listen(listen_socket_, kListenBacklog);
+  return bound;
+}
+
+void Gateway::Serve() { http_->listen_after_bind(); }
+
+void Gateway::Stop() {
+  if (stopping_.exchange(true)) return;
+  // Ends the event streams (their waits wake up) and the plans, then the
+  // HTTP server, which joins its threads once their streams returned.
+  plans_.StopAll();
+  http_->stop();
+}
+
+void Gateway::Routes() {
+  using httplib::Request;
+  using httplib::Response;
+  http_->set_mount_point("/", options_.assets_dir);
+  http_->set_mount_point("/lib/leaflet", options_.leaflet_dir);
+  http_->set_mount_point("/lib/chart.js", options_.chartjs_dir);
+
+  http_->Get("/api/status", [this](const Request&, Response& res) {
+    SendJson(res, Json{{"server", options_.server.address},
+                       {"viewers", viewers_.load()},
+                       {"max_viewers", options_.max_viewers},
+                       {"running_plans", plans_.running()},
+                       {"max_running_plans", options_.plans.max_running}}
+                      .dump());
+  });
+
+  http_->Get("/api/maps", [this](const Request&, Response& res) {
+    v1::ListMapsResponse maps;
+    const grpc::Status status = client_.ListMaps(&maps, options_.rpc_timeout);
+    if (!status.ok()) return SendServerError(res, status);
+    SendJson(res, ToJson(maps));
+  });
+
+  // GET /api/layer?map=M&layer=POPULATION_DENSITY|SHELTER|TERRAIN|NO_FLY&max_side_cells=N
+  http_->Get("/api/layer", [this](const Request& req, Response& res) {
+    v1::GetMapLayerRequest request;
+    request.set_map(req.get_param_value("map"));
+    v1::MapLayer layer;
+    if (!v1::MapLayer_Parse(req.get_param_value("layer"), &layer)) {
+      return SendError(res, 400, "INVALID_ARGUMENT",
+                       absl::StrFormat("layer has value '%s'; it must be one of "
+                                       "POPULATION_DENSITY, SHELTER, TERRAIN, NO_FLY",
+                                       req.get_param_value("layer")),
+                       "gateway");
+    }
+    request.set_layer(layer);
+    if (req.has_param("max_side_cells")) {
+      int side = 0;
+      if (!absl::SimpleAtoi(req.get_param_value("max_side_cells"), &side)) {
+        return SendError(res, 400, "INVALID_ARGUMENT", "max_side_cells must be an integer",
+                         "gateway");
+      }
+      // The server allows 4096 (16 Mi cells); as JSON for a browser that is
+      // some 200 MB on the gateway for one request.
+      if (side > kMaxLayerSideCells) {
+        return SendError(res, 400, "INVALID_ARGUMENT",
+                         absl::StrFormat("max_side_cells has value %d; this gateway serves "
+                                         "layers of at most %d cells a side",
+                                         side, kMaxLayerSideCells),
+                         "gateway");
+      }
+      request.set_max_side_cells(side);  // the server checks the rest of its range
+    }
+    v1::GetMapLayerResponse response;
+    const grpc::Status status = client_.GetMapLayer(request, &response, options_.rpc_timeout);
+    if (!status.ok()) return SendServerError(res, status);
+    SendJson(res, ToJson(response));
+  });
+
+  http_->Post("/api/risk_layer", [this](const Request& req, Response& res) {
+    v1::GetRiskLayerRequest request;
+    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+    v1::GetRiskLayerResponse response;
+    const grpc::Status status = client_.GetRiskLayer(request, &response, options_.rpc_timeout);
+    if (!status.ok()) return SendServerError(res, status);
+    SendJson(res, ToJson(response));
+  });
+
+  http_->Post("/api/evaluate", [this](const Request& req, Response& res) {
+    v1::EvaluateRiskRequest request;
+    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+    v1::EvaluateRiskResponse response;
+    const grpc::Status status = client_.EvaluateRisk(request, &response, options_.rpc_timeout);
+    if (!status.ok()) return SendServerError(res, status);
+    SendJson(res, ToJson(response));
+  });
+
+  // POST /api/export?format=geojson|plan|kml, body: an EvaluateRiskRequest
+  // (the trajectory; path_spacing_m 0 means 25 m). The server samples the
+  // path in WGS84; the writers of geo/export make the file.
+  http_->Post("/api/export", [this](const Request& req, Response& res) {
+    const std::string format = req.get_param_value("format");
+    if (format != "geojson" && format != "plan" && format != "kml") {
+      return SendError(
+          res, 400, "INVALID_ARGUMENT",
+          absl::StrFormat("format has value '%s'; it must be geojson, plan or kml", format),
+          "gateway");
+    }
+    v1::EvaluateRiskRequest request;
+    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+    if (request.path_spacing_m() == 0) request.set_path_spacing_m(25.0);
+    request.set_include_samples(false);
+    v1::EvaluateRiskResponse response;
+    const grpc::Status status = client_.EvaluateRisk(request, &response, options_.rpc_timeout);
+    if (!status.ok()) return SendServerError(res, status);
+    auto trajectory = client::ExportTrajectoryOf(response, request.map(), "riskplan-web",
+                                                 request.path_spacing_m());
+    if (!trajectory.ok()) return SendGatewayError(res, trajectory.status());
+    absl::StatusOr<std::string> text;
+    std::string content_type;
+    if (format == "geojson") {
+      text = geo::TrajectoryGeoJson(*trajectory);
+      content_type = "application/geo+json";
+    } else if (format == "plan") {
+      text = geo::QgcPlanJson(*trajectory);
+      content_type = "application/json";
+    } else {
+      text = geo::TrajectoryKml(*trajectory);
+      content_type = "application/vnd.google-earth.kml+xml";
+    }
+    if (!text.ok()) return SendGatewayError(res, text.status());
+    res.set_header("Content-Disposition", absl::StrFormat("attachment; filename=\"riskplan-%s.%s\"",
+                                                          request.map(), format));
+    res.set_content(std::move(*text), content_type);
+  });
+
+  // POST /api/plans, body: a PlanRequest. Starts the plan; its events are at
+  // /api/plans/ID/events. The server's refusal of the request (a start that
+  // is not admissible, say) arrives there as the "error" event.
+  http_->Post("/api/plans", [this](const Request& req, Response& res) {
+    v1::PlanRequest request;
+    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+    // A final tree can hold 50 000 edges: too much for an event kept in
+    // memory and sent to every viewer.
+    request.set_include_tree(false);
+    auto session = plans_.Start(std::move(request));
+    if (!session.ok()) return SendGatewayError(res, session.status());
+    const std::string& id = (*session)->id();
+    SendJson(res, Json{{"id", id}, {"events", absl::StrCat("/api/plans/", id, "/events")}}.dump(),
+             201);
+  });
+
+  http_->Get(R"(/api/plans/([0-9a-f-]+))", [this](const Request& req, Response& res) {
+    auto session = plans_.Find(req.matches[1]);
+    if (!session) {
+      return SendError(res, 404, "NOT_FOUND",
+                       absl::StrCat("no plan '", std::string(req.matches[1]), "' on this gateway"),
+                       "gateway");
+    }
+    const auto [first, last] = session->kept_range();
+    SendJson(res, Json{{"id", session->id()},
+                       {"state", PlanStateName(session->state())},
+                       {"last_event_id", session->last_event_id()},
+                       {"first_kept_event_id", first},
+                       {"last_kept_event_id", last}}
+                      .dump());
+  });
+
+  http_->Post(R"(/api/plans/([0-9a-f-]+)/cancel)", [this](const Request& req, Response& res) {
+    auto session = plans_.Find(req.matches[1]);
+    if (!session) {
+      return SendError(res, 404, "NOT_FOUND",
+                       absl::StrCat("no plan '", std::string(req.matches[1]), "' on this gateway"),
+                       "gateway");
+    }
+    SendJson(res, Json{{"cancelled", session->Cancel()}}.dump());
+  });
+
+  // The event stream of a plan (text/event-stream). A viewer that sends
+  // Last-Event-ID (or ?last_event_id=N) gets the events after N.
+  http_->Get(R"(/api/plans/([0-9a-f-]+)/events)", [this](const Request& req, Response& res) {
+    std::shared_ptr<PlanSession> session = plans_.Find(req.matches[1]);
+    if (!session) {
+      return SendError(res, 404, "NOT_FOUND",
+                       absl::StrCat("no plan '", std::string(req.matches[1]), "' on this gateway"),
+                       "gateway");
+    }
+    std::string last = req.get_header_value("Last-Event-ID");
+    if (last.empty()) last = req.get_param_value("last_event_id");
+    const std::optional<uint64_t> after = ParseLastEventId(last);
+    if (!after) {
+      return SendError(res, 400, "INVALID_ARGUMENT",
+                       absl::StrFormat("Last-Event-ID has value '%s'; it must be an event id, a "
+                                       "decimal number",
+                                       last),
+                       "gateway");
+    }
+    // A browser reconnects on its own whenever a stream ends; 204 is how
+    // the standard tells it that there is nothing more, ever.
+    if (session->ended() && *after >= session->last_event_id()) {
+      res.status = 204;
+      return;
+    }
+    int open = viewers_.load();
+    do {
+      if (open >= options_.max_viewers) {
+        res.set_header("Retry-After", "5");
+        return SendError(res, 503, "RESOURCE_EXHAUSTED",
+                         absl::StrFormat("this gateway holds at most %d event streams at once "
+                                         "(--max_viewers) and all are open; try again when a "
+                                         "viewer has closed",
+                                         options_.max_viewers),
+                         "gateway");
+      }
+    } while (!viewers_.compare_exchange_weak(open, open + 1));
+
+    struct Viewer {
+      std::shared_ptr<PlanSession> session;
+      uint64_t after = 0;
+      bool started = false;
+    };
+    auto viewer = std::make_shared<Viewer>(Viewer{std::move(session), *after});
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("X-Accel-Buffering", "no");
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [this, viewer](size_t /*offset*/, httplib::DataSink& sink) {
+          if (!viewer->started) {
+            viewer->started = true;
+            const std::string retry = FormatSseRetry(options_.retry_ms);
+            return sink.write(retry.data(), retry.size());
+          }
+          std::vector<PlanEvent> events;
+          const bool end = viewer->session->WaitForEvents(
+              viewer->after, absl::Now() + options_.heartbeat, &events);
+          if (stopping_.load()) {
+            sink.done();
+            return true;
+          }
+          std::string out;
+          for (const PlanEvent& e : events) {
+            out += FormatSseEvent(e.id, e.type, *e.data);
+            viewer->after = e.id;
+          }
+          // Nothing new: a comment, so that a viewer who left is found out.
+          if (out.empty() && !end) out = FormatSseComment("waiting");
+          if (!out.empty() && !sink.write(out.data(), out.size())) return false;
+          if (end) sink.done();
+          return true;
+        },
+        [this](bool /*success*/) { viewers_.fetch_sub(1); });
+  });
+}
+
+}  // namespace riskplan::web

@@ -1,0 +1,87 @@
+// Gateway: riskplan-web's HTTP server. A client of riskplan-server over gRPC
+// (through the public API only) and an HTTP/1.1 server for browsers: the
+// page and its libraries, JSON forms of the RPCs, and plans streamed as
+// Server-Sent Events (docs/web.md lists every route).
+//
+// Threads: cpp-httplib serves each connection on a thread of a fixed pool
+// for as long as the connection lives, so an open event stream holds a
+// thread. The pool has max_viewers + request_threads threads and at most
+// max_viewers event streams are open at once: a viewer past that is refused
+// at once (503, naming the limit), and the request threads stay free for the
+// page's other requests. Each running plan reads its gRPC stream on a thread
+// of its own (PlanSession), at most max_running_plans.
+#ifndef RISKPLAN_WEB_GATEWAY_H_
+#define RISKPLAN_WEB_GATEWAY_H_
+
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "client/client.h"
+#include "web/plan_session.h"
+#include "web/server_link.h"
+
+namespace httplib {
+class Server;
+}  // namespace httplib
+
+namespace riskplan::web {
+
+struct GatewayOptions {
+  std::string listen = "127.0.0.1:8080";  // HOST:PORT; port 0 picks a free one
+  ServerLinkOptions server;               // the gRPC link to riskplan-server
+  // Directories served as /, /lib/leaflet/ and /lib/chart.js/.
+  std::string assets_dir;
+  std::string leaflet_dir = "/usr/share/javascript/leaflet";
+  std::string chartjs_dir = "/usr/share/javascript/chart.js";
+  int max_viewers = 64;                         // event streams open at once
+  int request_threads = 16;                     // threads for everything else
+  absl::Duration heartbeat = absl::Seconds(5);  // comment on an idle event stream
+  int retry_ms = 1000;                          // the browsers' reconnection delay
+  PlanRegistryLimits plans;
+  size_t max_body_bytes = size_t{4} << 20;
+  absl::Duration rpc_timeout = absl::Seconds(60);  // unary calls' deadline
+};
+
+// InvalidArgument naming the option when `options` cannot work.
+absl::Status CheckGatewayOptions(const GatewayOptions& options);
+
+class Gateway {
+ public:
+  // A gateway to the server on `channel` (MakeServerChannel(options.server)).
+  Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel);
+  ~Gateway();  // Stop()
+  Gateway(const Gateway&) = delete;
+  Gateway& operator=(const Gateway&) = delete;
+
+  // Binds options.listen; the bound port (the real one for port 0).
+  // Unavailable when the address cannot be bound.
+  absl::StatusOr<int> Bind();
+  // Serves until Stop(). REQUIRES: Bind() succeeded.
+  void Serve();
+  // Stops serving: running plans are cancelled, event streams end, Serve
+  // returns. Thread-safe; idempotent.
+  void Stop();
+
+  int open_viewers() const { return viewers_.load(); }
+
+ private:
+  void Routes();
+
+  const GatewayOptions options_;
+  client::RiskplanClient client_;
+  PlanRegistry plans_;
+  std::unique_ptr<httplib::Server> http_;
+  // The listening socket (set by cpp-httplib's socket-options callback).
+  int listen_socket_ = -1;
+  static constexpr int kListenBacklog = 1024;
+  std::atomic<int> viewers_{0};
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace riskplan::web
+
+#endif  // RISKPLAN_WEB_GATEWAY_H_

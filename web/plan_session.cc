@@ -1,0 +1,253 @@
+#include "web/plan_session.h"
+
+#include <cmath>
+#include <random>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "client/client.h"
+#include "nlohmann/json.hpp"
+#include "web/proto_json.h"
+
+namespace riskplan::web {
+
+double EpochMs() { return absl::ToDoubleMilliseconds(absl::Now() - absl::UnixEpoch()); }
+
+const char* PlanStateName(PlanState state) {
+  switch (state) {
+    case PlanState::kRunning:
+      return "running";
+    case PlanState::kFinished:
+      return "finished";
+    case PlanState::kFailed:
+      return "failed";
+    case PlanState::kCancelled:
+      return "cancelled";
+  }
+  return "unknown";
+}
+
+PlanSession::PlanSession(std::string id, v1::PlanRequest request, PlanEventLimits limits)
+    : id_(std::move(id)), request_(std::move(request)), limits_(limits) {}
+
+PlanSession::~PlanSession() {
+  context_.TryCancel();
+  if (thread_.joinable()) thread_.join();
+}
+
+void PlanSession::Start(v1::Planner::Stub* stub) {
+  thread_ = std::thread([this, stub] { Run(stub); });
+}
+
+namespace {
+
+double Round(double v, double unit) { return std::round(v / unit) * unit; }
+
+// The display path is for drawing ("not for evaluation", says the API): to
+// the centimetre and the ten-thousandth of a radian (1e-7 degrees in WGS84,
+// a centimetre too) its JSON is about half as long, and every viewer of
+// every improvement receives it. The waypoints, which the page evaluates and
+// exports, keep every digit.
+void RoundDisplayPath(v1::Trajectory* t) {
+  for (v1::Pose& p : *t->mutable_path()) {
+    p.set_x(Round(p.x(), 0.01));
+    p.set_y(Round(p.y(), 0.01));
+    p.set_z(Round(p.z(), 0.01));
+    p.set_theta(Round(p.theta(), 1e-4));
+  }
+  for (v1::GeoPose& p : *t->mutable_path_wgs84()) {
+    p.set_lat_deg(Round(p.lat_deg(), 1e-7));
+    p.set_lon_deg(Round(p.lon_deg(), 1e-7));
+    p.set_alt_m(Round(p.alt_m(), 0.01));
+    p.set_heading_deg(Round(p.heading_deg(), 1e-2));
+  }
+}
+
+}  // namespace
+
+void PlanSession::Run(v1::Planner::Stub* stub) {
+  std::unique_ptr<grpc::ClientReader<v1::PlanUpdate>> reader =
+      stub->PlanTrajectory(&context_, request_);
+  v1::PlanUpdate update;
+  bool got_final = false;
+  while (reader->Read(&update)) {
+    // Stamped on arrival, before conversion, so that the page's latency
+    // includes the gateway's own work.
+    const double received_ms = EpochMs();
+    if (update.has_trajectory()) RoundDisplayPath(update.mutable_trajectory());
+    std::string data = absl::StrCat("{\"gateway_ms\":", absl::StrFormat("%.3f", received_ms),
+                                    ",\"update\":", ToJson(update), "}");
+    if (update.final()) {
+      got_final = true;
+      Append("final", std::move(data), PlanState::kFinished);
+    } else {
+      Append("update", std::move(data), PlanState::kRunning);
+    }
+  }
+  const grpc::Status status = reader->Finish();
+  if (got_final && status.ok()) return;
+  bool cancelled;
+  {
+    absl::MutexLock lock(&mu_);
+    cancelled = cancel_requested_;
+  }
+  if (cancelled && status.error_code() == grpc::StatusCode::CANCELLED) {
+    Append(
+        "cancelled",
+        nlohmann::json{{"message", "cancelled from the page; the server stopped the plan"}}.dump(),
+        PlanState::kCancelled);
+    return;
+  }
+  // The server's own words, untouched: the page shows them as they are.
+  Append("failed",
+         nlohmann::json{{"code", client::StatusCodeName(status.error_code())},
+                        {"message", status.error_message()}}
+             .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+         PlanState::kFailed);
+}
+
+void PlanSession::Append(const std::string& type, std::string data, PlanState end_state) {
+  absl::MutexLock lock(&mu_);
+  if (state_ != PlanState::kRunning) return;  // nothing after the terminal event
+  PlanEvent event{++last_id_, type, std::make_shared<const std::string>(std::move(data))};
+  bytes_ += event.data->size();
+  events_.push_back(std::move(event));
+  state_ = end_state;
+  // Drop the oldest events beyond the bounds; never the newest (the best
+  // trajectory, or the terminal event).
+  while (events_.size() > 1 &&
+         (events_.size() > limits_.max_events || bytes_ > limits_.max_bytes)) {
+    bytes_ -= events_.front().data->size();
+    events_.pop_front();
+  }
+}
+
+bool PlanSession::Cancel() {
+  {
+    absl::MutexLock lock(&mu_);
+    if (state_ != PlanState::kRunning) return false;
+    cancel_requested_ = true;
+  }
+  context_.TryCancel();
+  return true;
+}
+
+void PlanSession::Stop() {
+  {
+    absl::MutexLock lock(&mu_);
+    stopped_ = true;
+  }
+  context_.TryCancel();
+}
+
+bool PlanSession::WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
+                                size_t max_bytes) {
+  absl::MutexLock lock(&mu_);
+  auto ready = [this, after_id]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    return last_id_ > after_id || state_ != PlanState::kRunning || stopped_;
+  };
+  mu_.AwaitWithDeadline(absl::Condition(&ready), deadline);
+  if (stopped_) return true;
+  size_t bytes = 0;
+  bool all = true;
+  for (const PlanEvent& e : events_) {
+    if (e.id <= after_id) continue;
+    if (bytes >= max_bytes) {
+      all = false;
+      break;
+    }
+    out->push_back(e);
+    bytes += e.data->size();
+  }
+  return all && state_ != PlanState::kRunning;
+}
+
+PlanState PlanSession::state() const {
+  absl::MutexLock lock(&mu_);
+  return state_;
+}
+
+bool PlanSession::ended() const { return state() != PlanState::kRunning; }
+
+uint64_t PlanSession::last_event_id() const {
+  absl::MutexLock lock(&mu_);
+  return last_id_;
+}
+
+std::pair<uint64_t, uint64_t> PlanSession::kept_range() const {
+  absl::MutexLock lock(&mu_);
+  if (events_.empty()) return {0, 0};
+  return {events_.front().id, events_.back().id};
+}
+
+PlanRegistry::PlanRegistry(v1::Planner::Stub* stub, PlanRegistryLimits limits)
+    : stub_(stub), limits_(limits) {}
+
+PlanRegistry::~PlanRegistry() { StopAll(); }
+
+std::string PlanRegistry::NewId() {
+  // Random, so that a page reconnecting to a restarted gateway cannot land
+  // on someone else's plan of the same number.
+  static thread_local std::mt19937_64 generator(std::random_device{}());
+  return absl::StrFormat("%x-%016x", ++counter_, generator());
+}
+
+absl::StatusOr<std::shared_ptr<PlanSession>> PlanRegistry::Start(v1::PlanRequest request) {
+  std::shared_ptr<PlanSession> session;
+  std::vector<std::shared_ptr<PlanSession>> dropped;  // destroyed outside the lock
+  {
+    absl::MutexLock lock(&mu_);
+    if (stopped_) return absl::UnavailableError("the gateway is shutting down");
+    int running = 0;
+    for (const auto& s : sessions_) running += s->ended() ? 0 : 1;
+    if (running >= limits_.max_running) {
+      return absl::ResourceExhaustedError(absl::StrFormat(
+          "this gateway runs at most %d plans at once (--max_running_plans); cancel one or "
+          "wait for one to end",
+          limits_.max_running));
+    }
+    // Make room: the oldest ended sessions go first.
+    for (auto it = sessions_.begin();
+         it != sessions_.end() && static_cast<int>(sessions_.size()) >= limits_.max_kept;) {
+      if ((*it)->ended()) {
+        dropped.push_back(std::move(*it));
+        it = sessions_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    session = std::make_shared<PlanSession>(NewId(), std::move(request), limits_.events);
+    sessions_.push_back(session);
+  }
+  session->Start(stub_);
+  return session;
+}
+
+std::shared_ptr<PlanSession> PlanRegistry::Find(const std::string& id) const {
+  absl::MutexLock lock(&mu_);
+  for (const auto& s : sessions_) {
+    if (s->id() == id) return s;
+  }
+  return nullptr;
+}
+
+int PlanRegistry::running() const {
+  absl::MutexLock lock(&mu_);
+  int running = 0;
+  for (const auto& s : sessions_) running += s->ended() ? 0 : 1;
+  return running;
+}
+
+void PlanRegistry::StopAll() {
+  std::vector<std::shared_ptr<PlanSession>> sessions;
+  {
+    absl::MutexLock lock(&mu_);
+    stopped_ = true;
+    sessions.swap(sessions_);
+  }
+  for (const auto& s : sessions) s->Stop();
+}
+
+}  // namespace riskplan::web

@@ -1,0 +1,162 @@
+// PlanSession: one PlanTrajectory call that riskplan-web runs for browsers,
+// and the events it produced, kept so that any number of viewers can watch it
+// and a reconnecting viewer resumes after the last event it saw.
+// PlanRegistry: the gateway's sessions, bounded.
+//
+// Threads: each running session has one thread of its own that reads the
+// gRPC stream (started by PlanRegistry::Start, joined when the session is
+// destroyed); viewers (the HTTP server's threads) wait for events; Cancel
+// may come from any thread. Every method is thread-safe.
+#ifndef RISKPLAN_WEB_PLAN_SESSION_H_
+#define RISKPLAN_WEB_PLAN_SESSION_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "grpcpp/grpcpp.h"
+#include "riskplan/v1/planner.grpc.pb.h"
+
+namespace riskplan::web {
+
+// One event of a plan, as sent to viewers. The types:
+//   "update"    an improvement: {"gateway_ms": T, "update": PlanUpdate}
+//   "final"     the final PlanUpdate, same form; the stream ends after it
+//   "failed"    the call failed: {"code": "INVALID_ARGUMENT", "message":
+//               the server's message as it wrote it}; the stream ends (not
+//               "error": that name is EventSource's own, for a broken link)
+//   "cancelled" the plan was cancelled from the page: {"message": ...}
+// T is when the gateway read the message from the server, in milliseconds
+// since the Unix epoch (the page measures its drawing latency from it).
+// PlanUpdate is the API message in Protobuf's JSON form with the proto's
+// field names (docs/api.md; 64-bit integers are JSON strings), its display
+// path (Trajectory.path, path_wgs84: for drawing only) rounded to the
+// centimetre, which halves an event; the waypoints keep every digit.
+struct PlanEvent {
+  uint64_t id = 0;  // 1, 2, 3, ... within the plan
+  std::string type;
+  // JSON, one line. Shared, never copied: an event of a long trajectory is
+  // tens of kilobytes, and every viewer sends the same one.
+  std::shared_ptr<const std::string> data;
+};
+
+// Bounds of a session's memory.
+struct PlanEventLimits {
+  // Events kept; past either bound the oldest improvements are dropped (the
+  // newest improvement always holds the whole best trajectory, and the
+  // terminal event is always kept), so a viewer resuming from an id older
+  // than the oldest kept gets what is left.
+  size_t max_events = 2000;
+  size_t max_bytes = size_t{8} << 20;
+};
+
+enum class PlanState { kRunning, kFinished, kFailed, kCancelled };
+const char* PlanStateName(PlanState state);
+
+class PlanSession {
+ public:
+  PlanSession(std::string id, v1::PlanRequest request, PlanEventLimits limits);
+  // Cancels the call if it still runs and joins its thread.
+  ~PlanSession();
+  PlanSession(const PlanSession&) = delete;
+  PlanSession& operator=(const PlanSession&) = delete;
+
+  // Starts the call on `stub` in a thread of its own. REQUIRES: called once;
+  // `stub` outlives the session.
+  void Start(v1::Planner::Stub* stub);
+
+  // Cancels the gRPC call: the server stops the planner within milliseconds.
+  // Returns false when the plan had already ended (nothing to cancel).
+  bool Cancel();
+
+  // Waits until there is an event with an id above `after_id`, the plan has
+  // ended, Stop() was called, or `deadline` passes; then appends the kept
+  // events with ids above `after_id` to `*out`, oldest first, stopping once
+  // their data reach `max_bytes` (always at least one), so that a viewer
+  // catching up on a long plan sends it in pieces. Returns true when no
+  // event will ever come after those: the plan ended and `*out` ends with
+  // its last event (or it ended before `after_id`), or the session is stopped.
+  bool WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
+                     size_t max_bytes = size_t{256} << 10);
+
+  // Wakes every waiting viewer for good (the gateway is shutting down) and
+  // cancels the call.
+  void Stop();
+
+  const std::string& id() const { return id_; }
+  const v1::PlanRequest& request() const { return request_; }
+  PlanState state() const;
+  bool ended() const;
+  uint64_t last_event_id() const;
+  // Ids of the oldest and newest events kept (0, 0 when none).
+  std::pair<uint64_t, uint64_t> kept_range() const;
+
+ private:
+  void Run(v1::Planner::Stub* stub);
+  void Append(const std::string& type, std::string data, PlanState end_state);
+
+  const std::string id_;
+  const v1::PlanRequest request_;
+  const PlanEventLimits limits_;
+  grpc::ClientContext context_;  // TryCancel is thread-safe
+  std::thread thread_;
+
+  mutable absl::Mutex mu_;
+  std::deque<PlanEvent> events_ ABSL_GUARDED_BY(mu_);
+  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
+  uint64_t last_id_ ABSL_GUARDED_BY(mu_) = 0;
+  PlanState state_ ABSL_GUARDED_BY(mu_) = PlanState::kRunning;
+  bool cancel_requested_ ABSL_GUARDED_BY(mu_) = false;
+  bool stopped_ ABSL_GUARDED_BY(mu_) = false;
+};
+
+struct PlanRegistryLimits {
+  int max_running = 4;  // plans running at once; more: ResourceExhausted
+  int max_kept = 32;    // sessions kept (ended ones are dropped oldest first)
+  PlanEventLimits events;
+};
+
+class PlanRegistry {
+ public:
+  // `stub` must outlive the registry.
+  PlanRegistry(v1::Planner::Stub* stub, PlanRegistryLimits limits);
+  ~PlanRegistry();  // StopAll()
+
+  // Starts a plan. ResourceExhausted (naming the limit) when max_running
+  // plans already run.
+  absl::StatusOr<std::shared_ptr<PlanSession>> Start(v1::PlanRequest request);
+  // The session `id`, or nullptr.
+  std::shared_ptr<PlanSession> Find(const std::string& id) const;
+  int running() const;
+  const PlanRegistryLimits& limits() const { return limits_; }
+  // Stops every session (Stop) and refuses new plans.
+  void StopAll();
+
+ private:
+  std::string NewId() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+
+  v1::Planner::Stub* const stub_;
+  const PlanRegistryLimits limits_;
+  mutable absl::Mutex mu_;
+  // Oldest first.
+  std::vector<std::shared_ptr<PlanSession>> sessions_ ABSL_GUARDED_BY(mu_);
+  uint64_t counter_ ABSL_GUARDED_BY(mu_) = 0;
+  bool stopped_ ABSL_GUARDED_BY(mu_) = false;
+};
+
+// Milliseconds since the Unix epoch, with microseconds: the timestamps of
+// the events, comparable with a page's performance.timeOrigin + now().
+double EpochMs();
+
+}  // namespace riskplan::web
+
+#endif  // RISKPLAN_WEB_PLAN_SESSION_H_

@@ -36,10 +36,10 @@
 #include <string>
 #include <vector>
 
-#include "absl/strings/match.h"
-#include "absl/strings/str_cat.h"
 #include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_replace.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/time.h"
@@ -296,7 +296,8 @@ std::string ServeOne(web::Gateway& gateway, MemoryServer& http, absl::string_vie
   if (stream.out().empty()) return "";  // cpp-httplib answers nothing to no request line
   const Response r = ParseResponse(stream.out());
   if (r.status < 200 || r.status > 599) Fail("a status outside [200, 599]");
-  if (r.status == 500 || r.status == 502) Fail("status " + std::to_string(r.status) + ": " + r.body);
+  if (r.status == 500 || r.status == 502)
+    Fail("status " + std::to_string(r.status) + ": " + r.body);
   if (gateway.open_viewers() != 0) Fail("a viewer still counted after its stream ended");
   if (absl::StartsWith(r.content_type, "application/json")) CheckJson(r);
   if (absl::StartsWith(r.content_type, "text/event-stream") && r.status == 200) {

@@ -28,7 +28,9 @@
 // cpp-httplib is Debian's compiled library, not instrumented: coverage
 // guides the fuzzer through the gateway's code, and ASan checks every byte
 // the gateway touches, but not cpp-httplib's own parsing (docs/reliability.md).
+#include <fcntl.h>
 #include <httplib.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <cstdio>
@@ -99,9 +101,18 @@ class MemoryStream final : public httplib::Stream {
   std::string out_;
 };
 
-// httplib::Server with its request processing reachable.
+// httplib::Server with its request processing reachable. cpp-httplib writes
+// a chunked answer (an event stream) only while its listening socket is set
+// (it takes an unset one for a server shutting down, and cuts the answer
+// short): a descriptor of /dev/null stands in for it, never listened on.
 class MemoryServer final : public httplib::Server {
  public:
+  MemoryServer() {
+    const int fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    if (fd < 0) Fail("cannot open /dev/null");
+    svr_sock_ = fd;
+  }
+  ~MemoryServer() override { close(svr_sock_.exchange(INVALID_SOCKET)); }
   void Serve(httplib::Stream& stream) {
     bool closed = false;
     process_request(stream, /*close_connection=*/true, closed, nullptr);
@@ -187,19 +198,25 @@ struct Response {
 
 // Splits what the gateway wrote into status, Content-Type and body (joining
 // a chunked body); any framing that is not HTTP/1.1 fails.
+// A broken property of the answer `out`: says which, with the answer (its
+// first 4 KB), so that a crash's log shows what the gateway wrote.
+[[noreturn]] void Broken(absl::string_view out, absl::string_view what) {
+  Fail(absl::StrCat(what, "; the answer:\n", out.substr(0, 4096)));
+}
+
 Response ParseResponse(absl::string_view out) {
   Response r;
   const size_t head_end = out.find("\r\n\r\n");
-  if (head_end == absl::string_view::npos) Fail("an answer without a complete header");
+  if (head_end == absl::string_view::npos) Broken(out, "an answer without a complete header");
   std::vector<absl::string_view> lines = absl::StrSplit(out.substr(0, head_end), "\r\n");
   if (lines.empty() || !absl::StartsWith(lines[0], "HTTP/1.1 ") || lines[0].size() < 12 ||
       !absl::SimpleAtoi(lines[0].substr(9, 3), &r.status)) {
-    Fail("an answer whose status line is not HTTP/1.1");
+    Broken(out, "an answer whose status line is not HTTP/1.1");
   }
   bool chunked = false;
   for (size_t i = 1; i < lines.size(); ++i) {
     const size_t colon = lines[i].find(':');
-    if (colon == absl::string_view::npos) Fail("a header line without a colon");
+    if (colon == absl::string_view::npos) Broken(out, "a header line without a colon");
     const absl::string_view name = lines[i].substr(0, colon);
     absl::string_view value = absl::StripLeadingAsciiWhitespace(lines[i].substr(colon + 1));
     if (absl::EqualsIgnoreCase(name, "Content-Type")) r.content_type = std::string(value);
@@ -212,12 +229,12 @@ Response ParseResponse(absl::string_view out) {
   }
   while (true) {
     const size_t eol = rest.find("\r\n");
-    if (eol == absl::string_view::npos) Fail("a chunked body cut short");
+    if (eol == absl::string_view::npos) Broken(out, "a chunked body cut short");
     size_t n = 0;
-    if (!absl::SimpleHexAtoi(rest.substr(0, eol), &n)) Fail("a chunk size that is not hex");
+    if (!absl::SimpleHexAtoi(rest.substr(0, eol), &n)) Broken(out, "a chunk size that is not hex");
     rest.remove_prefix(eol + 2);
     if (n == 0) break;
-    if (rest.size() < n + 2 || rest.substr(n, 2) != "\r\n") Fail("a chunk cut short");
+    if (rest.size() < n + 2 || rest.substr(n, 2) != "\r\n") Broken(out, "a chunk cut short");
     absl::StrAppend(&r.body, rest.substr(0, n));
     rest.remove_prefix(n + 2);
   }

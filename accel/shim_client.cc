@@ -49,7 +49,12 @@ absl::StatusOr<std::unique_ptr<ShimClient>> ShimClient::Connect(const std::strin
       return absl::Status(s.code(), absl::StrCat("shim ", endpoint, ": ", s.message()));
     }
   }
-  auto client = std::unique_ptr<ShimClient>(new ShimClient(endpoint, options, *std::move(socket)));
+  return Handshake(endpoint, *std::move(socket), options);
+}
+
+absl::StatusOr<std::unique_ptr<ShimClient>> ShimClient::Handshake(
+    const std::string& endpoint, Socket socket, const ShimClientOptions& options) {
+  auto client = std::unique_ptr<ShimClient>(new ShimClient(endpoint, options, std::move(socket)));
   std::string reply;
   if (absl::Status s = client->Call(MessageType::kHello, EncodeHello({options.client_name}),
                                     MessageType::kHelloReply, options.hello_timeout, &reply);

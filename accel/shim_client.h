@@ -58,6 +58,13 @@ class ShimClient {
   // valid number format, sane limits.
   static absl::StatusOr<std::unique_ptr<ShimClient>> Connect(const std::string& endpoint,
                                                              const ShimClientOptions& options);
+  // The same over `socket`, already connected to a shim: exchanges HELLO and
+  // checks the reply (`endpoint` only names the shim in messages). Connect is
+  // ConnectTcp and then this; tests and fuzz targets give it one end of a
+  // socketpair.
+  static absl::StatusOr<std::unique_ptr<ShimClient>> Handshake(const std::string& endpoint,
+                                                               Socket socket,
+                                                               const ShimClientOptions& options);
 
   const HelloReply& hello() const { return hello_; }
   const std::string& endpoint() const { return endpoint_; }

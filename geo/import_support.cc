@@ -87,9 +87,12 @@ absl::Status MissingCellsError(const ImportContext& ctx, const std::string& labe
       }
       if (rx.valid()) {
         const bool geographic = IsGeographic(*input_srs);
-        in_crs = absl::StrFormat(geographic ? "%s lon %.6f .. %.6f, lat %.6f .. %.6f deg"
-                                            : "%s x %.3f .. %.3f, y %.3f .. %.3f",
-                                 CrsShortName(input_srs), rx.lo, rx.hi, ry.lo, ry.hi);
+        // Two calls: absl checks a format string at compile time only when it
+        // is a constant (clang refuses a conditional one).
+        in_crs = geographic ? absl::StrFormat("%s lon %.6f .. %.6f, lat %.6f .. %.6f deg",
+                                              CrsShortName(input_srs), rx.lo, rx.hi, ry.lo, ry.hi)
+                            : absl::StrFormat("%s x %.3f .. %.3f, y %.3f .. %.3f",
+                                              CrsShortName(input_srs), rx.lo, rx.hi, ry.lo, ry.hi);
       }
     }
   }

@@ -226,7 +226,10 @@ absl::StatusOr<ImportedMap> ImportMap(const ImportOptions& options) {
   p["notes"] = out.notes;
   p["people_total"] = out.stats.people_total;
   p["gdal"] = GDALVersionInfo("RELEASE_NAME");
-  out.provenance_json = p.dump();
+  // Paths, CRS names and the command line are bytes from the user's files
+  // and shell, not always UTF-8 (a Latin-1 file name): replaced by U+FFFD
+  // rather than letting the JSON library throw out of the import.
+  out.provenance_json = p.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   return out;
 }
 

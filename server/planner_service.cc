@@ -130,12 +130,14 @@ void Guarded(Call* call, const char* what, const std::string& map, Body body) {
   }
 }
 
-// Risk of a validated trajectory (runs on the evaluation pool: building a
-// model and evaluating a long trajectory can take seconds). Cancelled once
-// `stop` is reached (the call's cancellation, or the server's drain).
-absl::Status Evaluate(RiskModelCache& models, FeasibilityCache& checkers, accel::RiskEngine* engine,
-                      const RequestLimits& limits, const EvaluateSpec& spec,
-                      const StopCondition& stop, v1::EvaluateRiskResponse* response) {
+}  // namespace
+
+// On the evaluation pool: building a model and evaluating a long trajectory
+// can take seconds. `stop` is the call's cancellation or the server's drain.
+absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
+                           accel::RiskEngine* engine, const RequestLimits& limits,
+                           const EvaluateSpec& spec, const StopCondition& stop,
+                           v1::EvaluateRiskResponse* response) {
   if (stop.Reached()) return absl::CancelledError("the evaluation was stopped before it started");
   absl::StatusOr<std::shared_ptr<const RiskModel>> model = models.Get(*spec.map, spec.params);
   if (!model.ok()) return InField("model_params", model.status());
@@ -233,8 +235,6 @@ absl::Status ComputeLayer(RiskModelCache& models, const RiskLayerSpec& spec,
   *response = RiskLayerToProto(*layer, *spec.map, options, spec.frame.get());
   return absl::OkStatus();
 }
-
-}  // namespace
 
 PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
                                ServerMetrics& metrics, const ServiceOptions& options)
@@ -422,8 +422,8 @@ grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerConte
     const bool queued = eval_pool_.TrySubmit([this, call, spec = *std::move(spec)] {
       Guarded(call, "EvaluateRisk", spec.map->name(), [&] {
         const StopCondition stop(&call->cancelled(), &stop_evaluations_);
-        absl::Status status = Evaluate(models_, *checkers_, options_.engine, options_.limits, spec,
-                                       stop, call->response());
+        absl::Status status = RunEvaluation(models_, *checkers_, options_.engine, options_.limits,
+                                            spec, stop, call->response());
         // Stopped: by the drain (the client may still be there to be told),
         // or by the client itself (who no longer listens).
         if (absl::IsCancelled(status) && stop_evaluations_.IsCancelled()) {

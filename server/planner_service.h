@@ -54,6 +54,17 @@ struct ServiceOptions {
   std::shared_ptr<Authorizer> authorizer;
 };
 
+// The work of an EvaluateRisk call once ValidateEvaluateRequest has passed
+// (run on the evaluation pool): the model of the spec's map and parameters
+// from `models`, the pieces and the sample limits, the evaluation (on
+// `engine`, or on the calling thread when it is null), then the two-tier check
+// with a checker from `checkers`, into `response`. Cancelled once `stop` is
+// reached. Public so that a fuzz target runs exactly what the service runs.
+absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
+                           accel::RiskEngine* engine, const RequestLimits& limits,
+                           const EvaluateSpec& spec, const StopCondition& stop,
+                           v1::EvaluateRiskResponse* response);
+
 // riskplan.v1.Planner with every method raw (server/message_codec.h says
 // why): the service parses each request and serialises each response itself.
 using RawPlannerService = v1::Planner::WithRawCallbackMethod_PlanTrajectory<

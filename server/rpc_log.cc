@@ -4,7 +4,9 @@
 
 #include <atomic>
 
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "google/protobuf/stubs/logging.h"
 #include "nlohmann/json.hpp"
 #include "server/status_util.h"
 
@@ -71,6 +73,15 @@ void LogEvent(std::string_view event, std::string_view detail) {
   line["event"] = std::string(event);
   line["detail"] = std::string(detail);
   WriteLine(line);
+}
+
+void RouteProtobufLogs() {
+  google::protobuf::SetLogHandler([](google::protobuf::LogLevel level, const char* filename,
+                                     int line, const std::string& message) {
+    static constexpr const char* kLevels[] = {"INFO", "WARNING", "ERROR", "FATAL"};
+    const char* name = level >= 0 && level < 4 ? kLevels[level] : "LOG";
+    LogEvent("protobuf", absl::StrFormat("%s %s:%d: %s", name, filename, line, message));
+  });
 }
 
 }  // namespace riskplan::server

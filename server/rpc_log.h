@@ -34,6 +34,13 @@ void LogRpc(const RpcLogRecord& record);
 // A server event that is not an RPC: {"ts":...,"event":EVENT,"detail":DETAIL}.
 void LogEvent(std::string_view event, std::string_view detail);
 
+// Routes Protobuf's own messages into this log, as events "protobuf" whose
+// detail is "LEVEL FILE:LINE: MESSAGE", instead of Protobuf's plain lines on
+// stderr: a request with a string field that is not UTF-8 makes Protobuf log
+// while it parses, and that line would otherwise break the one-JSON-object-
+// per-line log, once per such request. Call once at start-up.
+void RouteProtobufLogs();
+
 }  // namespace riskplan::server
 
 #endif  // RISKPLAN_SERVER_RPC_LOG_H_

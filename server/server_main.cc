@@ -598,6 +598,7 @@ int Main() {
   absl::StatusOr<ServerConfig> config = ConfigFromFlags();
   if (!config.ok()) return Fail(2, config.status().message());
   SetRpcLogEnabled(absl::GetFlag(FLAGS_rpc_log));
+  RouteProtobufLogs();
   InstallGrpcLogHook();
   const sigset_t stop_signals = BlockStopSignals();
   // Before the maps load (seconds): a bad certificate, key or token file

@@ -169,10 +169,14 @@ absl::StatusOr<std::string> FindAssetsDir(const std::vector<std::string>& candid
 }
 
 Gateway::Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel)
+    : Gateway(std::move(options), std::move(channel), std::make_unique<httplib::Server>()) {}
+
+Gateway::Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel,
+                 std::unique_ptr<httplib::Server> http)
     : options_(std::move(options)),
       client_(std::move(channel)),
       plans_(&client_.stub(), options_.plans),
-      http_(std::make_unique<httplib::Server>()) {
+      http_(std::move(http)) {
   // One thread per connection for as long as it lives: event streams hold
   // theirs, so the pool is sized for every viewer plus the other requests.
   const size_t threads =

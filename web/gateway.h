@@ -60,6 +60,11 @@ class Gateway {
  public:
   // A gateway to the server on `channel` (MakeServerChannel(options.server)).
   Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel);
+  // The same, serving its routes on `http` (a subclass of httplib::Server:
+  // the fuzz target of fuzz/web_gateway_fuzz.cc feeds it requests from
+  // memory instead of a socket).
+  Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel,
+          std::unique_ptr<httplib::Server> http);
   ~Gateway();  // Stop()
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;

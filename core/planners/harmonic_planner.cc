@@ -141,11 +141,16 @@ bool Run::ApplyDueObstacles() {
   while (next_pending_ < pending_.size() && pending_[next_pending_].at_iteration <= sweeps_) {
     const DynamicObstacle& d = pending_[next_pending_++];
     closed_.push_back({d.x0_m, d.y0_m, d.x1_m, d.y1_m});
-    // Planning cells overlapping [x0, x1) x [y0, y1).
-    const int i0 = static_cast<int>(std::floor((d.x0_m - map.x0()) / cell_m_));
-    const int j0 = static_cast<int>(std::floor((d.y0_m - map.y0()) / cell_m_));
-    const int i1 = static_cast<int>(std::ceil((d.x1_m - map.x0()) / cell_m_)) - 1;
-    const int j1 = static_cast<int>(std::ceil((d.y1_m - map.y0()) / cell_m_)) - 1;
+    // Planning cells overlapping [x0, x1) x [y0, y1). An area may lie far
+    // outside the map (any finite coordinates are valid), so cell numbers are
+    // clamped to just outside the grid before they become ints.
+    const auto cell = [](double c, int n) {
+      return static_cast<int>(std::clamp(c, -1.0, static_cast<double>(n)));
+    };
+    const int i0 = cell(std::floor((d.x0_m - map.x0()) / cell_m_), nx_);
+    const int j0 = cell(std::floor((d.y0_m - map.y0()) / cell_m_), ny_);
+    const int i1 = cell(std::ceil((d.x1_m - map.x0()) / cell_m_), nx_) - 1;
+    const int j1 = cell(std::ceil((d.y1_m - map.y0()) / cell_m_), ny_) - 1;
     for (int j = std::max(j0, 0); j <= std::min(j1, ny_ - 1); ++j) {
       for (int i = std::max(i0, 0); i <= std::min(i1, nx_ - 1); ++i) Block(i, j);
     }

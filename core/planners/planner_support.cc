@@ -17,8 +17,10 @@ absl::StatusOr<PlannerParamValues> PlannerParamValues::Parse(
   PlannerParamValues out;
   for (const PlannerParamInfo& i : info) out.values_[i.name] = i.default_value;
   for (const auto& [name, value] : given) {
+    // Captured by an init-capture: clang before 16 cannot capture a
+    // structured binding (the sanitizer builds use clang 14).
     auto it = std::find_if(info.begin(), info.end(),
-                           [&](const PlannerParamInfo& i) { return i.name == name; });
+                           [&name = name](const PlannerParamInfo& i) { return i.name == name; });
     if (it == info.end()) {
       std::vector<std::string> names;
       for (const PlannerParamInfo& i : info) names.push_back(i.name);

@@ -2,6 +2,7 @@
 // buildings (vector and OpenStreetMap), land cover, no-fly zones, landing
 // sites.
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "geo/target_grid.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "nlohmann/json.hpp"
 #include "tests/geo/geodata_fixtures.h"
 
 namespace riskplan::geo {
@@ -408,6 +410,24 @@ TEST(ImportInputsTest, BadInputsAreRefusedNamingLayerAndInput) {
   o = MapOptions(dir);
   o.name = "Bad Name";
   EXPECT_THAT(ImportMap(o).status().message(), HasSubstr("--name: map header: name 'Bad Name'"));
+}
+
+// Found by fuzz/geo_import_fuzz.cc: a path that is not UTF-8 (a Latin-1 file
+// name) made the provenance's JSON library throw out of ImportMap, so that
+// riskplan-tool import died of an uncaught exception. The bytes it cannot
+// carry become U+FFFD; the import succeeds.
+TEST(ImportInputsTest, PathsThatAreNotUtf8KeepTheProvenanceValidJson) {
+  const std::string dir = FreshDir("latin1");
+  ImportOptions o = MapOptions(dir);
+  const std::string latin1 = dir + "/flat-caf\xe9.tif";
+  ASSERT_EQ(std::rename(o.terrain.c_str(), latin1.c_str()), 0);
+  o.terrain = latin1;
+  o.command_line = "riskplan-tool import --terrain=flat-caf\xe9.tif";
+  auto map = ImportMap(o);
+  ASSERT_TRUE(map.ok()) << map.status();
+  const nlohmann::json p = nlohmann::json::parse(map->provenance_json);
+  EXPECT_EQ(p["inputs"][0]["path"], dir + "/flat-caf\xef\xbf\xbd.tif");
+  EXPECT_EQ(p["command"], "riskplan-tool import --terrain=flat-caf\xef\xbf\xbd.tif");
 }
 
 }  // namespace

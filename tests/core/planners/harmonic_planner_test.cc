@@ -200,6 +200,30 @@ TEST(HarmonicPlannerTest, ObstacleAddedBeforeConvergenceIsAvoided) {
   }
 }
 
+// Areas far outside the map (coordinates beyond the range of an int once
+// counted in cells; found by fuzzing, undefined behaviour before) close
+// nothing: the trajectory is the one without them (an area's arrival
+// restarts the relaxation, so the sweeps may differ).
+TEST(HarmonicPlannerTest, ObstaclesFarOutsideTheMapCloseNothing) {
+  const auto m = testing_maps::WallWithGap();
+  const Outcome plain = RunPlan(kHarmonic, m.model, m.start, m.goal, 100000, 1);
+  PlanOptions options;
+  options.dynamic_obstacles = {{0, -1e21, -1e21, -1e20, 1e21},
+                               {0, 1e20, -1e21, 1e21, 1e21},
+                               {3, -1e300, 1e300, 1e300, 1.5e300},
+                               {5, -1e21, -1e21, 1e21, -1e20}};
+  const Outcome far = RunPlan(kHarmonic, m.model, m.start, m.goal, 100000, 1, {}, options);
+  ExpectSoundStream(*m.model, m.start, m.goal, far);
+  ASSERT_TRUE(plain.result.ok() && plain.result->best.has_value());
+  ASSERT_TRUE(far.result->best.has_value());
+  EXPECT_EQ(far.result->best->risk, plain.result->best->risk);
+  ASSERT_EQ(far.result->best->waypoints.size(), plain.result->best->waypoints.size());
+  for (size_t k = 0; k < plain.result->best->waypoints.size(); ++k) {
+    EXPECT_EQ(far.result->best->waypoints[k].x, plain.result->best->waypoints[k].x);
+    EXPECT_EQ(far.result->best->waypoints[k].y, plain.result->best->waypoints[k].y);
+  }
+}
+
 // A serpentine map: five 200 m corridors joined by 250 m gaps at alternate
 // ends. The goal's potential decays steeply along it; the planner converges
 // (SOR, then Gauss-Seidel), descends and flies it.

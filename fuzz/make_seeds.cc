@@ -14,8 +14,10 @@
 #include <span>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "accel/blobs.h"
 #include "accel/known_answer.h"
@@ -80,7 +82,8 @@ std::shared_ptr<const RiskMap> SmallMap(bool geo) {
 std::string BundleSeed(const RiskMap& map, void (*edit)(nlohmann::json&)) {
   const ScratchDir scratch;
   if (!WriteMapBundle(map, scratch.path().string()).ok()) Fail("WriteMapBundle");
-  nlohmann::ordered_json manifest = nlohmann::ordered_json::parse(ReadFile(scratch.path() / "manifest.json"));
+  nlohmann::ordered_json manifest =
+      nlohmann::ordered_json::parse(ReadFile(scratch.path() / "manifest.json"));
   nlohmann::json plain = manifest;
   if (edit != nullptr) edit(plain);
   std::string seed = edit != nullptr ? plain.dump(1) : manifest.dump(2);
@@ -119,7 +122,8 @@ std::string SmallKernelsBlob() {
   set.height_bins = 2;
   set.heading_bins = 2;
   set.half_width = {0, 1};
-  set.weights = {{1.0}, {0.5}, {0.1, 0.1, 0.1, 0.1, 0.2, 0.1, 0.1, 0.1, 0.1}, std::vector<double>(9, 0.1)};
+  set.weights = {
+      {1.0}, {0.5}, {0.1, 0.1, 0.1, 0.1, 0.2, 0.1, 0.1, 0.1, 0.1}, std::vector<double>(9, 0.1)};
   return EncodeKernelsBlob(set);
 }
 
@@ -152,13 +156,14 @@ void ShimSessionSeeds(const fs::path& out) {
                            EncodePutBlob({BlobKind::kMap, map_hash, map.size(), 0, map}),
                            kFixBlobs));
   const size_t half = kernels.size() / 2;
-  upload.push_back(Request(
-      MessageType::kPutBlob,
-      EncodePutBlob({BlobKind::kKernels, kernels_hash, kernels.size(), 0, kernels.substr(0, half)})));
-  upload.push_back(Request(MessageType::kPutBlob,
-                           EncodePutBlob({BlobKind::kKernels, kernels_hash, kernels.size(), half,
-                                          kernels.substr(half)})));
-  EvalRequest eval{map_hash, kernels_hash,
+  upload.push_back(
+      Request(MessageType::kPutBlob, EncodePutBlob({BlobKind::kKernels, kernels_hash,
+                                                    kernels.size(), 0, kernels.substr(0, half)})));
+  upload.push_back(
+      Request(MessageType::kPutBlob, EncodePutBlob({BlobKind::kKernels, kernels_hash,
+                                                    kernels.size(), half, kernels.substr(half)})));
+  EvalRequest eval{map_hash,
+                   kernels_hash,
                    {{1, 0, 2, 2}, {2, 1, 0, 0}, {2, 0, 5, 4}, {1, 1, -1, 3}, {2, 1, 9, 9}}};
   upload.push_back(Request(MessageType::kEval, EncodeEval(eval)));
   upload.push_back(ping);
@@ -183,7 +188,8 @@ void ShimSessionSeeds(const fs::path& out) {
   Record corrupt = ping;
   corrupt.flags = kBadCrc;
   Write(dir, "bad-crc", Records({hello, corrupt}));
-  Record raw = Request(MessageType::kPing, EncodeFrame(MessageType::kPing, 1, EncodePing({7})), kRaw);
+  Record raw =
+      Request(MessageType::kPing, EncodeFrame(MessageType::kPing, 1, EncodePing({7})), kRaw);
   Write(dir, "raw-ping", Records({raw}));
   Write(dir, "error-as-request",
         Records({Request(MessageType::kError, EncodeError({ShimErrorCode::kInternal, "x", {}}))}));
@@ -237,7 +243,8 @@ std::string RecordExchange(const std::string& ops, uint16_t blob_size) {
         (*client)->Ping().IgnoreError();
         break;
       case 1:
-        (*client)->PutBlob((op & 4) ? BlobKind::kKernels : BlobKind::kMap, Sha256(blob), blob)
+        (*client)
+            ->PutBlob((op & 4) ? BlobKind::kKernels : BlobKind::kMap, Sha256(blob), blob)
             .IgnoreError();
         break;
       case 2:
@@ -371,6 +378,28 @@ void RequestSeeds(const fs::path& out) {
   geo_plan.mutable_budget()->set_iterations(200);
   geo_plan.set_seed(7);
   Write(dir, "plan-wgs84", Method('1', geo_plan));
+
+  // A fleet ('3'): two missions to one goal (a shared goal tree), one to
+  // another goal in WGS84, and one whose start is outside the map.
+  v1::FleetRequest fleet;
+  fleet.set_tenant("seed");
+  fleet.set_send_improvements(true);
+  const std::pair<double, double> starts[] = {{250, 300}, {300, 650}};
+  for (size_t k = 0; k < 2; ++k) {
+    v1::FleetMission* m = fleet.add_missions();
+    m->set_id(absl::StrCat("depot-", k));
+    m->set_priority(static_cast<int>(10 * k));
+    *m->mutable_request() = plan;
+    *m->mutable_request()->mutable_start() = PoseAt(map, starts[k].first, starts[k].second, 0.0);
+  }
+  v1::FleetMission* geo_mission = fleet.add_missions();
+  geo_mission->set_id("wgs84");
+  *geo_mission->mutable_request() = geo_plan;
+  v1::FleetMission* outside = fleet.add_missions();
+  outside->set_id("outside");
+  *outside->mutable_request() = plan;
+  outside->mutable_request()->mutable_start()->set_x(-500.0);
+  Write(dir, "fleet", Method('3', fleet));
   v1::EvaluateRiskRequest geo_eval;
   geo_eval.set_map("geo-city");
   to_wgs84(PoseAt(map, 300, 300, 0.785), geo_eval.mutable_waypoints_wgs84()->add_poses());

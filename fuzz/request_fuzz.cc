@@ -9,30 +9,43 @@
 // of milliseconds with its improvements and final message converted as the
 // stream would send them; every response is serialised.
 //
-// Input: one byte choosing the method (even: EvaluateRisk, odd:
-// PlanTrajectory), then the request message's bytes (protobuf wire format).
+// Input: one byte choosing the method (even: EvaluateRisk; 1 mod 4:
+// PlanTrajectory; 3 mod 4: PlanFleet, validated and grouped into the
+// missions planned together, not planned: its missions are PlanRequests,
+// planned by the PlanTrajectory branch), then the request message's bytes
+// (protobuf wire format).
 //
 // Properties: an error is a status the API documents for these calls
 // (INVALID_ARGUMENT, NOT_FOUND, RESOURCE_EXHAUSTED) with a message, never
 // INTERNAL or UNKNOWN; no exception escapes (the server would answer it with
 // INTERNAL); a plan's improvements and final message always convert, and
-// every number of an answer is finite.
+// every number of an answer is finite. A fleet: its refusal is
+// INVALID_ARGUMENT; a mission's own error is a documented status naming
+// "missions[i]"; every valid mission is in exactly one group, a shared group
+// holds 2 to kMaxSharedTreeMissions RISK_RRT_STAR missions with one map,
+// goal and seed, and a group's priority is the highest of its missions'.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "core/base/cancellation.h"
 #include "core/map/demo_city.h"
 #include "core/map/risk_map.h"
 #include "core/planners/planner.h"
+#include "core/planners/shared_goal_tree.h"
 #include "fuzz/fuzz_support.h"
 #include "google/protobuf/stubs/logging.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.pb.h"
 #include "server/feasibility_cache.h"
+#include "server/fleet_request.h"
 #include "server/map_registry.h"
 #include "server/message_codec.h"
 #include "server/model_cache.h"
@@ -57,6 +70,7 @@ RequestLimits FuzzLimits() {
   limits.max_obstacle_points = 64;
   limits.max_edge_samples = 20000;
   limits.max_table_bytes = size_t{32} << 20;
+  limits.max_fleet_missions = 16;
   return limits;
 }
 
@@ -170,8 +184,8 @@ void PlanTrajectory(Server& server, const grpc::ByteBuffer& raw) {
   absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec->algorithm);
   if (!planner.ok()) Fail(planner.status().ToString());
   CancellationToken cancel;
-  absl::StatusOr<PlanResult> result = (*planner)->Plan(
-      problem, spec->options, cancel, [&](const PlanImprovement& improvement) {
+  absl::StatusOr<PlanResult> result =
+      (*planner)->Plan(problem, spec->options, cancel, [&](const PlanImprovement& improvement) {
         absl::StatusOr<v1::PlanUpdate> update =
             ImprovementToProto(improvement, spec->params, spec->display_step_m, spec->frame.get());
         if (!update.ok()) Fail(update.status().ToString());
@@ -190,6 +204,66 @@ void PlanTrajectory(Server& server, const grpc::ByteBuffer& raw) {
   CheckSerialises(*final_update);
 }
 
+void PlanFleet(Server& server, const grpc::ByteBuffer& raw) {
+  v1::FleetRequest request;
+  if (absl::Status s = ParseRequest(raw, &request); !s.ok()) {
+    CheckError(s);
+    return;
+  }
+  absl::StatusOr<FleetSpec> spec = ValidateFleetRequest(request, *server.maps, server.limits);
+  if (!spec.ok()) {
+    if (spec.status().code() != absl::StatusCode::kInvalidArgument) Fail(spec.status().ToString());
+    CheckError(spec.status());
+    return;
+  }
+  if (spec->missions.size() != static_cast<size_t>(request.missions_size())) {
+    Fail("a fleet spec without one entry per mission");
+  }
+  std::vector<int> seen(spec->missions.size(), 0);
+  for (size_t i = 0; i < spec->missions.size(); ++i) {
+    const FleetMissionSpec& m = spec->missions[i];
+    if (m.plan.ok()) continue;
+    CheckError(m.plan.status());
+    const absl::Status named = MissionError(i, m.plan.status());
+    if (named.message().find(absl::StrCat("missions[", i, "]")) == absl::string_view::npos) {
+      Fail("a mission's error that does not name the mission");
+    }
+  }
+  for (const MissionGroup& group : GroupMissions(*spec)) {
+    if (group.missions.empty()) Fail("an empty mission group");
+    int priority = -1;
+    for (size_t index : group.missions) {
+      if (index >= spec->missions.size() || !spec->missions[index].plan.ok()) {
+        Fail("a group with a mission that is not valid");
+      }
+      ++seen[index];
+      priority = std::max(priority, spec->missions[index].priority);
+    }
+    if (priority != group.priority) Fail("a group's priority is not its missions' highest");
+    if (!group.shared) {
+      if (group.missions.size() != 1) Fail("a group planned alone with more than one mission");
+      continue;
+    }
+    if (group.missions.size() < 2 || group.missions.size() > kMaxSharedTreeMissions) {
+      Fail("a shared goal tree of fewer than 2 or too many missions");
+    }
+    const PlanSpec& first = *spec->missions[group.missions[0]].plan;
+    for (size_t index : group.missions) {
+      const PlanSpec& p = *spec->missions[index].plan;
+      if (p.algorithm != PlannerAlgorithm::kRiskRrtStar || p.map != first.map ||
+          p.options.seed != first.options.seed ||
+          std::memcmp(&p.goal, &first.goal, sizeof(Pose)) != 0) {
+        Fail("a shared goal tree of missions that differ in algorithm, map, seed or goal");
+      }
+    }
+  }
+  for (size_t i = 0; i < spec->missions.size(); ++i) {
+    if (seen[i] != (spec->missions[i].plan.ok() ? 1 : 0)) {
+      Fail("a valid mission in no group or in two, or an invalid one in a group");
+    }
+  }
+}
+
 }  // namespace
 }  // namespace riskplan::fuzz
 
@@ -202,8 +276,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     if (data[0] % 2 == 0) {
       Evaluate(*server, raw);
-    } else {
+    } else if (data[0] % 4 == 1) {
       PlanTrajectory(*server, raw);
+    } else {
+      PlanFleet(*server, raw);
     }
   } catch (const std::exception& e) {
     Fail(std::string("an exception escaped: ") + e.what());

@@ -290,8 +290,13 @@ TEST_F(RiskRrtStarScenarioTest, TimeBudgetEndsTheRun) {
   CancellationToken cancel;
   auto result = (*planner)->Plan({model_, sc.start, sc.goal}, options, cancel, nullptr);
   ASSERT_TRUE(result.ok());
+  // Ended by its clock, not before: how many iterations fit in 0.2 s is the
+  // machine's business (the sanitized build on a loaded machine spent them
+  // all on the guide route and reached none), so only the reason counts.
   EXPECT_GE(result->elapsed_s, 0.2);
-  EXPECT_GT(result->iterations, 0);
+  EXPECT_TRUE(result->reason == StopReason::kBudgetExhausted ||
+              result->reason == StopReason::kNoSolution)
+      << StopReasonName(result->reason);
 }
 
 TEST_F(RiskRrtStarScenarioTest, RecordedTreeHasOneEdgePerNonRootNode) {

@@ -83,7 +83,7 @@ TEST(FdExhaustionTest, ServesOpenCallsAndAcceptsAgainOnceDescriptorsAreFree) {
   // and plan B, which starts once A is cancelled and runs to its end.
   v1::EvaluateRiskResponse response;
   const grpc::Status eval = client.EvaluateRisk(SmallCityPolyline(), &response);
-  EXPECT_TRUE(eval.ok()) << eval.error_message();
+  EXPECT_TRUE(eval.ok()) << eval.error_message() << "\nserver log:\n" << server->Stderr();
   a_context.TryCancel();
   while (plan_a->Read(&update)) {
   }

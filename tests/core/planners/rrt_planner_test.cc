@@ -253,6 +253,29 @@ TEST(ObstaclePointSetTest, IndexedClearanceTestIsTheBruteForceOne) {
   EXPECT_LT(clear, 2700);
 }
 
+// Coordinates and clearances far off the grid are clamped before any
+// conversion to int (the request fuzz target found a clearance of 1e168 m
+// converted out of int's range, undefined behaviour that UBSan reports), and
+// the answers stay the brute force's.
+TEST(ObstaclePointSetTest, FarCoordinatesAndHugeClearancesAreClampedOntoTheGrid) {
+  const ObstaclePointSet set({{10.0, 10.0}, {90.0, 50.0}, {-1e20, 3e300}}, 5.0);
+  const std::vector<std::pair<Point2, Point2>> segments = {
+      {{0.0, 0.0}, {100.0, 100.0}},     {{-1e300, -1e300}, {1e300, 1e300}},
+      {{-1.4e168, 5.0}, {5.0, 5.0}},    {{1e308, -1e308}, {-1e308, 1e308}},
+      {{200.0, 200.0}, {300.0, 200.0}}, {{2e300, 0.0}, {2e300, 1.0}}};
+  for (const double clearance : {0.5, 20.0, 1e168, 1e300}) {
+    for (const auto& [a, b] : segments) {
+      EXPECT_EQ(set.SegmentClear(a, b, clearance), set.SegmentClearBruteForce(a, b, clearance))
+          << "(" << a.x << ", " << a.y << ") to (" << b.x << ", " << b.y << "), clearance "
+          << clearance;
+    }
+    // (10, 10) and (90, 50) are 56.6 m and 40 m from (50, 50).
+    EXPECT_EQ(set.PointWithin({50.0, 50.0}, clearance) >= 0, clearance >= 40.0) << clearance;
+  }
+  EXPECT_FALSE(set.SegmentClear({0.0, 0.0}, {100.0, 100.0}, 1e168));
+  EXPECT_TRUE(set.SegmentClear({200.0, 200.0}, {300.0, 200.0}, 20.0));
+}
+
 TEST(ObstaclePointSetTest, MapPointsAreTheBordersOfBlockedRegions) {
   const auto m = testing_maps::GoalBehindObstacle();
   std::vector<uint8_t> flyable(m.model->map().layers().nofly.size());

@@ -23,7 +23,7 @@ if [ ${#passes[@]} -eq 0 ]; then passes=(asan tsan); fi
 # default.)
 export ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:print_stacktrace=1:strict_string_checks=1:check_initialization_order=1:strict_init_order=1
 export UBSAN_OPTIONS=halt_on_error=1:abort_on_error=1:print_stacktrace=1
-export TSAN_OPTIONS=halt_on_error=1:abort_on_error=1:second_deadlock_stack=1
+export TSAN_OPTIONS="halt_on_error=1:abort_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan/tsan.supp"
 
 # The clang-14 build directories share everything but the sanitizer list.
 configure() {

@@ -327,7 +327,7 @@ enum class Misbehaviour {
   kSilent,         // accepts connections, never answers anything (not even HELLO)
   kCorruptHeader,  // big EVALs: a header byte flipped (header checksum mismatch)
   kWrongSums,      // big EVALs: a valid frame, every impact sum off by 2^-20 (plausible)
-  kSlow,           // big EVALs: the right reply, 1.5 s late
+  kSlow,           // big EVALs: the right reply, held until release_slow_replies()
   kSlowUpload,     // big PUT_BLOBs (a model's map or kernels): each chunk answered 60 s late
 };
 
@@ -358,6 +358,8 @@ class FakeShim {
   const std::string& endpoint() const { return endpoint_; }
   int misbehaved() const { return misbehaved_.load(); }
   void set_misbehaviour(Misbehaviour m) { misbehaviour_.store(m); }
+  // kSlow's held replies go out now (and later ones at once).
+  void release_slow_replies() { release_slow_.store(true); }
 
  private:
   // The known-answer batch has fewer sites than this.
@@ -406,7 +408,9 @@ class FakeShim {
         continue;  // never answered; the client times out and hangs up
       } else if (big && m == Misbehaviour::kSlow) {
         ++misbehaved_;
-        absl::SleepFor(absl::Milliseconds(1500));
+        // Late by the test's decision, not by a time: a fixed delay raced
+        // the caller's own reaction on a loaded machine under TSan.
+        while (!release_slow_.load() && !stop_.load()) absl::SleepFor(absl::Milliseconds(5));
       } else if (big && m == Misbehaviour::kCloseOnEval) {
         ++misbehaved_;
         break;
@@ -445,6 +449,7 @@ class FakeShim {
   Socket listener_;
   std::string endpoint_;
   std::atomic<bool> stop_{false};
+  std::atomic<bool> release_slow_{false};
   std::atomic<int> misbehaved_{0};
   std::thread accept_thread_;
   absl::Mutex mu_;

@@ -24,6 +24,16 @@ inline double NormalizeHeading(double angle) {
   return a;
 }
 
+// floor(offset / cell) as a cell number in [0, n - 1] (n >= 1), clamped as a
+// double before the conversion: an offset far off the grid (a request's point
+// at 1e20 m, a clearance of 1e168 m) would otherwise convert a double out of
+// int's range, which is undefined behaviour. NaN gives 0.
+inline int ClampedCell(double offset, double cell, int n) {
+  const double c = std::floor(offset / cell);
+  if (!(c > 0.0)) return 0;
+  return c >= n - 1 ? n - 1 : static_cast<int>(c);
+}
+
 // A configuration q = (x, y, z, theta) of the aircraft.
 struct Pose {
   double x = 0.0;      // m, east

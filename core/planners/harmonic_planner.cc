@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/base/geometry.h"
 #include "core/planners/harmonic_potential.h"
 #include "core/planners/obstacle_points.h"
 #include "core/planners/path_realizer.h"
@@ -51,8 +52,7 @@ class Run {
   }
   GridCell CellOf(double x, double y) const {
     const RiskMap& map = model_.map();
-    return {std::clamp(static_cast<int>(std::floor((x - map.x0()) / cell_m_)), 0, nx_ - 1),
-            std::clamp(static_cast<int>(std::floor((y - map.y0()) / cell_m_)), 0, ny_ - 1)};
+    return {ClampedCell(x - map.x0(), cell_m_, nx_), ClampedCell(y - map.y0(), cell_m_, ny_)};
   }
   bool Pinned(int i, int j) const {
     return GridCell{i, j} == start_cell_ || GridCell{i, j} == goal_cell_;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/base/geometry.h"
+
 namespace riskplan {
 
 double SquaredDistanceToSegment(const Point2& p, const Point2& a, const Point2& b) {
@@ -48,23 +50,9 @@ ObstaclePointSet::ObstaclePointSet(std::vector<Point2> points, double bucket_m) 
   for (size_t k = 0; k < points.size(); ++k) points_[count[bucket_of[k]]++] = points[k];
 }
 
-namespace {
+int ObstaclePointSet::BucketX(double x) const { return ClampedCell(x - x0_, bucket_m_, nx_); }
 
-// floor(offset / bucket) in [0, n - 1], clamped as a double before the
-// conversion: a coordinate or clearance far off the grid (a request's
-// obstacle at 1e20 m, a clearance of 1e168 m) would otherwise convert a
-// double out of int's range, which is undefined behaviour.
-int ClampedBucket(double offset, double bucket_m, int n) {
-  const double b = std::floor(offset / bucket_m);
-  if (!(b > 0.0)) return 0;  // NaN too
-  return b >= n - 1 ? n - 1 : static_cast<int>(b);
-}
-
-}  // namespace
-
-int ObstaclePointSet::BucketX(double x) const { return ClampedBucket(x - x0_, bucket_m_, nx_); }
-
-int ObstaclePointSet::BucketY(double y) const { return ClampedBucket(y - y0_, bucket_m_, ny_); }
+int ObstaclePointSet::BucketY(double y) const { return ClampedCell(y - y0_, bucket_m_, ny_); }
 
 bool ObstaclePointSet::SegmentClear(const Point2& a, const Point2& b, double clearance_m) const {
   if (points_.empty()) return true;

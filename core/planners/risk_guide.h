@@ -117,8 +117,8 @@ class CoarseRiskGrid {
     const auto centre = [&](int ci, int cj) { return Centre(ci, cj); };
     const auto altitude = [&](int i, int j, double* z) { return Altitude(i, j, z); };
     const auto cell_of = [&](const Pose& p) {
-      const int ci = std::clamp(static_cast<int>(std::floor((p.x - map.x0()) / cell_m)), 0, nx - 1);
-      const int cj = std::clamp(static_cast<int>(std::floor((p.y - map.y0()) / cell_m)), 0, ny - 1);
+      const int ci = ClampedCell(p.x - map.x0(), cell_m, nx);
+      const int cj = ClampedCell(p.y - map.y0(), cell_m, ny);
       return cj * nx + ci;
     };
     const int source = cell_of(start);

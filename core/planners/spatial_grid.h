@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/base/geometry.h"
+
 namespace riskplan {
 
 class SpatialGrid {
@@ -89,10 +91,10 @@ class SpatialGrid {
     double y;
   };
   int BucketX(double x) const {
-    return std::clamp(static_cast<int>(std::floor((x - x0_) / bucket_)), 0, nx_ - 1);
+    return ClampedCell(x - x0_, bucket_, nx_);
   }
   int BucketY(double y) const {
-    return std::clamp(static_cast<int>(std::floor((y - y0_) / bucket_)), 0, ny_ - 1);
+    return ClampedCell(y - y0_, bucket_, ny_);
   }
   size_t BucketIndex(int bx, int by) const { return static_cast<size_t>(by) * nx_ + bx; }
 

@@ -266,6 +266,30 @@ TEST(HarmonicPlannerTest, RequestObstaclePointsAreObstacles) {
   }
 }
 
+// A request's obstacle point far off the map (x = 8.2e246 m: the request fuzz
+// target's smoke found it converted to a cell number out of int's range,
+// undefined behaviour) closes nothing; one on the map still does.
+TEST(HarmonicPlannerTest, RequestObstaclePointsFarOffTheMapCloseNothing) {
+  const auto model = testing_maps::SyntheticModel("open", 200, 200, 10.0, nullptr);
+  const Pose start{300.0, 600.0, kFlightZM, 0.0};
+  const Pose goal{1700.0, 600.0, kFlightZM, 0.0};
+  const Outcome plain = RunPlan(kHarmonic, model, start, goal, 100000, 1);
+  PlanOptions options;
+  options.obstacle_points = {{8.2e246, 600.0}, {-1e300, 1e300}, {1000.0, -1.2e213}};
+  const Outcome far = RunPlan(kHarmonic, model, start, goal, 100000, 1, {}, options);
+  ExpectSoundStream(*model, start, goal, far);
+  ASSERT_TRUE(plain.result.ok() && plain.result->best.has_value());
+  ASSERT_TRUE(far.result->best.has_value());
+  EXPECT_EQ(far.result->best->risk, plain.result->best->risk);
+  options.obstacle_points.push_back({1000.0, 600.0});
+  const Outcome near = RunPlan(kHarmonic, model, start, goal, 100000, 1, {}, options);
+  ExpectSoundStream(*model, start, goal, near);
+  ASSERT_TRUE(near.result->best.has_value());
+  for (const Pose& q : TrajectorySamples(*model, near.result->best->waypoints)) {
+    ASSERT_GT(std::hypot(q.x - 1000.0, q.y - 600.0), 20.0);
+  }
+}
+
 TEST(HarmonicPlannerTest, EnclosedGoalHasNoSolution) {
   const auto model = testing_maps::SyntheticModel("ring", 100, 100, 10.0, [](double x, double y) {
     const double r = std::hypot(x - 700.0, y - 500.0);

@@ -452,13 +452,22 @@ struct Serving {
 };
 
 // Every health service the process serves (the main port's, and the health
-// port's when there is one).
+// port's when there is one). At start each name is registered SERVING; the
+// drain turns them all NOT_SERVING in one call, which gRPC's default health
+// service does under its one lock: a client that has seen one name change
+// (a watch on "") finds the other changed too. Two calls, one per name, left
+// a window in which a Check of "riskplan.v1.Planner" still answered SERVING
+// after a watch of "" had read NOT_SERVING (ShutdownTest under ASan in CI).
 void SetHealth(const Serving& serving, bool serving_status) {
   for (grpc::Server* server : {serving.server.get(), serving.health_server.get()}) {
     if (server == nullptr) continue;
     grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
-    health->SetServingStatus("", serving_status);
-    health->SetServingStatus("riskplan.v1.Planner", serving_status);
+    if (serving_status) {
+      health->SetServingStatus("", true);
+      health->SetServingStatus("riskplan.v1.Planner", true);
+    } else {
+      health->SetServingStatus(false);
+    }
   }
 }
 

@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/base/check.h"
+#include "core/base/geometry.h"
 
 // Layout. Everything is placed in *design* coordinates: metres on the default
 // 8 km map, origin at its south-west corner. A map of another size is the same
@@ -304,8 +305,8 @@ absl::StatusOr<std::shared_ptr<const RiskMap>> MakeDemoCity(const DemoCityOption
       layers.shelter[k] =
           static_cast<float>(field ? 0.1 + 0.3 * building(x, y) : 0.3 + 0.7 * building(x, y));
     });
-    const int si = std::clamp(static_cast<int>(std::floor(cx / cell)), 0, n - 1);
-    const int sj = std::clamp(static_cast<int>(std::floor(cy / cell)), 0, n - 1);
+    const int si = ClampedCell(cx, cell, n);
+    const int sj = ClampedCell(cy, cell, n);
     layers.landing_sites.push_back({park.name, si, sj});
   }
 

@@ -261,6 +261,11 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   if (static_cast<size_t>(request.obstacle_points_size()) +
           static_cast<size_t>(request.obstacle_points_wgs84_size()) >
       limits.max_obstacle_points) {
+    if (request.obstacle_points_wgs84_size() == 0) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("obstacle_points has %d points; the limit is %d",
+                          request.obstacle_points_size(), limits.max_obstacle_points));
+    }
     return absl::InvalidArgumentError(absl::StrFormat(
         "obstacle_points has %d points and obstacle_points_wgs84 %d; the limit is %d together",
         request.obstacle_points_size(), request.obstacle_points_wgs84_size(),

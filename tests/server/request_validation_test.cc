@@ -165,9 +165,9 @@ TEST_F(RequestValidationTest, ObstaclesReachThePlanOptions) {
   EXPECT_EQ(spec->options.dynamic_obstacles[0].at_iteration, 50);
   EXPECT_EQ(spec->options.dynamic_obstacles[0].y1_m, 400);
   limits_.max_obstacle_points = 0;
-  ExpectPlanError(
-      r, absl::StatusCode::kInvalidArgument,
-      "obstacle_points has 1 points and obstacle_points_wgs84 0; the limit is 0 together");
+  // Only local points: the message names only them.
+  ExpectPlanError(r, absl::StatusCode::kInvalidArgument,
+                  "obstacle_points has 1 points; the limit is 0");
 }
 
 TEST_F(RequestValidationTest, PlannersThatCannotHonourObstaclesRefuseThem) {

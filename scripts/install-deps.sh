@@ -6,6 +6,8 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git
+  # LLVM's linker: links the suite's many test programs in a third of the time.
+  lld
   libabsl-dev nlohmann-json3-dev libssl-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc

@@ -34,6 +34,7 @@
 #include "core/planners/planner.h"
 #include "gtest/gtest.h"
 #include "plan_test_util.h"
+#include "tests/sweep.h"
 
 namespace riskplan::accel {
 namespace {
@@ -108,7 +109,7 @@ double CompareWithBoard(const std::string& format, double risk_tolerance) {
   EXPECT_GE(problems.size(), 6u);
   int matches = 0;
   double worst = 0.0;
-  for (size_t p = 0; p < problems.size(); ++p) {
+  for (size_t p = 0; p < problems.size(); p += testing_sweep::kSweepStride) {
     auto cpu = PlanWith(nullptr, problems[p]);
     std::unique_ptr<RiskEvaluator> engine_evaluator = engine->NewEvaluator();
     ComparingEvaluator evaluator(engine_evaluator.get());
@@ -140,7 +141,8 @@ double CompareWithBoard(const std::string& format, double risk_tolerance) {
   }
   // Every batch went to the board.
   EXPECT_EQ(engine->Stats().caller_configurations, 0u);
-  std::cout << "format " << format << ": " << matches << " of " << problems.size()
+  std::cout << "format " << format << ": " << matches << " of "
+            << testing_sweep::SweptCount(problems.size())
             << " trajectories identical to the CPU path; largest relative error of M " << worst
             << "\n";
   EXPECT_LE(worst, risk_tolerance);
@@ -158,7 +160,7 @@ TEST(PlanThroughShimTest, BoardFormatGivesTheCpuTrajectories) {
 
 TEST(PlanThroughShimTest, PlansKeepTheirTrajectoriesUnderBoardSizedPerturbations) {
   const std::vector<PlanningProblem> problems = Problems();
-  for (size_t p = 0; p < problems.size(); ++p) {
+  for (size_t p = 0; p < problems.size(); p += testing_sweep::kSweepStride) {
     auto cpu = PlanWith(nullptr, problems[p]);
     ASSERT_TRUE(cpu.ok());
     for (uint64_t seed : {1, 2}) {

@@ -62,6 +62,25 @@ absl::StatusOr<std::string> ReadFile(const char* flag, const std::string& path) 
   return text.str();
 }
 
+// Reads a server stream to its end, handing every message to `on_update`
+// until it says stop, then cancels the call. The stream is still read to its
+// end after a cancel, because Finish may only be called once every message
+// has been read; the messages already on their way are dropped, so the
+// callback hears nothing after it said stop.
+template <typename Update, typename Callback>
+grpc::Status ReadUntilStopped(grpc::ClientContext& context, grpc::ClientReader<Update>& reader,
+                              const Callback& on_update) {
+  Update update;
+  bool cancelled = false;
+  while (reader.Read(&update)) {
+    if (!cancelled && !on_update(update)) {
+      context.TryCancel();
+      cancelled = true;
+    }
+  }
+  return reader.Finish();
+}
+
 }  // namespace
 
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
@@ -172,18 +191,7 @@ grpc::Status RiskplanClient::Plan(const v1::PlanRequest& request,
   SetTimeout(&context, timeout);
   std::unique_ptr<grpc::ClientReader<v1::PlanUpdate>> reader =
       stub_->PlanTrajectory(&context, request);
-  v1::PlanUpdate update;
-  bool cancelled = false;
-  // After a cancel the stream is still read to its end, because Finish may
-  // only be called once every message has been read; the updates already on
-  // their way are dropped, so the callback hears nothing after it said stop.
-  while (reader->Read(&update)) {
-    if (!cancelled && !on_update(update)) {
-      context.TryCancel();
-      cancelled = true;
-    }
-  }
-  return reader->Finish();
+  return ReadUntilStopped(context, *reader, on_update);
 }
 
 grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
@@ -192,16 +200,7 @@ grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
   grpc::ClientContext context;
   SetTimeout(&context, timeout);
   std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> reader = stub_->PlanFleet(&context, request);
-  v1::FleetUpdate update;
-  bool cancelled = false;
-  // Read to the end after a cancel, as Plan does.
-  while (reader->Read(&update)) {
-    if (!cancelled && !on_update(update)) {
-      context.TryCancel();
-      cancelled = true;
-    }
-  }
-  return reader->Finish();
+  return ReadUntilStopped(context, *reader, on_update);
 }
 
 grpc::Status RiskplanClient::CheckHealth(

@@ -37,6 +37,11 @@ class LoadRun {
   void IssueAsync(absl::Time intended);
   // One blocking call (closed loop).
   void CallSync(absl::Time intended);
+  // Reads a blocking call's stream to its end, recording the first update and
+  // counting them all; the call's status.
+  template <typename Update>
+  grpc::Status ReadStream(grpc::ClientReader<Update>& reader, absl::Time intended)
+      ABSL_LOCKS_EXCLUDED(mu_);
   void Record(absl::Time intended, const grpc::Status& status, absl::Time done)
       ABSL_LOCKS_EXCLUDED(mu_);
   void RecordFirstUpdate(absl::Time intended, absl::Time at) ABSL_LOCKS_EXCLUDED(mu_);
@@ -153,6 +158,19 @@ void LoadRun::IssueAsync(absl::Time intended) {
   }
 }
 
+template <typename Update>
+grpc::Status LoadRun::ReadStream(grpc::ClientReader<Update>& reader, absl::Time intended) {
+  Update update;
+  int64_t updates = 0;
+  while (reader.Read(&update)) {
+    if (updates++ == 0) RecordFirstUpdate(intended, absl::Now());
+  }
+  grpc::Status status = reader.Finish();
+  absl::MutexLock lock(&mu_);
+  report_.plan_updates += updates;
+  return status;
+}
+
 void LoadRun::CallSync(absl::Time intended) {
   {
     absl::MutexLock lock(&mu_);
@@ -163,32 +181,12 @@ void LoadRun::CallSync(absl::Time intended) {
   SetTimeout(&context, options_.timeout);
   grpc::Status status;
   switch (options_.rpc) {
-    case LoadRpc::kPlanTrajectory: {
-      std::unique_ptr<grpc::ClientReader<v1::PlanUpdate>> reader =
-          stub_->PlanTrajectory(&context, options_.plan_request);
-      v1::PlanUpdate update;
-      int64_t updates = 0;
-      while (reader->Read(&update)) {
-        if (updates++ == 0) RecordFirstUpdate(intended, absl::Now());
-      }
-      status = reader->Finish();
-      absl::MutexLock lock(&mu_);
-      report_.plan_updates += updates;
+    case LoadRpc::kPlanTrajectory:
+      status = ReadStream(*stub_->PlanTrajectory(&context, options_.plan_request), intended);
       break;
-    }
-    case LoadRpc::kPlanFleet: {
-      std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> reader =
-          stub_->PlanFleet(&context, options_.fleet_request);
-      v1::FleetUpdate update;
-      int64_t updates = 0;
-      while (reader->Read(&update)) {
-        if (updates++ == 0) RecordFirstUpdate(intended, absl::Now());
-      }
-      status = reader->Finish();
-      absl::MutexLock lock(&mu_);
-      report_.plan_updates += updates;
+    case LoadRpc::kPlanFleet:
+      status = ReadStream(*stub_->PlanFleet(&context, options_.fleet_request), intended);
       break;
-    }
     case LoadRpc::kEvaluateRisk: {
       v1::EvaluateRiskResponse response;
       status = stub_->EvaluateRisk(&context, options_.eval_request, &response);

@@ -36,10 +36,9 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "core/base/cancellation.h"
-#include "core/map/demo_city.h"
-#include "core/map/risk_map.h"
 #include "core/planners/planner.h"
 #include "core/planners/shared_goal_tree.h"
+#include "fuzz/fuzz_server.h"
 #include "fuzz/fuzz_support.h"
 #include "google/protobuf/stubs/logging.h"
 #include "grpcpp/grpcpp.h"
@@ -58,22 +57,6 @@ namespace {
 
 using namespace riskplan::server;
 
-RequestLimits FuzzLimits() {
-  RequestLimits limits;
-  limits.max_plan_time_ms = 40;
-  limits.default_plan_time_ms = 10;
-  limits.max_iterations = 100000;
-  limits.max_update_interval_ms = 1000;
-  limits.max_waypoints = 64;
-  limits.max_eval_samples = 4000;
-  limits.max_response_samples = 500;
-  limits.max_obstacle_points = 64;
-  limits.max_edge_samples = 20000;
-  limits.max_table_bytes = size_t{32} << 20;
-  limits.max_fleet_missions = 16;
-  return limits;
-}
-
 // What every input shares: the map, the model cache (the default model built
 // once), the limits.
 struct Server {
@@ -87,19 +70,7 @@ struct Server {
     // would flood the fuzzer's output; riskplan-server routes them into its
     // log (RouteProtobufLogs, tested in tests/server/rpc_log_test.cc).
     google::protobuf::SetLogHandler(nullptr);
-    absl::StatusOr<std::shared_ptr<const RiskMap>> city =
-        MakeDemoCity(DemoCityOptions{.size_m = 1000.0, .res_m = 10.0});
-    if (!city.ok()) Fail(city.status().ToString());
-    MapHeader header = (*city)->header();
-    header.name = "geo-city";
-    header.geo = GeoReference{49.6, 6.1, "azimuthal equidistant on WGS84 at the origin"};
-    absl::StatusOr<std::shared_ptr<const RiskMap>> geo_city =
-        RiskMap::Create(std::move(header), (*city)->layers());
-    if (!geo_city.ok()) Fail(geo_city.status().ToString());
-    absl::StatusOr<std::unique_ptr<MapRegistry>> registry =
-        MapRegistry::FromMaps({*city, *geo_city});
-    if (!registry.ok()) Fail(registry.status().ToString());
-    maps = *std::move(registry);
+    maps = FuzzMaps();
     absl::StatusOr<std::unique_ptr<RiskModelCache>> cache =
         RiskModelCache::Create(*maps, /*max_overridden=*/4, BuildLimits(limits));
     if (!cache.ok()) Fail(cache.status().ToString());

@@ -45,8 +45,7 @@
 #include "absl/strings/str_replace.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/time.h"
-#include "core/map/demo_city.h"
-#include "core/map/risk_map.h"
+#include "fuzz/fuzz_server.h"
 #include "fuzz/fuzz_support.h"
 #include "google/protobuf/stubs/logging.h"
 #include "grpcpp/grpcpp.h"
@@ -119,21 +118,6 @@ class MemoryServer final : public httplib::Server {
   }
 };
 
-RequestLimits FuzzLimits() {
-  RequestLimits limits;
-  limits.max_plan_time_ms = 40;
-  limits.default_plan_time_ms = 10;
-  limits.max_iterations = 100000;
-  limits.max_update_interval_ms = 1000;
-  limits.max_waypoints = 64;
-  limits.max_eval_samples = 4000;
-  limits.max_response_samples = 500;
-  limits.max_obstacle_points = 64;
-  limits.max_edge_samples = 20000;
-  limits.max_table_bytes = size_t{32} << 20;
-  return limits;
-}
-
 // The server behind the gateway, built once for the whole run.
 struct Backend {
   std::unique_ptr<MapRegistry> maps;
@@ -146,19 +130,7 @@ struct Backend {
   Backend() {
     google::protobuf::SetLogHandler(nullptr);
     SetRpcLogEnabled(false);
-    absl::StatusOr<std::shared_ptr<const RiskMap>> city =
-        MakeDemoCity(DemoCityOptions{.size_m = 1000.0, .res_m = 10.0});
-    if (!city.ok()) Fail(city.status().ToString());
-    MapHeader header = (*city)->header();
-    header.name = "geo-city";
-    header.geo = GeoReference{49.6, 6.1, "azimuthal equidistant on WGS84 at the origin"};
-    absl::StatusOr<std::shared_ptr<const RiskMap>> geo_city =
-        RiskMap::Create(std::move(header), (*city)->layers());
-    if (!geo_city.ok()) Fail(geo_city.status().ToString());
-    absl::StatusOr<std::unique_ptr<MapRegistry>> registry =
-        MapRegistry::FromMaps({*city, *geo_city});
-    if (!registry.ok()) Fail(registry.status().ToString());
-    maps = *std::move(registry);
+    maps = FuzzMaps();
     ServiceOptions options;
     options.limits = FuzzLimits();
     absl::StatusOr<std::unique_ptr<RiskModelCache>> cache =

@@ -8,10 +8,17 @@
 // ones (dlsym(RTLD_NEXT)) and tells TSan what they did: a release on the
 // mutex before every operation that can unlock it, an acquire after every one
 // that returns with it held. Conditions that abseil evaluates inside the
-// library (Mutex::Await, LockWhen) may run on the unlocking thread, so every
-// unlock also releases, and every Condition::Eval acquires, one shared
-// object: an over-approximation that can hide a race inside a condition but
-// never reports a false one.
+// library (Mutex::Await, LockWhen) run with the mutex held, on the waiting
+// thread or on the unlocking one, and after this library's release:
+// - every unlock also releases, and every Condition::Eval acquires, one
+//   shared object, so a condition sees what was written before it;
+// - a condition evaluated inside an unlock, an Await or a LockWhen releases
+//   that mutex again after it, so that its reads happen before the next
+//   holder's writes (without this, a condition an Await evaluated before it
+//   blocked was reported racing with the writer that woke it, a false report
+//   CI's TSan pass made once in tests/accel/shim_tls_test.cc's EventLog).
+// An over-approximation that can hide a race inside a condition but never
+// reports a false one.
 //
 // Only the edges are modelled, not ownership: TSan's lock-order (deadlock)
 // detection does not see absl::Mutex. The TSan runtime's functions are weak,
@@ -36,6 +43,21 @@ void __tsan_release(void* addr) __attribute__((weak));
 namespace {
 
 char condition_sync;  // released by every unlock, acquired by every Condition::Eval
+
+// The mutex whose unlock, Await or LockWhen this thread is inside: a
+// condition evaluated there releases it after reading.
+thread_local const void* evaluating_under = nullptr;
+
+class EvaluatingUnder {
+ public:
+  explicit EvaluatingUnder(const void* mu) : saved_(evaluating_under) { evaluating_under = mu; }
+  ~EvaluatingUnder() { evaluating_under = saved_; }
+  EvaluatingUnder(const EvaluatingUnder&) = delete;
+  EvaluatingUnder& operator=(const EvaluatingUnder&) = delete;
+
+ private:
+  const void* const saved_;
+};
 
 void Acquire(const void* addr) {
   if (__tsan_acquire != nullptr) __tsan_acquire(const_cast<void*>(addr));
@@ -103,12 +125,14 @@ bool Mutex::ReaderTryLock() {
 
 void Mutex::Unlock() {
   REAL(void (*)(Mutex*), "_ZN", "5Mutex6UnlockEv");
+  const EvaluatingUnder under(this);
   Release(this);
   real(this);
 }
 
 void Mutex::ReaderUnlock() {
   REAL(void (*)(Mutex*), "_ZN", "5Mutex12ReaderUnlockEv");
+  const EvaluatingUnder under(this);
   Release(this);
   real(this);
 }
@@ -117,12 +141,14 @@ void Mutex::ReaderUnlock() {
 
 void Mutex::LockWhen(const Condition& cond) {
   REAL(void (*)(Mutex*, const Condition*), "_ZN", "5Mutex8LockWhenERKNS0_9ConditionE");
+  const EvaluatingUnder under(this);
   real(this, &cond);
   Acquire(this);
 }
 
 void Mutex::ReaderLockWhen(const Condition& cond) {
   REAL(void (*)(Mutex*, const Condition*), "_ZN", "5Mutex14ReaderLockWhenERKNS0_9ConditionE");
+  const EvaluatingUnder under(this);
   real(this, &cond);
   Acquire(this);
 }
@@ -130,6 +156,7 @@ void Mutex::ReaderLockWhen(const Condition& cond) {
 bool Mutex::LockWhenWithTimeout(const Condition& cond, Duration timeout) {
   REAL(bool (*)(Mutex*, const Condition*, Duration), "_ZN",
        "5Mutex19LockWhenWithTimeoutERKNS0_9ConditionENS0_8DurationE");
+  const EvaluatingUnder under(this);
   const bool result = real(this, &cond, timeout);
   Acquire(this);
   return result;
@@ -138,6 +165,7 @@ bool Mutex::LockWhenWithTimeout(const Condition& cond, Duration timeout) {
 bool Mutex::LockWhenWithDeadline(const Condition& cond, Time deadline) {
   REAL(bool (*)(Mutex*, const Condition*, Time), "_ZN",
        "5Mutex20LockWhenWithDeadlineERKNS0_9ConditionENS0_4TimeE");
+  const EvaluatingUnder under(this);
   const bool result = real(this, &cond, deadline);
   Acquire(this);
   return result;
@@ -146,6 +174,7 @@ bool Mutex::LockWhenWithDeadline(const Condition& cond, Time deadline) {
 bool Mutex::ReaderLockWhenWithTimeout(const Condition& cond, Duration timeout) {
   REAL(bool (*)(Mutex*, const Condition*, Duration), "_ZN",
        "5Mutex25ReaderLockWhenWithTimeoutERKNS0_9ConditionENS0_8DurationE");
+  const EvaluatingUnder under(this);
   const bool result = real(this, &cond, timeout);
   Acquire(this);
   return result;
@@ -154,6 +183,7 @@ bool Mutex::ReaderLockWhenWithTimeout(const Condition& cond, Duration timeout) {
 bool Mutex::ReaderLockWhenWithDeadline(const Condition& cond, Time deadline) {
   REAL(bool (*)(Mutex*, const Condition*, Time), "_ZN",
        "5Mutex26ReaderLockWhenWithDeadlineERKNS0_9ConditionENS0_4TimeE");
+  const EvaluatingUnder under(this);
   const bool result = real(this, &cond, deadline);
   Acquire(this);
   return result;
@@ -163,6 +193,7 @@ bool Mutex::ReaderLockWhenWithDeadline(const Condition& cond, Time deadline) {
 
 void Mutex::Await(const Condition& cond) {
   REAL(void (*)(Mutex*, const Condition*), "_ZN", "5Mutex5AwaitERKNS0_9ConditionE");
+  const EvaluatingUnder under(this);
   Release(this);
   real(this, &cond);
   Acquire(this);
@@ -171,6 +202,7 @@ void Mutex::Await(const Condition& cond) {
 bool Mutex::AwaitWithTimeout(const Condition& cond, Duration timeout) {
   REAL(bool (*)(Mutex*, const Condition*, Duration), "_ZN",
        "5Mutex16AwaitWithTimeoutERKNS0_9ConditionENS0_8DurationE");
+  const EvaluatingUnder under(this);
   Release(this);
   const bool result = real(this, &cond, timeout);
   Acquire(this);
@@ -180,6 +212,7 @@ bool Mutex::AwaitWithTimeout(const Condition& cond, Duration timeout) {
 bool Mutex::AwaitWithDeadline(const Condition& cond, Time deadline) {
   REAL(bool (*)(Mutex*, const Condition*, Time), "_ZN",
        "5Mutex17AwaitWithDeadlineERKNS0_9ConditionENS0_4TimeE");
+  const EvaluatingUnder under(this);
   Release(this);
   const bool result = real(this, &cond, deadline);
   Acquire(this);
@@ -189,7 +222,9 @@ bool Mutex::AwaitWithDeadline(const Condition& cond, Time deadline) {
 bool Condition::Eval() const {
   REAL(bool (*)(const Condition*), "_ZNK", "9Condition4EvalEv");
   Acquire(&condition_sync);
-  return real(this);
+  const bool result = real(this);
+  if (evaluating_under != nullptr) Release(evaluating_under);
+  return result;
 }
 
 // Condition variables: the same as Await.

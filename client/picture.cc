@@ -12,6 +12,7 @@
 #include "client/picture_draw.h"
 #include "client/picture_layout.h"
 #include "client/picture_legend.h"
+#include "geo/export/xml_text.h"
 
 namespace riskplan::client {
 namespace {
@@ -95,31 +96,6 @@ RgbaImage RenderMap(const PictureInput& in) {
   DrawDisc(&img, pr.X(in.start.x()), pr.Y(in.start.y()), kEndpointRadius, kStartColour);
   DrawDisc(&img, pr.X(in.goal.x()), pr.Y(in.goal.y()), kEndpointRadius, kGoalColour);
   return img;
-}
-
-// `text` with the characters XML gives a meaning escaped (a mission id is
-// the client's free text).
-std::string SvgText(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 std::string SvgPoints(const Projection& pr, const v1::Trajectory& t) {
@@ -273,7 +249,7 @@ std::string RenderSvg(const PictureInput& in) {
         "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"3.0\" points=\"%s\"><title>%s: "
         "risk %.6g, length %.0f m</title></polyline>\n",
         SvgColour(ImprovementColour(1, 2)), SvgPoints(pr, in.fleet[k]),
-        k < in.fleet_labels.size() ? SvgText(in.fleet_labels[k]) : "", in.fleet[k].risk(),
+        k < in.fleet_labels.size() ? geo::XmlEscape(in.fleet_labels[k]) : "", in.fleet[k].risk(),
         in.fleet[k].length_m());
   }
   for (const v1::Pose& p : in.fleet_starts) {

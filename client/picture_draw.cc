@@ -89,27 +89,4 @@ std::string SvgColour(Rgb c) {
                          static_cast<int>(c.b));
 }
 
-// Texts hold names from the server (the map's); escaped so that a name with
-// '<' or '&' cannot break the document. Quotes need no escape in element
-// text.
-std::string XmlEscape(const std::string& text) {
-  std::string out;
-  for (char ch : text) {
-    switch (ch) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      default:
-        out += ch;
-    }
-  }
-  return out;
-}
-
 }  // namespace riskplan::client

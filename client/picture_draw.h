@@ -71,9 +71,6 @@ void DrawText(RgbaImage* img, const PlacedText& text, int scale, Rgb c);
 // "rgb(r,g,b)" for SVG.
 std::string SvgColour(Rgb c);
 
-// `text` with '<', '>' and '&' escaped, for SVG element text.
-std::string XmlEscape(const std::string& text);
-
 }  // namespace riskplan::client
 
 #endif  // RISKPLAN_CLIENT_PICTURE_DRAW_H_

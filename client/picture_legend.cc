@@ -5,6 +5,7 @@
 #include "absl/strings/str_format.h"
 #include "client/bitmap_font.h"
 #include "client/picture_draw.h"
+#include "geo/export/xml_text.h"
 
 namespace riskplan::client {
 namespace {
@@ -31,7 +32,7 @@ void DrawLineKey(RgbaImage* img, const PixelBox& b, double width, Rgb c, double 
 std::string SvgText(const PlacedText& t, int scale) {
   return absl::StrFormat(
       "<text x=\"%d\" y=\"%d\" font-family=\"sans-serif\" font-size=\"%d\" fill=\"%s\">%s</text>\n",
-      t.x, t.y + kCapHeight * scale, 9 * scale, SvgColour(kTextColour), XmlEscape(t.text));
+      t.x, t.y + kCapHeight * scale, 9 * scale, SvgColour(kTextColour), geo::XmlEscape(t.text));
 }
 
 std::string SvgBoxKey(const PixelBox& b, Rgb fill) {

@@ -5,34 +5,10 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "geo/export/xml_text.h"
 
 namespace riskplan::geo {
 namespace {
-
-// Text content and attribute values (map names are plain, descriptions
-// need not be).
-std::string Escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string Coordinates(const ExportSample& s) {
   return absl::StrFormat("%.10f,%.10f,%.4f", s.lon_deg, s.lat_deg, s.alt_m);
@@ -56,8 +32,8 @@ absl::StatusOr<std::string> TrajectoryKml(const ExportTrajectory& t) {
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       "<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n"
       "<Document>\n";
-  absl::StrAppend(&out, "<name>riskplan trajectory on ", Escape(t.map), "</name>\n");
-  absl::StrAppend(&out, "<description>", Escape(t.description), "</description>\n");
+  absl::StrAppend(&out, "<name>riskplan trajectory on ", XmlEscape(t.map), "</name>\n");
+  absl::StrAppend(&out, "<description>", XmlEscape(t.description), "</description>\n");
   absl::StrAppend(&out,
                   "<Style id=\"trajectory\"><LineStyle><color>ff0000ff</color><width>3</width>"
                   "</LineStyle></Style>\n");

@@ -18,6 +18,7 @@
 #include "geo/export/geojson.h"
 #include "geo/export/kml.h"
 #include "geo/export/qgc_plan.h"
+#include "geo/export/xml_text.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
@@ -257,6 +258,16 @@ TEST(GeoJsonTest, GdalReadsThePointsBack) {
 
 // KML's coordinates are longitude, latitude, altitude AMSL (altitudeMode
 // absolute), written to 1e-10 degrees (about 0.01 mm) and 0.1 mm.
+TEST(XmlEscapeTest, EscapesTheFiveMeaningfulCharactersAndKeepsEveryOtherByte) {
+  EXPECT_EQ(XmlEscape(R"(<a href="x">Tom & Jerry's</a>)"),
+            "&lt;a href=&quot;x&quot;&gt;Tom &amp; Jerry&apos;s&lt;/a&gt;");
+  // Already escaped text is escaped again (the writers take plain text).
+  EXPECT_EQ(XmlEscape("&amp;"), "&amp;amp;");
+  const std::string bytes("depot \xc3\xa9 \0 end", 14);
+  EXPECT_EQ(XmlEscape(bytes), bytes);
+  EXPECT_EQ(XmlEscape(""), "");
+}
+
 TEST(KmlTest, BothGdalDriversReadTheLineBack) {
   const ExportTrajectory t = Sample();
   absl::StatusOr<std::string> text = TrajectoryKml(t);

@@ -5,8 +5,10 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <numeric>
+#include <optional>
 #include <sstream>
-#include "absl/strings/string_view.h"
 #include <utility>
 #include <vector>
 
@@ -14,6 +16,8 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/string_view.h"
+#include "client/channel_target.h"
 #include "grpcpp/support/client_interceptor.h"
 
 namespace riskplan::client {
@@ -83,10 +87,42 @@ grpc::Status ReadUntilStopped(grpc::ClientContext& context, grpc::ClientReader<U
 
 }  // namespace
 
+std::string ChannelServiceConfig(bool replicas) {
+  return absl::StrCat(
+      "{", replicas ? R"json("healthCheckConfig": {"serviceName": "riskplan.v1.Planner"}, )json" : "",
+      R"json("methodConfig": [{
+    "name": [
+      {"service": "riskplan.v1.Planner", "method": "EvaluateRisk"},
+      {"service": "riskplan.v1.Planner", "method": "ListMaps"},
+      {"service": "riskplan.v1.Planner", "method": "GetMapLayer"},
+      {"service": "riskplan.v1.Planner", "method": "GetRiskLayer"},
+      {"service": "riskplan.v1.Planner", "method": "Ping"},
+      {"service": "grpc.health.v1.Health", "method": "Check"}
+    ],
+    "retryPolicy": {
+      "maxAttempts": 5,
+      "initialBackoff": "0.1s",
+      "maxBackoff": "1s",
+      "backoffMultiplier": 2,
+      "retryableStatusCodes": ["UNAVAILABLE"]
+    }
+  }]
+})json");
+}
+
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
                                                            const ConnectionOptions& options,
                                                            const grpc::ChannelArguments& extra) {
+  absl::StatusOr<std::string> target = ChannelTarget(address);
+  if (!target.ok()) return target.status();
   grpc::ChannelArguments args = extra;
+  // The retry policy is the client's own: a service config published in DNS
+  // (TXT records) is not looked up, so it cannot replace it.
+  // Replicas: a list, or a URI whose resolver may give several addresses.
+  const bool replicas = *target != address || absl::StartsWith(address, "dns:") ||
+                        absl::StartsWith(address, "ipv4:") || absl::StartsWith(address, "ipv6:");
+  args.SetServiceConfigJSON(ChannelServiceConfig(replicas));
+  args.SetInt(GRPC_ARG_SERVICE_CONFIG_DISABLE_RESOLUTION, 1);
   // gRPC's default limit is 4 MiB, which a final PlanUpdate with its tree or
   // an EvaluateRisk response with every sample can exceed; the server sends
   // up to 64 MiB (docs/api.md, "Limits").
@@ -127,7 +163,7 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& ad
     }
     interceptors.push_back(std::make_unique<TokenInterceptorFactory>(std::string(trimmed)));
   }
-  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args,
+  return grpc::experimental::CreateCustomChannelWithInterceptors(*target, credentials, args,
                                                                  std::move(interceptors));
 }
 
@@ -194,13 +230,117 @@ grpc::Status RiskplanClient::Plan(const v1::PlanRequest& request,
   return ReadUntilStopped(context, *reader, on_update);
 }
 
+namespace {
+
+// A mission's final message that the server's drain sent without planning
+// it: the mission has no result yet.
+bool Unplanned(const v1::FleetUpdate& u) {
+  return u.error_code() == 0 && u.update().final() && u.update().end_reason() == v1::SHUTDOWN &&
+         !u.update().has_trajectory();
+}
+
+}  // namespace
+
 grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
                                        const FleetUpdateCallback& on_update,
-                                       absl::Duration timeout) {
-  grpc::ClientContext context;
-  SetTimeout(&context, timeout);
-  std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> reader = stub_->PlanFleet(&context, request);
-  return ReadUntilStopped(context, *reader, on_update);
+                                       absl::Duration timeout,
+                                       const FleetResubmitOptions& resubmit) {
+  const absl::Time deadline =
+      timeout == absl::InfiniteDuration() ? absl::InfiniteFuture() : absl::Now() + timeout;
+  const int n = request.missions_size();
+  // What the caller has seen, by index in `request`.
+  std::vector<bool> ended(n, false);
+  std::vector<uint64_t> mission_sequence(n, 0);
+  std::vector<double> best_risk(n, std::numeric_limits<double>::infinity());
+  uint64_t sequence = 0;
+  int missions_ended = 0;
+  // The missions of this call, by their index in `request`.
+  std::vector<int> sent(n);
+  std::iota(sent.begin(), sent.end(), 0);
+  v1::FleetRequest call_request = request;
+  // The latest Unplanned final of each mission, passed on if the mission
+  // gets no other.
+  std::vector<std::optional<v1::FleetUpdate>> held(n);
+  for (int attempt = 0;; ++attempt) {
+    bool stopped = false;
+    const auto pass_on = [&](v1::FleetUpdate u) {
+      const int i = u.mission_index();
+      const bool final = u.error_code() != 0 || u.update().final();
+      if (final) {
+        ended[i] = true;
+        ++missions_ended;
+      }
+      u.set_sequence(++sequence);
+      u.set_missions_ended(missions_ended);
+      if (u.has_update()) {
+        if (attempt > 0) u.mutable_update()->set_sequence(mission_sequence[i] + 1);
+        mission_sequence[i] = u.update().sequence();
+      }
+      if (!on_update(u)) stopped = true;
+      return !stopped;
+    };
+    grpc::ClientContext context;
+    if (deadline != absl::InfiniteFuture()) context.set_deadline(absl::ToChronoTime(deadline));
+    std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> reader =
+        stub_->PlanFleet(&context, call_request);
+    const grpc::Status status = ReadUntilStopped(context, *reader, [&](const v1::FleetUpdate& in) {
+      const int k = in.mission_index();
+      // Not a mission of this call: a server's error, passed on as it came.
+      if (k < 0 || k >= static_cast<int>(sent.size())) {
+        if (!on_update(in)) stopped = true;
+        return !stopped;
+      }
+      const int i = sent[k];
+      if (ended[i]) return true;  // a second final: not passed on
+      v1::FleetUpdate u = in;
+      u.set_mission_index(i);
+      // Held back only while a re-submission may follow; otherwise it is
+      // the mission's final, passed on in its place in the stream.
+      if (Unplanned(u) && attempt < resubmit.max_resubmits) {
+        held[i] = std::move(u);
+        return true;
+      }
+      if (u.error_code() == 0 && !u.update().final()) {
+        // An improvement: a re-submitted mission starts over, and its first
+        // trajectories may be worse than what the caller already has.
+        if (u.update().has_trajectory()) {
+          const double risk = u.update().trajectory().risk();
+          if (attempt > 0 && !(risk < best_risk[i])) return true;
+          best_risk[i] = std::min(best_risk[i], risk);
+        }
+      }
+      return pass_on(std::move(u));
+    });
+    if (stopped) return status;
+    std::vector<int> unfinished;
+    for (int i : sent) {
+      if (!ended[i]) unfinished.push_back(i);
+    }
+    const absl::Duration wait = resubmit.backoff * (1 << std::min(attempt, 16));
+    const bool resubmit_now =
+        !unfinished.empty() && attempt < resubmit.max_resubmits &&
+        (status.ok() || status.error_code() == grpc::StatusCode::UNAVAILABLE) &&
+        absl::Now() + wait < deadline;
+    if (!resubmit_now) {
+      // Also after a failed re-submission: a mission the drain of an earlier
+      // replica ended unplanned still gets that final.
+      for (int i : unfinished) {
+        if (held[i].has_value() && !pass_on(*std::move(held[i]))) {
+          return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the update callback");
+        }
+      }
+      return status;
+    }
+    if (resubmit.on_resubmit) {
+      resubmit.on_resubmit(FleetResubmission{.attempt = attempt + 1,
+                                             .broken = status,
+                                             .unfinished = static_cast<int>(unfinished.size())});
+    }
+    absl::SleepFor(wait);
+    call_request.clear_missions();
+    for (int i : unfinished) *call_request.add_missions() = request.missions(i);
+    sent = std::move(unfinished);
+  }
 }
 
 grpc::Status RiskplanClient::CheckHealth(

@@ -22,12 +22,47 @@ namespace riskplan::client {
 // EvaluateRisk response with every sample).
 inline constexpr int kMaxReceiveBytes = 64 << 20;
 
+// The channel's service config (MakeChannel). Calls that change nothing on
+// the server (EvaluateRisk, ListMaps, GetMapLayer, GetRiskLayer, Ping and the
+// health check) are retried by gRPC when they fail UNAVAILABLE (a replica
+// killed or draining, a connection reset), up to 4 more attempts with
+// backoff from 0.1 s to 1 s; with round_robin, a retry goes to the next
+// replica. PlanTrajectory and PlanFleet are not retried by gRPC (a stream
+// already delivering results cannot start over unseen); PlanFleet
+// re-submits its unfinished missions itself.
+//
+// With `replicas` (a static list, or a dns:, ipv4: or ipv6: URI), gRPC's
+// client-side health checking is on as well: round-robin picks only
+// replicas whose health service says riskplan.v1.Planner is SERVING, so a
+// replica stops getting new calls the moment its drain begins (SIGTERM),
+// not when its port closes. For one HOST:PORT it is off, so that a client
+// of a draining server hears the server's own refusal ("shutting down").
+std::string ChannelServiceConfig(bool replicas);
+
 // Called for every PlanUpdate in order. Return false to cancel the call (the
 // plan then ends with status CANCELLED).
 using PlanUpdateCallback = std::function<bool(const v1::PlanUpdate&)>;
 // Called for every FleetUpdate in order; false cancels the call (every
 // mission stops; the call ends with CANCELLED).
 using FleetUpdateCallback = std::function<bool(const v1::FleetUpdate&)>;
+
+// A fleet's stream broke (or the server's drain ended missions unplanned)
+// and its unfinished missions are sent again (RiskplanClient::PlanFleet).
+struct FleetResubmission {
+  int attempt = 0;      // 1 for the first re-submission
+  grpc::Status broken;  // how the previous call ended
+  int unfinished = 0;   // missions sent again
+};
+
+// How PlanFleet re-submits unfinished missions.
+struct FleetResubmitOptions {
+  // Calls after the first; 0: one call, its missions as the server ends them.
+  int max_resubmits = 3;
+  // Wait before the first re-submission, doubled before each further one.
+  absl::Duration backoff = absl::Milliseconds(250);
+  // Told of every re-submission before it is sent (may be null).
+  std::function<void(const FleetResubmission&)> on_resubmit;
+};
 
 // How a client reaches the server (the `riskplan` flags of the same names,
 // and any other program built on this library, e.g. a gateway). Every field
@@ -54,11 +89,15 @@ struct ConnectionOptions {
 
 // The one place a channel to riskplan-server is made (the CLI, the load
 // generator, the tests and the web gateway all come here): large messages,
-// round-robin over every address the target resolves to, the credentials
-// and token of `options`, and `extra` channel arguments on top. Errors name
-// the flag and file that could not be read (nothing connects yet: a server
-// that is down or refuses the handshake shows up as UNAVAILABLE on the first
-// call; ExplainStatus says why).
+// round-robin over every address the target resolves to (`address` as
+// ChannelTarget takes it: one address, a URI such as dns:///name:port, or a
+// static comma-separated list), gRPC's retry of UNAVAILABLE for the calls
+// that change nothing and health-aware balancing over replicas
+// (ChannelServiceConfig), the credentials and token of
+// `options`, and `extra` channel arguments on top. Errors name the flag and
+// file that could not be read, or the list entry that is wrong (nothing
+// connects yet: a server that is down or refuses the handshake shows up as
+// UNAVAILABLE on the first call; ExplainStatus says why).
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(
     const std::string& address, const ConnectionOptions& options = {},
     const grpc::ChannelArguments& extra = {});
@@ -100,8 +139,27 @@ class RiskplanClient {
   // Runs a fleet to its end, passing every update to `on_update`: each
   // mission's improvements (with send_improvements) and its one final
   // message or error. The status as Plan's.
+  //
+  // Every mission gets exactly one final message or error, also when a
+  // replica fails: when the stream ends UNAVAILABLE (the server died, or
+  // its connection did) or ends with missions the server's drain never
+  // planned (final SHUTDOWN without a trajectory: held back, not passed on),
+  // the missions without a final are sent again in a new call, which the
+  // channel's round-robin gives to a replica that is up, at most
+  // `resubmit.max_resubmits` times, within `timeout`. A re-submitted mission
+  // starts over with its whole budget; a SHUTDOWN final with a trajectory
+  // is a result and is kept. The updates passed on look like one call's:
+  // mission_index is the mission's index in `request`, sequence and
+  // missions_ended count over every call, a mission's update.sequence goes
+  // on from its last one, and a re-submitted mission's improvements are
+  // passed on only when they beat its best so far. A held-back SHUTDOWN final
+  // is passed on when its mission gets no other (no re-submission follows,
+  // or the re-submissions failed); the status is that of the last call. With
+  // one HOST:PORT, a re-submission goes to the same address (behind a
+  // Kubernetes Service, another pod).
   grpc::Status PlanFleet(const v1::FleetRequest& request, const FleetUpdateCallback& on_update,
-                         absl::Duration timeout = absl::InfiniteDuration());
+                         absl::Duration timeout = absl::InfiniteDuration(),
+                         const FleetResubmitOptions& resubmit = {});
 
   // grpc.health.v1.Health/Check of `service` ("" for the whole server);
   // `*status` is set when the call succeeds. REQUIRES: status != nullptr.

@@ -66,6 +66,8 @@ struct CliOptions {
 
   // Fleet (fleet, load --rpc=fleet): the missions file (client/fleet_file.h).
   std::string missions;
+  // Re-submissions of missions a broken stream left without a result (fleet).
+  int max_resubmits = 3;
 
   // Load.
   std::string rpc = "eval";     // eval | plan | fleet | ping

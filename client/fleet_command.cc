@@ -111,6 +111,9 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
   if (!o.picture.empty()) {
     if (int code = FetchPictureLayers(o, client, &picture); code != 0) return code;
   }
+  if (o.max_resubmits < 0 || o.max_resubmits > 10) {
+    return Usage(absl::StrFormat("--max_resubmits=%d: must be 0 to 10", o.max_resubmits));
+  }
   const int n = request->missions_size();
   std::vector<MissionRow> rows(n);
   for (int i = 0; i < n; ++i) {
@@ -147,7 +150,17 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
         }
         return true;
       },
-      timeout);
+      timeout,
+      FleetResubmitOptions{
+          .max_resubmits = o.max_resubmits,
+          .on_resubmit =
+              [](const FleetResubmission& r) {
+                std::fprintf(stderr,
+                             "riskplan: PlanFleet ended %s (%s) with %d missions without a "
+                             "result; sending them again (re-submission %d)\n",
+                             StatusCodeName(r.broken.error_code()).c_str(),
+                             r.broken.error_message().c_str(), r.unfinished, r.attempt);
+              }});
   PrintSummary(rows);
   if (!o.picture.empty()) {
     if (int code = WriteFleetPicture(o, rows, picture); code != 0) return code;

@@ -12,7 +12,9 @@
 #include "client/connection_flags.h"
 #include "cmdline/help.h"
 
-ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server address, HOST:PORT");
+ABSL_FLAG(std::string, server, "127.0.0.1:50051",
+          "riskplan-server address: HOST:PORT, a list HOST:PORT,HOST:PORT,... of replicas, or a "
+          "gRPC URI such as dns:///NAME:PORT (calls go round-robin over every address)");
 ABSL_FLAG(std::string, map, "demo-city", "Map name (see `riskplan maps`)");
 ABSL_FLAG(int64_t, timeout_ms, 0,
           "Deadline of each call, ms (0: 10 s for maps, 30 s for eval and load calls, none for "
@@ -82,6 +84,9 @@ ABSL_FLAG(double, target_level_of_safety, 1e-6,
 ABSL_FLAG(std::string, missions, "",
           "fleet, load --rpc=fleet: the missions file, JSON (docs/api.md, \"Missions files\"); "
           "a mission's fields take the place of the plan flags of the same names");
+ABSL_FLAG(int, max_resubmits, 3,
+          "fleet: times the missions without a result are sent again when the stream breaks "
+          "(a replica died or drained), 0 to 10");
 ABSL_FLAG(std::string, rpc, "eval",
           "load: the RPC to load, eval | plan | fleet (one call: the whole --missions fleet) | "
           "ping | connect (a new connection, TLS handshake included, and one Ping on it, per "
@@ -179,12 +184,14 @@ riskplan::cmdline::ProgramHelp Help() {
        "mission does not give, the flag gives (e.g. one --goal for all).\n"
        "Prints each mission's end as it comes, then a summary table; --picture draws\n"
        "every mission's trajectory on --map. Exit code 3: some mission has no\n"
-       "trajectory (its own error, or NO_SOLUTION).\n"
+       "trajectory (its own error, or NO_SOLUTION). With several replicas in\n"
+       "--server, missions a broken stream left without a result are sent again\n"
+       "(--max_resubmits times at most).\n"
        "\n"
        "Example:\n"
        "  riskplan fleet --missions=fleet.json --goal=6800,6500,250,0.785 --iterations=2000 "
        "--picture=fleet.svg",
-       join(join(join(connection, {"map", "missions"}), planning),
+       join(join(join(connection, {"map", "missions", "max_resubmits"}), planning),
             {"params", "picture", "picture_size"})},
       {"load", "load test of one RPC (eval, plan, fleet or ping), closed or open loop",
        "  riskplan load [--rpc=eval|plan|fleet|ping] [--mode=closed|open] [flags]\n"
@@ -256,6 +263,7 @@ int main(int argc, char** argv) {
   o.plan_firmware = absl::GetFlag(FLAGS_plan_firmware);
   o.target_level_of_safety = absl::GetFlag(FLAGS_target_level_of_safety);
   o.missions = absl::GetFlag(FLAGS_missions);
+  o.max_resubmits = absl::GetFlag(FLAGS_max_resubmits);
   o.rpc = absl::GetFlag(FLAGS_rpc);
   o.mode = absl::GetFlag(FLAGS_mode);
   o.concurrency = absl::GetFlag(FLAGS_concurrency);

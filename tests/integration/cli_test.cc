@@ -266,5 +266,30 @@ TEST_F(CliTest, FleetRefusesABadMissionsFileSayingWhere) {
   EXPECT_THAT(r.output, HasSubstr("cannot open missions file"));
 }
 
+TEST_F(CliTest, ServerTakesAListOfReplicasAndSaysWhichEntryIsWrong) {
+  // The same server twice and a name for it: one list, resolved and
+  // de-duplicated, round-robin over what is left.
+  const std::string address = server_->address();
+  const std::string port = address.substr(address.rfind(':') + 1);
+  const std::string tls = server_->connection().tls() ? " --tls_server_name=localhost" : "";
+  CommandResult r = Cli("maps --server=" + address + ",localhost:" + port + tls);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("demo-city"));
+
+  r = Cli("maps --server=" + address + ",,127.0.0.1:1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr(": entry 2 of the list is empty"));
+  r = Cli("maps --server=" + address + ",127.0.0.1:99999");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("entry 2 (\"127.0.0.1:99999\"): expected HOST:PORT with a port "
+                                  "in 1..65535"));
+
+  const std::string missions = *dir_ + "/resubmit-fleet.json";
+  std::ofstream(missions) << R"({"missions": [{"id": "a", "start": "300,375,240,0.785"}]})";
+  r = Cli("fleet --missions=" + missions + " --goal=1700,1625,250,0.785 --max_resubmits=11");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("--max_resubmits=11: must be 0 to 10"));
+}
+
 }  // namespace
 }  // namespace riskplan::testing

@@ -318,15 +318,20 @@ TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
   client::RiskplanClient client((*server)->Channel());
   std::vector<v1::FleetUpdate> finals;
   bool signalled = false;
-  const grpc::Status status = client.PlanFleet(request, [&](const v1::FleetUpdate& u) {
-    // The first improvement says the first mission plans.
-    if (!signalled) {
-      (*server)->Signal(SIGTERM);
-      signalled = true;
-    }
-    if (u.update().final()) finals.push_back(u);
-    return true;
-  });
+  // The server's own finals, not re-submitted (the client's re-submission:
+  // replicas_test.cc and the test below).
+  const grpc::Status status = client.PlanFleet(
+      request,
+      [&](const v1::FleetUpdate& u) {
+        // The first improvement says the first mission plans.
+        if (!signalled) {
+          (*server)->Signal(SIGTERM);
+          signalled = true;
+        }
+        if (u.update().final()) finals.push_back(u);
+        return true;
+      },
+      absl::InfiniteDuration(), client::FleetResubmitOptions{.max_resubmits = 0});
   EXPECT_TRUE(status.ok()) << status.error_message();
   ASSERT_EQ(finals.size(), 2u);
   // The waiting one ends at once, unplanned; the planning one at the end of
@@ -335,6 +340,60 @@ TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
   EXPECT_FALSE(finals[0].update().has_trajectory());
   EXPECT_EQ(finals[1].mission_id(), "endless-0");
   EXPECT_TRUE(finals[1].update().has_trajectory());
+  for (const v1::FleetUpdate& u : finals) EXPECT_EQ(u.update().end_reason(), v1::SHUTDOWN);
+  EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0);
+}
+
+TEST(FleetShutdownTest, AMissionTheDrainLeftUnplannedKeepsThatFinalWhenNoReplicaIsLeft) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+      ServerProcess::Start({"--plan_threads=1", "--grace_period_ms=1000"});
+  ASSERT_TRUE(server.ok()) << server.status();
+  v1::FleetRequest request;
+  for (int i = 0; i < 2; ++i) {
+    v1::FleetMission m = Mission(absl::StrFormat("endless-%d", i), kStarts[i], 0);
+    m.mutable_request()->mutable_budget()->set_time_ms(600000);
+    m.mutable_request()->mutable_goal()->set_z(250 + i);
+    *request.add_missions() = m;
+  }
+  request.set_send_improvements(true);
+  client::RiskplanClient client((*server)->Channel());
+  std::vector<v1::FleetUpdate> finals;
+  std::vector<client::FleetResubmission> resubmissions;
+  bool signalled = false;
+  const grpc::Status status = client.PlanFleet(
+      request,
+      [&](const v1::FleetUpdate& u) {
+        if (!signalled) {
+          (*server)->Signal(SIGTERM);
+          signalled = true;
+        }
+        if (u.update().final()) finals.push_back(u);
+        return true;
+      },
+      absl::InfiniteDuration(),
+      client::FleetResubmitOptions{
+          .max_resubmits = 2,
+          .backoff = absl::Milliseconds(50),
+          .on_resubmit = [&](const client::FleetResubmission& r) { resubmissions.push_back(r); }});
+  // The drain's call ended OK with endless-1 unplanned: sent again, to the
+  // one address there is, which is gone by then (or refuses it while it
+  // drains), twice.
+  ASSERT_EQ(resubmissions.size(), 2u);
+  EXPECT_EQ(resubmissions[0].attempt, 1);
+  EXPECT_TRUE(resubmissions[0].broken.ok());
+  EXPECT_EQ(resubmissions[0].unfinished, 1);
+  EXPECT_EQ(resubmissions[1].attempt, 2);
+  EXPECT_EQ(resubmissions[1].broken.error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE);
+  // Each mission still has exactly one final: the planned one's, then the
+  // drain's unplanned one, held back until no re-submission was left.
+  ASSERT_EQ(finals.size(), 2u);
+  EXPECT_EQ(finals[0].mission_id(), "endless-0");
+  EXPECT_TRUE(finals[0].update().has_trajectory());
+  EXPECT_EQ(finals[1].mission_id(), "endless-1");
+  EXPECT_EQ(finals[1].mission_index(), 1);
+  EXPECT_FALSE(finals[1].update().has_trajectory());
+  EXPECT_EQ(finals[1].missions_ended(), 2);
   for (const v1::FleetUpdate& u : finals) EXPECT_EQ(u.update().end_reason(), v1::SHUTDOWN);
   EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0);
 }

@@ -124,14 +124,14 @@ TEST(HelpTest, Riskplan) {
         "params", "picture", "picture_size", "trajectory_out"},
        {"waypoints", "json", "rpc", "concurrency", "two_tier"}},
       {"fleet",
-       {"server", "map", "timeout_ms", "missions", "goal", "algorithm", "budget_ms", "iterations",
-        "seed", "params", "picture", "picture_size"},
+       {"server", "map", "timeout_ms", "missions", "max_resubmits", "goal", "algorithm",
+        "budget_ms", "iterations", "seed", "params", "picture", "picture_size"},
        {"waypoints", "json", "rpc", "concurrency", "trajectory_out"}},
       {"load",
        {"server", "map", "timeout_ms", "rpc", "mode", "concurrency", "rate", "duration_s",
         "max_outstanding", "ceiling", "report_json", "waypoints", "polyline", "trajectory_file",
         "params", "start", "goal", "algorithm", "budget_ms"},
-       {"picture", "picture_size", "trajectory_out", "json"}},
+       {"picture", "picture_size", "trajectory_out", "json", "max_resubmits"}},
   };
   for (const Command& c : p.commands) p.flags.insert(p.flags.end(), c.flags.begin(), c.flags.end());
   ExpectHelp(p);

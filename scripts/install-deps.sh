@@ -19,6 +19,8 @@ PACKAGES=(
   chromium chromium-driver python3-selenium
   # The TLS tests make their certificates with the openssl CLI.
   openssl
+  # The check of deploy/kubernetes reads its YAML.
+  python3-yaml
 )
 # Extra packages a caller asks for (e.g. the benchmark script adds OMPL).
 PACKAGES+=("$@")

@@ -70,7 +70,7 @@ void FleetScheduler::Pump() {
       UpdateGaugesLocked();
     }
     // Recorded before the task is queued: the task releases what was admitted.
-    env_.metrics->PlanAdmitted();
+    env_.metrics->PlanAdmitted(ServerMetrics::PlanKind::kFleetGroup);
     const bool queued = env_.pool->TrySubmit([this, group] {
       group->Run();
       Finished(group);
@@ -90,7 +90,7 @@ void FleetScheduler::Finished(const std::shared_ptr<FleetGroup>& group) {
     groups_.erase(group->id());
     UpdateGaugesLocked();
   }
-  env_.metrics->PlanReleased();
+  env_.metrics->PlanReleased(ServerMetrics::PlanKind::kFleetGroup);
   // Starts the next group (the release listener) before the call is told.
   env_.active->Release(group.get());
   group->call()->GroupEnded();

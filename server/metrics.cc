@@ -41,6 +41,13 @@ ServerMetrics::ServerMetrics() : registry_(std::make_shared<prometheus::Registry
                         .Help("Plans admitted and not yet finished (queued or planning)")
                         .Register(*registry_)
                         .Add({});
+  missions_in_flight_ =
+      &prometheus::BuildGauge()
+           .Name("riskplan_missions_in_flight")
+           .Help("The replica's load for autoscaling: PlanTrajectory plans admitted and not "
+                 "finished plus PlanFleet missions queued or running")
+           .Register(*registry_)
+           .Add({});
   plan_duration_ = &prometheus::BuildHistogram()
                         .Name("riskplan_plan_duration_seconds")
                         .Help("Planner time of finished plans, by end reason")
@@ -141,9 +148,28 @@ void ServerMetrics::RecordFleetMissionsEnded(int64_t completed, int64_t failed, 
   fleet_ended_->Add({{"outcome", "cancelled"}}).Increment(static_cast<double>(cancelled));
 }
 
+void ServerMetrics::PlanAdmitted(PlanKind kind) {
+  running_plans_->Increment();
+  if (kind != PlanKind::kTrajectory) return;
+  absl::MutexLock lock(&mu_);
+  ++trajectory_plans_;
+  missions_in_flight_->Set(static_cast<double>(trajectory_plans_ + fleet_missions_in_flight_));
+}
+
+void ServerMetrics::PlanReleased(PlanKind kind) {
+  running_plans_->Decrement();
+  if (kind != PlanKind::kTrajectory) return;
+  absl::MutexLock lock(&mu_);
+  --trajectory_plans_;
+  missions_in_flight_->Set(static_cast<double>(trajectory_plans_ + fleet_missions_in_flight_));
+}
+
 void ServerMetrics::SetFleetMissions(int64_t queued, int64_t running) {
   fleet_missions_->Add({{"state", "queued"}}).Set(static_cast<double>(queued));
   fleet_missions_->Add({{"state", "running"}}).Set(static_cast<double>(running));
+  absl::MutexLock lock(&mu_);
+  fleet_missions_in_flight_ = queued + running;
+  missions_in_flight_->Set(static_cast<double>(trajectory_plans_ + fleet_missions_in_flight_));
 }
 
 void ServerMetrics::SetMapMemory(const std::string& map, double bytes) {

@@ -15,6 +15,11 @@
 //                                                  PlanUpdate; failed, with an error; cancelled,
 //                                                  unreported because the client went)
 //   riskplan_fleet_missions{state}                 gauge (state: queued, running)
+//   riskplan_missions_in_flight                    gauge (the replica's load, what the
+//                                                  HorizontalPodAutoscaler scales on:
+//                                                  PlanTrajectory plans admitted and not
+//                                                  finished + PlanFleet missions queued or
+//                                                  running; docs/fleet.md)
 //   riskplan_model_cache_builds_total              counter
 //   riskplan_accept_errors_total                   counter (failed accepts, ConnectionAcceptor)
 //
@@ -29,6 +34,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "grpcpp/support/status_code_enum.h"
 #include "prometheus/counter.h"
@@ -53,8 +59,11 @@ class ServerMetrics {
   // "anonymous".
   void RecordRpc(std::string_view method, grpc::StatusCode code, absl::Duration duration,
                  std::string_view identity_label = "");
-  void PlanAdmitted() { running_plans_->Increment(); }
-  void PlanReleased() { running_plans_->Decrement(); }
+  // What holds a plan slot: a PlanTrajectory call (one mission) or a group
+  // of PlanFleet missions (counted by SetFleetMissions).
+  enum class PlanKind { kTrajectory, kFleetGroup };
+  void PlanAdmitted(PlanKind kind);
+  void PlanReleased(PlanKind kind);
   // The riskplan_running_plans gauge (for checks of the admission bookkeeping).
   double running_plans() const { return running_plans_->Value(); }
   void RecordPlan(std::string_view end_reason, absl::Duration planner_time);
@@ -65,6 +74,8 @@ class ServerMetrics {
   }
   void RecordFleetMissionsEnded(int64_t completed, int64_t failed, int64_t cancelled);
   void SetFleetMissions(int64_t queued, int64_t running);
+  // The riskplan_missions_in_flight gauge.
+  double missions_in_flight() const { return missions_in_flight_->Value(); }
   void RecordModelBuild() { model_builds_->Increment(); }
   void RecordAcceptError() { accept_errors_->Increment(); }
 
@@ -88,6 +99,11 @@ class ServerMetrics {
   prometheus::Counter* fleet_admitted_;
   prometheus::Family<prometheus::Counter>* fleet_ended_;
   prometheus::Family<prometheus::Gauge>* fleet_missions_;
+  prometheus::Gauge* missions_in_flight_;
+  // The two terms of missions_in_flight_, set together under mu_.
+  absl::Mutex mu_;
+  int64_t trajectory_plans_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t fleet_missions_in_flight_ ABSL_GUARDED_BY(mu_) = 0;
   prometheus::Counter* model_builds_;
   prometheus::Counter* accept_errors_;
 };

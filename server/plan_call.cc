@@ -142,7 +142,7 @@ void PlanCall::Run() {
   // The slot is free as soon as the planner is: the final message may still
   // be on its way to a slow client.
   env_.active->Release(this);
-  env_.metrics->PlanReleased();
+  env_.metrics->PlanReleased(ServerMetrics::PlanKind::kTrajectory);
   if (!result.ok()) {
     FinishWith(ToGrpcStatus(result.status()));
     return;

@@ -330,12 +330,12 @@ grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanTrajectory(
   }
   // Recorded before the task is queued: Run() may start at once, and it
   // releases what was admitted (PlanCall::Run checks both).
-  metrics_.PlanAdmitted();
+  metrics_.PlanAdmitted(ServerMetrics::PlanKind::kTrajectory);
   // The pool's queue is unbounded (admission bounds it); it refuses only
   // while it is being destroyed.
   if (!plan_pool_.TrySubmit([call] { call->Run(); })) {
     active_.Release(call.get());
-    metrics_.PlanReleased();
+    metrics_.PlanReleased(ServerMetrics::PlanKind::kTrajectory);
     call->Reject(kDraining);
   }
   return call.get();

@@ -1,5 +1,9 @@
 // Prometheus metrics over HTTP (--metrics_listen), read after real RPCs.
 #include <regex>
+#include <thread>
+
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -39,6 +43,64 @@ TEST(MetricsTest, CountsRpcsByMethodAndCodeAndPlans) {
   EXPECT_THAT(*text,
               HasSubstr("riskplan_plan_duration_seconds_count{end_reason=\"BUDGET_EXHAUSTED\"} 1"));
   EXPECT_THAT(*text, HasSubstr("riskplan_map_memory_bytes{map=\"demo-city\"}"));
+}
+
+// The autoscaler's metric: a PlanTrajectory plan is one mission, a fleet's
+// missions count one by one, queued or planning.
+TEST(MetricsTest, MissionsInFlightCountsPlansAndEveryFleetMission) {
+  auto started = ServerProcess::Start(
+      {"--metrics_listen=127.0.0.1:0", "--plan_threads=1", "--max_running_plans=1"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
+  const std::string metrics_address = MetricsAddress(server->Stderr());
+  const auto in_flight = [&]() -> double {
+    absl::StatusOr<std::string> text = HttpGet(metrics_address, "/metrics");
+    if (!text.ok()) return -1;
+    return MetricValue(*text, "riskplan_missions_in_flight").value_or(-1);
+  };
+  // Waits (bounded) until the gauge reads `want`; returns what it read last.
+  const auto await = [&](double want) {
+    double got = in_flight();
+    for (int i = 0; i < 3000 && got != want; ++i) {
+      absl::SleepFor(absl::Milliseconds(20));
+      got = in_flight();
+    }
+    return got;
+  };
+  EXPECT_EQ(in_flight(), 0);
+
+  client::RiskplanClient client(server->Channel());
+  // A long plan takes the one slot.
+  grpc::ClientContext plan_context;
+  auto plan = client.stub().PlanTrajectory(&plan_context, SmallCityPlan(600000));
+  v1::PlanUpdate update;
+  ASSERT_TRUE(plan->Read(&update));
+  EXPECT_EQ(await(1), 1);
+
+  // Three fleet missions, each its own group (a seed each): all queued
+  // behind the plan, and counted.
+  v1::FleetRequest fleet;
+  for (int m = 0; m < 3; ++m) {
+    v1::FleetMission* mission = fleet.add_missions();
+    mission->set_id(absl::StrFormat("m%d", m));
+    *mission->mutable_request() = SmallCityPlan(0, 50);
+    mission->mutable_request()->set_seed(m + 1);
+  }
+  grpc::ClientContext fleet_context;
+  auto fleet_stream = client.stub().PlanFleet(&fleet_context, fleet);
+  EXPECT_EQ(await(4), 4);
+
+  // The plan ends: the fleet's missions plan one by one, each leaving the
+  // count when it ends, down to 0.
+  plan_context.TryCancel();
+  while (plan->Read(&update)) {
+  }
+  v1::FleetUpdate fleet_update;
+  int finals = 0;
+  while (fleet_stream->Read(&fleet_update)) finals += fleet_update.update().final();
+  EXPECT_TRUE(fleet_stream->Finish().ok());
+  EXPECT_EQ(finals, 3);
+  EXPECT_EQ(await(0), 0);
 }
 
 TEST(MetricsTest, ReportsTheMemoryAndBoundsOfTheServersCaches) {

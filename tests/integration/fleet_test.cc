@@ -302,11 +302,9 @@ TEST_F(FleetFairShareTest, ATenantArrivingLaterGetsTheNextSlotAndAdmissionCounts
   EXPECT_EQ(Metric("riskplan_fleet_missions_admitted_total"), 4);
 }
 
-TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
-  // One slot: one mission plans, the other waits, when SIGTERM comes.
-  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
-      ServerProcess::Start({"--plan_threads=1", "--grace_period_ms=1000"});
-  ASSERT_TRUE(server.ok()) << server.status();
+// Two missions with ten-minute budgets and goals of their own (two groups):
+// with one plan slot, the first plans and the second waits.
+v1::FleetRequest EndlessFleet() {
   v1::FleetRequest request;
   for (int i = 0; i < 2; ++i) {
     v1::FleetMission m = Mission(absl::StrFormat("endless-%d", i), kStarts[i], 0);
@@ -315,23 +313,38 @@ TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
     *request.add_missions() = m;
   }
   request.set_send_improvements(true);
-  client::RiskplanClient client((*server)->Channel());
-  std::vector<v1::FleetUpdate> finals;
+  return request;
+}
+
+// Runs `request` on `server` and SIGTERMs the server at the first update (the
+// first mission's first improvement: it plans); the finals passed on.
+grpc::Status PlanFleetAndDrain(ServerProcess& server, const v1::FleetRequest& request,
+                               const client::FleetResubmitOptions& resubmit,
+                               std::vector<v1::FleetUpdate>* finals) {
+  client::RiskplanClient client(server.Channel());
   bool signalled = false;
-  // The server's own finals, not re-submitted (the client's re-submission:
-  // replicas_test.cc and the test below).
-  const grpc::Status status = client.PlanFleet(
+  return client.PlanFleet(
       request,
       [&](const v1::FleetUpdate& u) {
-        // The first improvement says the first mission plans.
         if (!signalled) {
-          (*server)->Signal(SIGTERM);
+          server.Signal(SIGTERM);
           signalled = true;
         }
-        if (u.update().final()) finals.push_back(u);
+        if (u.update().final()) finals->push_back(u);
         return true;
       },
-      absl::InfiniteDuration(), client::FleetResubmitOptions{.max_resubmits = 0});
+      absl::InfiniteDuration(), resubmit);
+}
+
+TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+      ServerProcess::Start({"--plan_threads=1", "--grace_period_ms=1000"});
+  ASSERT_TRUE(server.ok()) << server.status();
+  // The server's own finals, not re-submitted (the client's re-submission:
+  // replicas_test.cc and the test below).
+  std::vector<v1::FleetUpdate> finals;
+  const grpc::Status status = PlanFleetAndDrain(
+      **server, EndlessFleet(), client::FleetResubmitOptions{.max_resubmits = 0}, &finals);
   EXPECT_TRUE(status.ok()) << status.error_message();
   ASSERT_EQ(finals.size(), 2u);
   // The waiting one ends at once, unplanned; the planning one at the end of
@@ -348,33 +361,15 @@ TEST(FleetShutdownTest, AMissionTheDrainLeftUnplannedKeepsThatFinalWhenNoReplica
   absl::StatusOr<std::unique_ptr<ServerProcess>> server =
       ServerProcess::Start({"--plan_threads=1", "--grace_period_ms=1000"});
   ASSERT_TRUE(server.ok()) << server.status();
-  v1::FleetRequest request;
-  for (int i = 0; i < 2; ++i) {
-    v1::FleetMission m = Mission(absl::StrFormat("endless-%d", i), kStarts[i], 0);
-    m.mutable_request()->mutable_budget()->set_time_ms(600000);
-    m.mutable_request()->mutable_goal()->set_z(250 + i);
-    *request.add_missions() = m;
-  }
-  request.set_send_improvements(true);
-  client::RiskplanClient client((*server)->Channel());
   std::vector<v1::FleetUpdate> finals;
   std::vector<client::FleetResubmission> resubmissions;
-  bool signalled = false;
-  const grpc::Status status = client.PlanFleet(
-      request,
-      [&](const v1::FleetUpdate& u) {
-        if (!signalled) {
-          (*server)->Signal(SIGTERM);
-          signalled = true;
-        }
-        if (u.update().final()) finals.push_back(u);
-        return true;
-      },
-      absl::InfiniteDuration(),
+  const grpc::Status status = PlanFleetAndDrain(
+      **server, EndlessFleet(),
       client::FleetResubmitOptions{
           .max_resubmits = 2,
           .backoff = absl::Milliseconds(50),
-          .on_resubmit = [&](const client::FleetResubmission& r) { resubmissions.push_back(r); }});
+          .on_resubmit = [&](const client::FleetResubmission& r) { resubmissions.push_back(r); }},
+      &finals);
   // The drain's call ended OK with endless-1 unplanned: sent again, to the
   // one address there is, which is gone by then (or refuses it while it
   // drains), twice.

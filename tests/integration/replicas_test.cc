@@ -159,17 +159,19 @@ TEST(ReplicasTest, AKilledAndADrainedReplicaLoseNoMissionAndNoEvaluateRiskCall) 
   // replica and none has ended), and the load has reached every replica.
   const absl::Time wait_until = absl::Now() + absl::Seconds(120);
   bool all_busy = false;
+  std::map<std::string, int> before;
   while (!all_busy && absl::Now() < wait_until) {
     all_busy = true;
     for (const auto& s : servers) all_busy = all_busy && MissionsOn(*s) >= 2;
-    absl::SleepFor(absl::Milliseconds(20));
+    {
+      absl::MutexLock lock(&mu);
+      before.clear();
+      for (const Call& c : calls) ++before[c.peer];
+    }
+    all_busy = all_busy && before.size() == static_cast<size_t>(kReplicas);
+    if (!all_busy) absl::SleepFor(absl::Milliseconds(20));
   }
-  ASSERT_TRUE(all_busy) << "the fleets did not spread over the three replicas";
-  std::map<std::string, int> before;
-  {
-    absl::MutexLock lock(&mu);
-    for (const Call& c : calls) ++before[c.peer];
-  }
+  ASSERT_TRUE(all_busy) << "the fleets and the load did not reach all three replicas";
 
   servers[0]->Signal(SIGKILL);
   servers[1]->Signal(SIGTERM);

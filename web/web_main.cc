@@ -21,7 +21,9 @@
 ABSL_FLAG(std::string, listen, "127.0.0.1:8080",
           "HTTP address for browsers, HOST:PORT; port 0 picks a free port, and "
           "'riskplan-web listening on HOST:PORT' on stdout gives the real one");
-ABSL_FLAG(std::string, server, "127.0.0.1:50051", "riskplan-server's gRPC address, HOST:PORT");
+ABSL_FLAG(std::string, server, "127.0.0.1:50051",
+          "riskplan-server's gRPC address: HOST:PORT, a list HOST:PORT,HOST:PORT,... of "
+          "replicas, or a gRPC URI such as dns:///NAME:PORT (round-robin over every address)");
 ABSL_FLAG(std::string, assets_dir, "",
           "Directory of the page's own files (empty: web/static of the source tree it was "
           "built from, else the installed share/riskplan/web)");

@@ -118,7 +118,14 @@ absl::StatusOr<std::vector<absl::StatusOr<PlanResult>>> SharedGoalTreePlanner::P
                       GoalTree::PlanSeed(options.seed, generation), options.record_tree, *params,
                       evaluator, cancel, std::move(callbacks), initial);
     run.Execute();
-    if (grown_tree != nullptr && run.ExportTree(grown_tree)) {
+    // A guide route may take the tree past max_nodes (it is checked between
+    // steps); such a tree is not exported, so that every exported tree is one
+    // a plan with these parameters accepts.
+    if (grown_tree != nullptr && run.ExportTree(grown_tree) &&
+        static_cast<int64_t>(grown_tree->nodes.size()) > params->max_nodes) {
+      grown_tree->nodes.clear();
+    }
+    if (grown_tree != nullptr && !grown_tree->nodes.empty()) {
       grown_tree->goal = problem.goal;
       grown_tree->params = options.params;
       grown_tree->seed = options.seed;

@@ -168,7 +168,9 @@ class SharedGoalTreePlanner {
   // With `grown_tree` not null, the tree as it stands at the end (without
   // its starts) is written there, its generation one more than
   // initial_tree's (1 without); it is left with no nodes when no mission was
-  // planned or an evaluator's error ended the plan.
+  // planned, an evaluator's error ended the plan, or the tree has more than
+  // max_nodes nodes (a guide route can pass the bound), so that every tree
+  // exported is one a plan with the same options accepts.
   absl::StatusOr<std::vector<absl::StatusOr<PlanResult>>> Plan(
       const SharedTreeProblem& problem, const SharedTreeOptions& options,
       const CancellationToken& cancel, const MissionImprovementCallback& on_improvement,

@@ -50,10 +50,12 @@ class GoalTreeReuseTest : public testing_planner::DemoCityPlannerTest {
   }
 
   static Outcome Plan(const SharedTreeProblem& problem, uint64_t seed,
-                      std::shared_ptr<const GoalTree> initial, bool export_tree = true) {
+                      std::shared_ptr<const GoalTree> initial, bool export_tree = true,
+                      std::map<std::string, double> params = {}) {
     Outcome out;
     SharedTreeOptions options;
     options.seed = seed;
+    options.params = std::move(params);
     options.initial_tree = std::move(initial);
     CancellationToken token;
     SharedGoalTreePlanner planner;
@@ -180,6 +182,25 @@ TEST_F(GoalTreeReuseTest, TheSameTreeAndSeedGiveTheSameResultsBitForBit) {
     }
   }
   EXPECT_EQ(b.grown.nodes.size(), c.grown.nodes.size());
+}
+
+// A tree at max_nodes still answers: each start is connected to it before
+// the bound ends the plan, and no exported tree exceeds the bound.
+TEST_F(GoalTreeReuseTest, AFullTreeStillAnswersEveryMission) {
+  const std::map<std::string, double> params = {{"max_nodes", 250}};
+  const SharedTreeProblem problem = Problem(depot_, {0, 1}, 5000);
+  Outcome a = Plan(problem, 13, nullptr, true, params);
+  ExpectExactRisks(problem, a);
+  ASSERT_FALSE(a.grown.nodes.empty());
+  EXPECT_LE(a.grown.nodes.size(), 250u);
+  auto tree = std::make_shared<const GoalTree>(std::move(a.grown));
+  const Outcome b = Plan(problem, 13, tree, true, params);
+  ExpectExactRisks(problem, b);
+  for (const absl::StatusOr<PlanResult>& r : *b.results) {
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->reason, StopReason::kBudgetExhausted);
+    EXPECT_LT(r->iterations, 5000);
+  }
 }
 
 // A tree grown for another goal, other parameters or another seed is refused

@@ -14,6 +14,17 @@ prometheus::MetricFamily Gauge(std::string name, std::string help) {
   return family;
 }
 
+prometheus::MetricFamily Counter(std::string name, std::string help, double value) {
+  prometheus::MetricFamily family;
+  family.name = std::move(name);
+  family.help = std::move(help);
+  family.type = prometheus::MetricType::Counter;
+  prometheus::ClientMetric metric;
+  metric.counter.value = value;
+  family.metric.push_back(std::move(metric));
+  return family;
+}
+
 void Add(prometheus::MetricFamily* family, double value,
          std::vector<prometheus::ClientMetric::Label> labels = {}) {
   prometheus::ClientMetric metric;
@@ -49,6 +60,26 @@ std::vector<prometheus::MetricFamily> CacheMetrics::Collect() const {
   out.push_back(Gauge("riskplan_feasibility_cache_limit_checkers",
                       "Most two-tier checkers kept (--feasibility_cache_size)"));
   Add(&out.back(), static_cast<double>(checkers_->capacity()));
+  // Reported with the cache off too (zeros), so that dashboards need no
+  // special case.
+  const GoalTreeCache::Stats trees =
+      goal_trees_ != nullptr ? goal_trees_->stats() : GoalTreeCache::Stats{};
+  out.push_back(Counter("riskplan_goal_tree_cache_hits_total",
+                        "PlanFleet shared groups that began from a cached goal tree",
+                        static_cast<double>(trees.hits)));
+  out.push_back(Counter("riskplan_goal_tree_cache_misses_total",
+                        "PlanFleet shared groups that found no cached goal tree",
+                        static_cast<double>(trees.misses)));
+  out.push_back(Counter("riskplan_goal_tree_cache_evictions_total",
+                        "Goal trees evicted to stay within --goal_tree_cache_mb",
+                        static_cast<double>(trees.evictions)));
+  out.push_back(Gauge("riskplan_goal_tree_cache_bytes", "Goal trees cached, estimated bytes"));
+  Add(&out.back(), static_cast<double>(trees.bytes));
+  out.push_back(Gauge("riskplan_goal_tree_cache_entries", "Goal trees cached"));
+  Add(&out.back(), static_cast<double>(trees.entries));
+  out.push_back(Gauge("riskplan_goal_tree_cache_limit_bytes",
+                      "Most bytes of goal trees kept (--goal_tree_cache_mb; 0: off)"));
+  Add(&out.back(), static_cast<double>(goal_trees_ != nullptr ? goal_trees_->max_bytes() : 0));
   return out;
 }
 

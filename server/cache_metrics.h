@@ -8,6 +8,13 @@
 //   riskplan_feasibility_cache_bytes         gauge  two-tier checkers' layers
 //   riskplan_feasibility_cache_checkers      gauge  checkers cached
 //   riskplan_feasibility_cache_limit_checkers gauge their bound (--feasibility_cache_size)
+//   riskplan_goal_tree_cache_hits_total      counter PlanFleet shared groups that began from a
+//                                                   cached goal tree
+//   riskplan_goal_tree_cache_misses_total    counter ... that grew theirs from the goal (cache on)
+//   riskplan_goal_tree_cache_evictions_total counter trees evicted to stay within the bound
+//   riskplan_goal_tree_cache_bytes           gauge  trees cached (GoalTreeCache::TreeBytes)
+//   riskplan_goal_tree_cache_entries         gauge  trees cached
+//   riskplan_goal_tree_cache_limit_bytes     gauge  their bound (--goal_tree_cache_mb; 0: off)
 //
 // The accelerator's caches are in accel/engine_metrics.h (riskplan_accel_cache_bytes).
 #ifndef RISKPLAN_SERVER_CACHE_METRICS_H_
@@ -19,22 +26,29 @@
 #include "prometheus/collectable.h"
 #include "prometheus/metric_family.h"
 #include "server/feasibility_cache.h"
+#include "server/goal_tree_cache.h"
 #include "server/model_cache.h"
 
 namespace riskplan::server {
 
 class CacheMetrics final : public prometheus::Collectable {
  public:
-  // `models` must outlive every scrape; the checkers are kept alive.
+  // `models` and `goal_trees` (null: the cache is off, its metrics read 0)
+  // must outlive every scrape; the checkers are kept alive.
   CacheMetrics(const RiskModelCache* models, size_t model_limit,
-               std::shared_ptr<const FeasibilityCache> checkers)
-      : models_(models), model_limit_(model_limit), checkers_(std::move(checkers)) {}
+               std::shared_ptr<const FeasibilityCache> checkers,
+               const GoalTreeCache* goal_trees = nullptr)
+      : models_(models),
+        model_limit_(model_limit),
+        checkers_(std::move(checkers)),
+        goal_trees_(goal_trees) {}
   std::vector<prometheus::MetricFamily> Collect() const override;
 
  private:
   const RiskModelCache* models_;
   size_t model_limit_;
   std::shared_ptr<const FeasibilityCache> checkers_;
+  const GoalTreeCache* goal_trees_;
 };
 
 }  // namespace riskplan::server

@@ -117,6 +117,20 @@ void FleetGroup::PlanShared() {
     problem.missions.push_back({.start = spec.start, .budget = spec.options.budget});
     options.record_tree = options.record_tree || spec.options.record_tree;
   }
+  // With the cache, the group begins from the tree an earlier group grew
+  // for the same key (the planner copies it: a tree is shared read-only).
+  GoalTreeKey key;
+  std::optional<GoalTree> grown;
+  if (goal_trees_ != nullptr) {
+    key = GoalTreeKey{.map_name = first.map->name(),
+                      .map_identity = reinterpret_cast<uintptr_t>(first.map.get()),
+                      .goal = first.goal,
+                      .model_params = first.params,
+                      .planner_params = first.options.params,
+                      .seed = first.options.seed};
+    options.initial_tree = goal_trees_->Find(key);
+    grown.emplace();
+  }
   // The evaluator serves the missions that still run when the first ones
   // end: it stops on the call's cancel only (SharedGoalTreePlanner's rule).
   std::unique_ptr<RiskEvaluator> evaluator = NewEvaluator(0.0);
@@ -138,7 +152,15 @@ void FleetGroup::PlanShared() {
         const std::string prefix = absl::StrFormat("missions[%d]: ", k);
         if (absl::StartsWith(message, prefix)) message.erase(0, prefix.size());
         Offer(m, MissionError(m, absl::Status(result.status().code(), message)));
-      });
+      },
+      grown.has_value() ? &*grown : nullptr);
+  // The tree goes back when it grew (a plan cut short by a cancel or a
+  // deadline still leaves a valid tree: every node's edge risk is exact).
+  if (results.ok() && grown.has_value() && !grown->nodes.empty() &&
+      (options.initial_tree == nullptr ||
+       grown->nodes.size() > options.initial_tree->nodes.size())) {
+    goal_trees_->Put(key, std::make_shared<const GoalTree>(*std::move(grown)));
+  }
   if (!results.ok()) {
     // What the missions share failed (the goal, a planner parameter): each
     // mission gets the error.

@@ -14,6 +14,7 @@
 #include "accel/risk_engine.h"
 #include "server/fleet_call.h"
 #include "server/fleet_request.h"
+#include "server/goal_tree_cache.h"
 #include "server/model_cache.h"
 #include "server/plan_call.h"
 
@@ -21,15 +22,18 @@ namespace riskplan::server {
 
 class FleetGroup final : public ActivePlan {
  public:
-  // `models` and `engine` (may be null) outlive the group.
+  // `models`, `engine` (may be null) and `goal_trees` (may be null: no
+  // cache, each shared group grows its tree from the goal) outlive the group.
   FleetGroup(uint64_t id, std::shared_ptr<FleetCall> call, std::shared_ptr<const FleetSpec> spec,
-             MissionGroup group, RiskModelCache* models, accel::RiskEngine* engine)
+             MissionGroup group, RiskModelCache* models, accel::RiskEngine* engine,
+             GoalTreeCache* goal_trees = nullptr)
       : id_(id),
         call_(std::move(call)),
         spec_(std::move(spec)),
         group_(std::move(group)),
         models_(models),
-        engine_(engine) {}
+        engine_(engine),
+        goal_trees_(goal_trees) {}
 
   // Plans every mission and offers its result; a call already cancelled
   // plans nothing. Never throws: an exception (std::bad_alloc) becomes the
@@ -58,6 +62,7 @@ class FleetGroup final : public ActivePlan {
   const MissionGroup group_;
   RiskModelCache* const models_;
   accel::RiskEngine* const engine_;
+  GoalTreeCache* const goal_trees_;
   std::vector<bool> reported_;  // by position in group_.missions; Run's thread only
 };
 

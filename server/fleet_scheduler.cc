@@ -33,7 +33,8 @@ void FleetScheduler::Enqueue(const std::shared_ptr<FleetCall>& call,
     absl::MutexLock lock(&mu_);
     for (const MissionGroup& group : groups) {
       const uint64_t id = next_id_++;
-      auto g = std::make_shared<FleetGroup>(id, call, spec, group, env_.models, env_.engine);
+      auto g = std::make_shared<FleetGroup>(id, call, spec, group, env_.models, env_.engine,
+                                            env_.goal_trees);
       if (stopping_) {
         // The drain began after the call was let in: nothing more plans.
         queue_.Unadmit(static_cast<int64_t>(group.missions.size()));

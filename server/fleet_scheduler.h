@@ -33,6 +33,7 @@
 #include "server/fleet_call.h"
 #include "server/fleet_queue.h"
 #include "server/fleet_request.h"
+#include "server/goal_tree_cache.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
 #include "server/plan_call.h"
@@ -47,6 +48,7 @@ struct FleetEnv {
   ActivePlans* active = nullptr;
   ThreadPool* pool = nullptr;
   accel::RiskEngine* engine = nullptr;  // null: each planner's own evaluator
+  GoalTreeCache* goal_trees = nullptr;  // null: shared trees are built per request
 };
 
 class FleetGroup;

@@ -245,12 +245,16 @@ PlannerService::PlannerService(const MapRegistry& maps, RiskModelCache& models,
       authorizer_(options.authorizer != nullptr ? options.authorizer
                                                 : std::make_shared<Authorizer>(nullptr)),
       checkers_(std::make_shared<FeasibilityCache>(options.max_cached_checkers)),
+      goal_trees_(options.goal_tree_cache_bytes > 0
+                      ? std::make_unique<GoalTreeCache>(options.goal_tree_cache_bytes)
+                      : nullptr),
       active_(options.max_running_plans),
       fleet_(FleetEnv{.models = &models_,
                       .metrics = &metrics_,
                       .active = &active_,
                       .pool = &plan_pool_,
-                      .engine = options.engine},
+                      .engine = options.engine,
+                      .goal_trees = goal_trees_.get()},
              options.fleet_plan_slots, options.max_admitted_missions),
       eval_pool_(options.eval_threads, options.max_queued_evals),
       plan_pool_(options.plan_threads) {

@@ -22,6 +22,7 @@
 #include "server/auth.h"
 #include "server/feasibility_cache.h"
 #include "server/fleet_scheduler.h"
+#include "server/goal_tree_cache.h"
 #include "server/map_registry.h"
 #include "server/metrics.h"
 #include "server/model_cache.h"
@@ -45,6 +46,10 @@ struct ServiceOptions {
   int eval_threads = 2;            // EvaluateRisk and GetMapLayer workers
   size_t max_queued_evals = 1024;  // waiting evaluations; more: RESOURCE_EXHAUSTED
   size_t max_cached_checkers = 8;  // two-tier feasibility checkers kept (EvaluateRisk.two_tier)
+  // PlanFleet's goal trees kept across requests (server/goal_tree_cache.h),
+  // bytes by GoalTreeCache::TreeBytes; 0: none, each shared group grows its
+  // tree from the goal.
+  size_t goal_tree_cache_bytes = 0;
   // Computes every risk batch of plans and evaluations (CPU workers, FPGA
   // boards); null: each call computes its own on its thread. Not owned; must
   // outlive the service.
@@ -121,6 +126,8 @@ class PlannerService final : public RawPlannerService {
   const OpenCalls& open_calls() const { return open_calls_; }
   // The two-tier checkers of EvaluateRisk (for the cache metrics).
   std::shared_ptr<const FeasibilityCache> checkers() const { return checkers_; }
+  // PlanFleet's goal trees (for the cache metrics); null when the cache is off.
+  const GoalTreeCache* goal_trees() const { return goal_trees_.get(); }
 
  private:
   const MapRegistry& maps_;
@@ -129,6 +136,8 @@ class PlannerService final : public RawPlannerService {
   const ServiceOptions options_;
   const std::shared_ptr<Authorizer> authorizer_;  // never null
   const std::shared_ptr<FeasibilityCache> checkers_;
+  // Before fleet_, which plans with it.
+  const std::unique_ptr<GoalTreeCache> goal_trees_;
   v1::ListMapsResponse map_list_;  // built once
   std::atomic<bool> draining_{false};
   CancellationToken stop_evaluations_;  // cancelled by StopEvaluations

@@ -62,6 +62,10 @@ ABSL_FLAG(int, max_fleet_missions, 256,
 ABSL_FLAG(int64_t, max_admitted_missions, 1024,
           "PlanFleet: missions admitted at once over every fleet, waiting or planning; a fleet "
           "whose missions do not fit gets RESOURCE_EXHAUSTED at once");
+ABSL_FLAG(int64_t, goal_tree_cache_mb, 0,
+          "PlanFleet: MB of RISK_RRT_STAR goal trees kept across requests, keyed by map, goal, "
+          "model and planner parameters and seed, least recently used out (0: off, each "
+          "request grows its trees from the goal; at most 65536)");
 ABSL_FLAG(int, eval_threads, 0,
           "EvaluateRisk, GetMapLayer and GetRiskLayer workers (0: one per CPU core)");
 ABSL_FLAG(int, max_queued_evals, 1024,
@@ -173,6 +177,9 @@ ABSL_FLAG(int, kernel_weights_cache_mb, 128,
 namespace riskplan::server {
 namespace {
 
+// The goal tree cache's largest size: 64 GiB, beyond any replica's memory.
+constexpr int64_t kMaxGoalTreeCacheMb = 65536;
+
 constexpr char kUsage[] =
     "risk-aware UAV trajectory planning over gRPC (riskplan.v1.Planner).\n"
     "\n"
@@ -279,6 +286,12 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
         "need 1 <= --fleet_plan_slots <= --max_running_plans (0: automatic) and 1 <= "
         "--max_fleet_missions <= --max_admitted_missions");
   }
+  const int64_t goal_tree_cache_mb = absl::GetFlag(FLAGS_goal_tree_cache_mb);
+  if (goal_tree_cache_mb < 0 || goal_tree_cache_mb > kMaxGoalTreeCacheMb) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("need 0 <= --goal_tree_cache_mb <= %d", kMaxGoalTreeCacheMb));
+  }
+  config.options.goal_tree_cache_bytes = static_cast<size_t>(goal_tree_cache_mb) << 20;
   if (options.limits.max_plan_time_ms < 1 || options.limits.default_plan_time_ms < 1 ||
       options.limits.default_plan_time_ms > options.limits.max_plan_time_ms) {
     return absl::InvalidArgumentError("need 1 <= --default_plan_time_ms <= --max_plan_time_ms");
@@ -634,7 +647,7 @@ int Main() {
   PlannerService service(*maps->registry, *maps->models, metrics, config->options);
   metrics.AddCollectable(std::make_shared<CacheMetrics>(
       maps->models.get(), static_cast<size_t>(absl::GetFlag(FLAGS_model_cache_size)),
-      service.checkers()));
+      service.checkers(), service.goal_trees()));
   absl::StatusOr<Serving> serving = BuildAndStart(*config, service, metrics, *security);
   if (!serving.ok()) return Fail(1, serving.status().message());
   AnnounceServing(*serving, config->options);

@@ -11,7 +11,7 @@ namespace riskplan::rrt_star {
 
 Run::Run(const RiskModel& model, const Pose& goal, std::vector<RunMission> missions, uint64_t seed,
          bool record_tree, const Params& params, RiskEvaluator* evaluator,
-         const CancellationToken& cancel, RunCallbacks callbacks)
+         const CancellationToken& cancel, RunCallbacks callbacks, const GoalTree* initial_tree)
     : model_(model),
       goal_(goal),
       record_tree_(record_tree),
@@ -20,6 +20,7 @@ Run::Run(const RiskModel& model, const Pose& goal, std::vector<RunMission> missi
       cancel_(cancel),
       callbacks_(std::move(callbacks)),
       begin_(std::chrono::steady_clock::now()),
+      initial_tree_(initial_tree),
       rng_(seed),
       refine_rng_(seed ^ 0x5265666e65526e67ULL),
       refiner_(model_, evaluator, params.refine_scale_m, params.MidpointsPerBatch()),
@@ -129,6 +130,7 @@ void Run::Finish(size_t m, StopReason reason) {
 }
 
 void Run::FailRunning(const absl::Status& status) {
+  failed_ = true;
   for (size_t m = 0; m < missions_.size(); ++m) {
     if (!Running(m)) continue;
     missions_[m].state = MissionState::kDone;

@@ -208,13 +208,63 @@ absl::Status Run::Iterate() {
   return Refine();
 }
 
-void Run::Execute() {
+void Run::Seed() {
   nodes_.push_back(Node{goal_, -1, 0.0, 0.0, {}});
   grid_.Insert(kGoal, goal_.x, goal_.y);
   for (size_t m = 0; m < missions_.size(); ++m) {
     const Pose& start = missions_[m].spec.start;
     nodes_.push_back(Node{start, -1, kInf, kInf, {}});
     grid_.Insert(StartNode(m), start.x, start.y);
+  }
+  if (initial_tree_ == nullptr) return;
+  // The tree's node i > 0 becomes node i + M, after the starts: the layout
+  // (goal, starts, grown nodes) stays that of a run from the goal. Costs and
+  // edge risks are copied as they are: each edge risk is the exact piece
+  // risk under the same model, so reported risks stay exact sums.
+  const std::vector<GoalTreeNode>& tree = initial_tree_->nodes;
+  const int32_t shift = static_cast<int32_t>(missions_.size());
+  const auto renumber = [shift](int32_t n) { return n == kGoal ? kGoal : n + shift; };
+  nodes_.reserve(nodes_.size() + tree.size() - 1);
+  for (size_t i = 1; i < tree.size(); ++i) {
+    const GoalTreeNode& t = tree[i];
+    nodes_.push_back(Node{t.pose, renumber(t.parent), t.cost, t.edge_risk, {}});
+  }
+  for (size_t n = kFirstStart + missions_.size(); n < nodes_.size(); ++n) {
+    nodes_[nodes_[n].parent].children.push_back(static_cast<int32_t>(n));
+    grid_.Insert(static_cast<int32_t>(n), nodes_[n].pose.x, nodes_[n].pose.y);
+  }
+  initial_tree_ = nullptr;
+}
+
+bool Run::ExportTree(GoalTree* out) const {
+  out->nodes.clear();
+  if (failed_) return false;
+  // Starts are never parents, so dropping them leaves every other parent in
+  // the tree: node n > M becomes n - M.
+  const int32_t shift = static_cast<int32_t>(missions_.size());
+  out->nodes.reserve(nodes_.size() - missions_.size());
+  for (size_t n = 0; n < nodes_.size(); ++n) {
+    if (IsStart(static_cast<int32_t>(n))) continue;
+    const Node& node = nodes_[n];
+    const int32_t parent = node.parent <= kGoal ? node.parent : node.parent - shift;
+    out->nodes.push_back(GoalTreeNode{node.pose, parent, node.cost, node.edge_risk});
+  }
+  return true;
+}
+
+void Run::Execute() {
+  const bool from_tree = initial_tree_ != nullptr;
+  Seed();
+  if (from_tree) {
+    // Each start first takes what the tree already offers: a tree at
+    // max_nodes still answers, and the guide routes build on a solution.
+    for (size_t m = 0; m < missions_.size(); ++m) {
+      if (absl::Status s = ConnectStart(m); !s.ok()) {
+        if (!IsRunStopped(s)) return FailRunning(s);
+        break;
+      }
+    }
+    MaybeReport();
   }
   // A step stopped by the StopCondition inside its loops (RunStopped) is
   // dropped, as an iteration the budget would not have begun; UpdateMissions

@@ -30,6 +30,7 @@
 #include "core/planners/planner.h"
 #include "core/planners/planner_support.h"
 #include "core/planners/risk_guide.h"
+#include "core/planners/shared_goal_tree.h"
 #include "core/planners/spatial_grid.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
@@ -130,13 +131,23 @@ class Run {
   // REQUIRES: at least one mission; every start and the goal admissible,
   // every budget valid (the callers check them first). `model`, `evaluator` and `cancel`
   // must outlive the Run.
+  // With `initial_tree` (checked by the caller: its goal is `goal`, its
+  // parents in range), the tree begins as a copy of it, its nodes after the
+  // starts, and each start is connected to it before the guide routes;
+  // `initial_tree` need only live until Execute() begins.
   Run(const RiskModel& model, const Pose& goal, std::vector<RunMission> missions, uint64_t seed,
       bool record_tree, const Params& params, RiskEvaluator* evaluator,
-      const CancellationToken& cancel, RunCallbacks callbacks);
+      const CancellationToken& cancel, RunCallbacks callbacks,
+      const GoalTree* initial_tree = nullptr);
 
   // Plans until every mission has ended; each gets exactly one on_result:
   // its PlanResult, or the evaluator's error.
   void Execute();
+
+  // After Execute(): the tree without its starts, into out->nodes (the
+  // other fields are the caller's). False, leaving them empty, when an
+  // evaluator's error ended the run (a step may have been cut short).
+  bool ExportTree(GoalTree* out) const;
 
  private:
   enum class MissionState { kRunning, kDone };
@@ -169,6 +180,8 @@ class Run {
   void Finish(size_t m, StopReason reason);
   void FailRunning(const absl::Status& status);
   void ResetStop();
+  // The goal, the starts and initial_tree_'s nodes, into nodes_ and grid_.
+  void Seed();
   // Which missions a round-robin pick may choose.
   enum class Pick { kRunning, kWithBest, kWithCost };
   // The next running mission at or after *cursor that `pick` allows (kWithBest:
@@ -234,6 +247,8 @@ class Run {
   const CancellationToken& cancel_;
   const RunCallbacks callbacks_;
   const std::chrono::steady_clock::time_point begin_;  // every time budget counts from here
+  const GoalTree* initial_tree_;                       // null after Seed()
+  bool failed_ = false;                                // FailRunning was called
   std::vector<MissionRun> missions_;
   size_t running_ = 0;
   StopCondition stop_;  // the token and the earliest deadline of a running mission

@@ -51,6 +51,42 @@ namespace riskplan {
 // bounds the work is every mission's budget and max_nodes.
 inline constexpr size_t kMaxSharedTreeMissions = 256;
 
+// A goal tree as SharedGoalTreePlanner grew it, without its starts: derived
+// data that a later plan with the same goal, model (map + model parameters),
+// planner parameters and seed may begin from instead of the goal alone.
+// Every node keeps its parent, R(node) and the exact piece risk of the edge
+// to its parent, so a trajectory through it still reports the exact sum of
+// its piece risks. The starts were leaves (never parents): they are dropped
+// and the other nodes renumbered in their order, node 0 the goal.
+//
+// The model is not recorded: a tree is only valid for the model it was grown
+// with, and the caller must key it by that model (server/goal_tree_cache.h
+// keys by the map's name and identity and every model parameter).
+struct GoalTreeNode {
+  Pose pose;
+  int32_t parent = -1;     // -1 for the goal only
+  double cost = 0.0;       // R(node): risk from here to the goal along the tree
+  double edge_risk = 0.0;  // piece risk of the edge to the parent (0 for the goal)
+};
+
+struct GoalTree {
+  Pose goal;                             // == nodes[0].pose
+  std::map<std::string, double> params;  // RISK_RRT_STAR's parameters, as given
+  uint64_t seed = 1;                     // the seed of the plans that grew it
+  // How many plans grew it. A plan that begins from a tree of generation g
+  // draws its random numbers from PlanSeed(seed, g), and exports generation
+  // g + 1: the same tree and seed give the same plan, and two generations do
+  // not replay one random stream over an already grown tree.
+  int64_t generation = 0;
+  std::vector<GoalTreeNode> nodes;
+
+  // seed for generation 0 (a plan from the goal alone: bit for bit the plan
+  // without a tree), else seed + g times the 64-bit golden ratio, wrapping.
+  static uint64_t PlanSeed(uint64_t seed, int64_t generation) {
+    return seed + static_cast<uint64_t>(generation) * 0x9E3779B97F4A7C15ULL;
+  }
+};
+
 struct SharedTreeMission {
   Pose start;
   // This mission's own budget: iterations of the shared tree and/or wall
@@ -77,6 +113,15 @@ struct SharedTreeOptions {
   // The edge-sample bound of PlanOptions::max_edge_samples, checked for
   // every start (CheckEdgeSamples).
   int64_t max_edge_samples = kDefaultMaxEdgeSamples;
+  // Begin from this tree instead of the goal alone (null: from the goal).
+  // The planner copies it and never changes it, so it may be shared with
+  // other plans. It must have been grown for the same model; its goal,
+  // params and seed must equal the problem's and these options' bit for bit
+  // and it must hold at most max_nodes nodes (else Plan fails with
+  // InvalidArgument naming "initial_tree"). Each start is first connected to
+  // the tree as it stands; then the plan runs as from the goal (guide
+  // routes, bound, budgets), with the seed GoalTree::PlanSeed gives.
+  std::shared_ptr<const GoalTree> initial_tree;
 };
 
 // An improvement of mission `mission` (its index in the problem), in order of
@@ -119,10 +164,17 @@ class SharedGoalTreePlanner {
   // when the mission ended; its elapsed_s counts from the start of Plan().
   // Both callbacks may be null; they run on the caller's thread, must not
   // block for long, and must not call Plan() again on this planner.
+  //
+  // With `grown_tree` not null, the tree as it stands at the end (without
+  // its starts) is written there, its generation one more than
+  // initial_tree's (1 without); it is left with no nodes when no mission was
+  // planned, an evaluator's error ended the plan, or the tree has more than
+  // max_nodes nodes (a guide route can pass the bound), so that every tree
+  // exported is one a plan with the same options accepts.
   absl::StatusOr<std::vector<absl::StatusOr<PlanResult>>> Plan(
       const SharedTreeProblem& problem, const SharedTreeOptions& options,
       const CancellationToken& cancel, const MissionImprovementCallback& on_improvement,
-      const MissionResultCallback& on_result);
+      const MissionResultCallback& on_result, GoalTree* grown_tree = nullptr);
 
  private:
   RiskEvaluator* evaluator_;

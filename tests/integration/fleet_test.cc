@@ -393,5 +393,104 @@ TEST(FleetShutdownTest, AMissionTheDrainLeftUnplannedKeepsThatFinalWhenNoReplica
   EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0);
 }
 
+// The goal tree cache (--goal_tree_cache_mb): a fleet to a goal a fleet
+// already planned begins from the grown tree.
+class FleetGoalTreeCacheTest : public SharedServerTest<FleetGoalTreeCacheTest> {
+ public:
+  static std::vector<std::string> ServerFlags() {
+    return {"--plan_threads=2", "--max_fleet_missions=8", "--goal_tree_cache_mb=64",
+            "--metrics_listen=127.0.0.1:0"};
+  }
+
+ protected:
+  double Metric(const std::string& series) {
+    absl::StatusOr<std::string> text = HttpGet(MetricsAddress(server_->Stderr()), "/metrics");
+    if (!text.ok()) return -1;
+    return MetricValue(*text, series).value_or(-1);
+  }
+
+  // Every trajectory the fleet reported has exactly EvaluateRisk's risk.
+  void ExpectEvaluateRisksBitForBit(const FleetOutcome& out) {
+    int checked = 0;
+    for (const v1::FleetUpdate& u : out.updates) {
+      if (!u.update().has_trajectory()) continue;
+      v1::EvaluateRiskRequest eval;
+      eval.set_map("demo-city");
+      *eval.mutable_waypoints()->mutable_poses() = u.update().trajectory().waypoints();
+      v1::EvaluateRiskResponse response;
+      ASSERT_TRUE(client_->EvaluateRisk(eval, &response).ok());
+      EXPECT_EQ(response.risk(), u.update().trajectory().risk()) << u.mission_id();
+      EXPECT_EQ(response.length_m(), u.update().trajectory().length_m()) << u.mission_id();
+      ++checked;
+    }
+    EXPECT_GE(checked, 4);
+  }
+};
+
+TEST_F(FleetGoalTreeCacheTest, TheSameFleetTwiceHitsAndEveryRiskIsEvaluateRisks) {
+  v1::FleetRequest request = MixedFleet();
+  request.set_send_improvements(true);
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_limit_bytes"), 64.0 * 1024 * 1024);
+  const double hits = Metric("riskplan_goal_tree_cache_hits_total");
+  const double misses = Metric("riskplan_goal_tree_cache_misses_total");
+  ASSERT_GE(hits, 0);
+  ASSERT_GE(misses, 0);
+
+  FleetOutcome first = RunFleet(*client_, request);
+  ASSERT_TRUE(first.status.ok()) << first.status.error_message();
+  // The three tree missions are one shared group: one look-up, a miss; the
+  // RRT mission plans alone and never looks.
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_misses_total"), misses + 1);
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_hits_total"), hits);
+  EXPECT_GE(Metric("riskplan_goal_tree_cache_entries"), 1);
+  EXPECT_GT(Metric("riskplan_goal_tree_cache_bytes"), 0);
+  ExpectEvaluateRisksBitForBit(first);
+
+  FleetOutcome second = RunFleet(*client_, request);
+  ASSERT_TRUE(second.status.ok()) << second.status.error_message();
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_hits_total"), hits + 1);
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_misses_total"), misses + 1);
+  ExpectEvaluateRisksBitForBit(second);
+  ASSERT_EQ(second.finals.size(), 4u);
+  for (int i = 0; i < 3; ++i) {
+    const v1::FleetUpdate& u = second.finals.at(absl::StrFormat("tree-%d", i));
+    EXPECT_EQ(u.error_code(), 0) << u.error_message();
+    EXPECT_TRUE(u.update().has_trajectory());
+  }
+}
+
+// Without the flag no tree outlives its request: two identical fleets give
+// identical trajectories, and the cache's metrics stay at 0.
+TEST_F(FleetTest, WithoutTheGoalTreeCacheIdenticalFleetsGiveIdenticalTrajectories) {
+  FleetOutcome a = RunFleet(*client_, MixedFleet());
+  FleetOutcome b = RunFleet(*client_, MixedFleet());
+  ASSERT_TRUE(a.status.ok() && b.status.ok());
+  ASSERT_EQ(a.finals.size(), 4u);
+  for (const auto& [id, u] : a.finals) {
+    // Everything but found_at_s, the wall time that found it.
+    v1::Trajectory ta = u.update().trajectory();
+    v1::Trajectory tb = b.finals.at(id).update().trajectory();
+    ta.clear_found_at_s();
+    tb.clear_found_at_s();
+    EXPECT_EQ(ta.SerializeAsString(), tb.SerializeAsString()) << id;
+  }
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_hits_total"), 0);
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_misses_total"), 0);
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_entries"), 0);
+  EXPECT_EQ(Metric("riskplan_goal_tree_cache_limit_bytes"), 0);
+}
+
+TEST(FleetGoalTreeCacheFlagTest, AnOutOfRangeSizeIsRefusedAtStartUp) {
+  const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-server";
+  const CommandResult help = RunCommand(binary + " --help 2>&1");
+  EXPECT_THAT(help.output, HasSubstr("-goal_tree_cache_mb"));
+  for (const char* value : {"-1", "65537"}) {
+    const CommandResult r = RunCommand(
+        absl::StrFormat("%s --listen=127.0.0.1:0 --goal_tree_cache_mb=%s 2>&1", binary, value));
+    EXPECT_EQ(r.exit_code, 2) << value;
+    EXPECT_THAT(r.output, HasSubstr("need 0 <= --goal_tree_cache_mb <= 65536")) << value;
+  }
+}
+
 }  // namespace
 }  // namespace riskplan::testing

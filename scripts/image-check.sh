@@ -13,6 +13,7 @@ set -euo pipefail
 usage() {
   cat <<'EOF'
 Usage: bash scripts/image-check.sh [--workdir=DIR] [--reuse] [--keep] [--mirror=URL]
+       bash scripts/image-check.sh --print-dockerfile[=FILE]
 
 Builds the image described by ./Dockerfile without a container engine:
 
@@ -36,6 +37,10 @@ Run as root; installs debootstrap with apt-get when it is missing.
                  finished (default: start clean, deleting DIR's roots)
   --keep         keep the roots on disk at the end (default: delete them)
   --mirror=URL   Debian mirror for debootstrap (default http://deb.debian.org/debian)
+  --print-dockerfile[=FILE]
+                 print FILE's (default ./Dockerfile) instructions as this script
+                 reads them, one a line (continuations joined, comments dropped),
+                 and exit; needs neither root nor debootstrap
   -h, --help     this text
 EOF
 }
@@ -44,6 +49,7 @@ WORKDIR=/var/tmp/riskplan-image-check
 REUSE=0
 KEEP=0
 MIRROR=http://deb.debian.org/debian
+PRINT=""
 for arg in "$@"; do
   case "$arg" in
     -h | --help) usage; exit 0 ;;
@@ -51,11 +57,41 @@ for arg in "$@"; do
     --reuse) REUSE=1 ;;
     --keep) KEEP=1 ;;
     --mirror=*) MIRROR=${arg#--mirror=} ;;
+    --print-dockerfile) PRINT=Dockerfile ;;
+    --print-dockerfile=*) PRINT=${arg#--print-dockerfile=} ;;
     *) echo "image-check: unknown argument '$arg' (--help for usage)" >&2; exit 1 ;;
   esac
 done
 
 die() { echo "image-check: FAILED: $*" >&2; exit 1; }
+
+# ---------------------------------------------------------------- Dockerfile
+# The Dockerfile as one instruction per line: comments dropped, `\` line
+# continuations joined (as Docker does: the backslash and the line break
+# removed, the lines' text kept as it is), outer white space trimmed.
+parse_dockerfile() {
+  local line joined=""
+  while IFS= read -r line || [ -n "$line" ]; do
+    # Comment and empty lines are skipped, also inside a continued
+    # instruction (as Docker does).
+    [[ "$line" =~ ^[[:space:]]*(#|$) ]] && continue
+    if [[ "$line" =~ ^(.*)\\[[:space:]]*$ ]]; then
+      joined+="${BASH_REMATCH[1]}"
+      continue
+    fi
+    joined+="$line"
+    joined=$(sed -E 's/^[[:space:]]+//; s/[[:space:]]+$//' <<<"$joined")
+    printf '%s\n' "$joined"
+    joined=""
+  done <"$1"
+  [ -z "$joined" ] || printf '%s\n' "$joined"
+}
+
+if [ -n "$PRINT" ]; then
+  [ -f "$PRINT" ] || die "no such file: $PRINT"
+  parse_dockerfile "$PRINT"
+  exit 0
+fi
 
 [ "$(id -u)" -eq 0 ] || die "must run as root (debootstrap, mount and chroot need it)"
 case "$WORKDIR" in /*) ;; *) WORKDIR="$PWD/$WORKDIR" ;; esac
@@ -150,29 +186,6 @@ in_root() {
   chroot "$root" /usr/bin/env -i HOME=/root \
     PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
     /bin/sh -c "mkdir -p \"\$1\" && cd \"\$1\" && $cmd" sh "$dir"
-}
-
-# ---------------------------------------------------------------- Dockerfile
-# The Dockerfile as one instruction per line: comments dropped, `\` line
-# continuations joined (as Docker does, each into one space-separated line).
-parse_dockerfile() {
-  local line joined=""
-  while IFS= read -r line || [ -n "$line" ]; do
-    if [ -z "$joined" ]; then
-      [[ "$line" =~ ^[[:space:]]*(#|$) ]] && continue
-    else
-      [[ "$line" =~ ^[[:space:]]*# ]] && continue
-    fi
-    if [[ "$line" =~ ^(.*)\\[[:space:]]*$ ]]; then
-      joined+="${BASH_REMATCH[1]}"
-      continue
-    fi
-    joined+="$line"
-    joined=$(sed -E 's/^[[:space:]]+//; s/[[:space:]]+$//' <<<"$joined")
-    printf '%s\n' "$joined"
-    joined=""
-  done <"$1"
-  [ -z "$joined" ] || printf '%s\n' "$joined"
 }
 
 # The build context: the checkout's tracked files (with their working-tree

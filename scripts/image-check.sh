@@ -125,8 +125,8 @@ phase_end() {
 summary() {
   local i
   echo "image-check: phase times (s)"
-  for i in "${!PHASES[@]}"; do printf '  %-44s %6d\n' "${PHASES[$i]}" "${TIMES[$i]}"; done
-  printf '  %-44s %6d\n' "total" "$(($(date +%s) - T_START))"
+  for i in "${!PHASES[@]}"; do printf '  %-60s %6d\n' "${PHASES[$i]}" "${TIMES[$i]}"; done
+  printf '  %-60s %6d\n' "total" "$(($(date +%s) - T_START))"
 }
 
 # ---------------------------------------------------------------- cleanup
@@ -155,7 +155,7 @@ cleanup() {
   fi
   if [ "${#PHASES[@]}" -gt 0 ]; then summary >&2; fi
   if [ "$rc" -ne 0 ]; then
-    echo "image-check: FAILED (exit $rc) in phase: ${PHASE_NAME:-setup}; log above" >&2
+    echo "image-check: FAILED (exit $rc) in phase: ${PHASE_NAME:-setup}" >&2
   fi
   exit "$rc"
 }
@@ -272,6 +272,7 @@ mapfile -t INSTR < <(parse_dockerfile "$DOCKERFILE")
 declare -A STAGE_ROOT=()   # stage name or index -> root
 STAGE=-1
 ROOT=""
+SLABEL=""
 WD=/
 USER_NAME=root
 ENTRYPOINT_JSON=""
@@ -285,6 +286,7 @@ for ins in "${INSTR[@]}"; do
   keyword=${ins%%[[:space:]]*}
   rest=${ins#"$keyword"}
   rest=$(sed -E 's/^[[:space:]]+//' <<<"$rest")
+  [ -n "$ROOT" ] || [ "${keyword^^}" = FROM ] || die "$keyword before the first FROM"
   case "${keyword^^}" in
     FROM)
       finish_stage
@@ -295,7 +297,8 @@ for ins in "${INSTR[@]}"; do
         *) die "FROM $image: only Debian 12 images can be made with debootstrap" ;;
       esac
       ROOT="$WORKDIR/root-$STAGE"
-      phase_start "stage $STAGE ($image${name:+ AS $name}): root"
+      SLABEL="stage $STAGE ${name:-$image}"
+      phase_start "$SLABEL: root (a copy of the bootstrap)"
       rm -rf --one-file-system "$ROOT"
       cp -a "$BASE" "$ROOT"
       rm -f "$ROOT/.image-check-bootstrap-done"
@@ -331,10 +334,10 @@ for ins in "${INSTR[@]}"; do
     RUN)
       [[ "$rest" == \[* ]] && die "RUN in exec form is not supported: $ins"
       RUN_INDEX=$((RUN_INDEX + 1))
-      label="stage $STAGE RUN $RUN_INDEX: $(cut -c1-40 <<<"$rest")"
+      label="$SLABEL: RUN $(cut -c1-36 <<<"$rest")..."
       phase_start "$label"
       echo "+ $rest" >&2
-      in_root "$ROOT" "$WD" "$rest" || die "$label... exited $?"
+      in_root "$ROOT" "$WD" "$rest" || die "$label exited $?"
       phase_end
       ;;
     USER) USER_NAME=$rest ;;
@@ -362,11 +365,15 @@ pw=$(grep "^$USER_NAME:" "$RT/etc/passwd") || die "USER $USER_NAME does not exis
 uid=$(cut -d: -f3 <<<"$pw"); gid=$(cut -d: -f4 <<<"$pw")
 [ "$uid" -ne 0 ] || die "USER $USER_NAME is root"
 
-# Every shared library resolves in the runtime root.
+# Every shared library of every program resolves in the runtime root (all
+# the missing ones are listed before failing).
+lacking=""
 for b in "$RT"/usr/local/bin/*; do
-  missing=$(chroot "$RT" /usr/bin/ldd "/usr/local/bin/${b##*/}" 2>&1 | grep 'not found' || true)
-  [ -z "$missing" ] || die "${b##*/} lacks shared libraries in the runtime root: $missing"
+  missing=$(chroot "$RT" /usr/bin/ldd "/usr/local/bin/${b##*/}" 2>&1 | grep 'not found' |
+    awk '{print $1}' | tr '\n' ' ' || true)
+  [ -z "$missing" ] || lacking+=$'\n'"  ${b##*/}: $missing"
 done
+[ -z "$lacking" ] || die "programs lack shared libraries in the runtime root (add their packages to the runtime stage's apt-get install):$lacking"
 
 as_user() {
   chroot --userspec="$uid:$gid" "$RT" /usr/bin/env -i HOME=/ \

@@ -375,14 +375,15 @@ for b in "$RT"/usr/local/bin/*; do
 done
 [ -z "$lacking" ] || die "programs lack shared libraries in the runtime root (add their packages to the runtime stage's apt-get install):$lacking"
 
-as_user() {
-  chroot --userspec="$uid:$gid" "$RT" /usr/bin/env -i HOME=/ \
-    PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin "$@"
-}
+# The command line that runs a program in the runtime root as the stage's
+# USER, with a clean environment (chroot and env exec: the pid of a program
+# started in the background through it is the program's own).
+AS_USER=(chroot --userspec="$uid:$gid" "$RT" /usr/bin/env -i HOME=/
+  PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin)
 SERVER_OUT="$WORKDIR/server.out"
 SERVER_ERR="$WORKDIR/server.err"
 echo "+ ${ENTRY[*]} --listen=127.0.0.1:0" >&2
-as_user "${ENTRY[@]}" --listen=127.0.0.1:0 >"$SERVER_OUT" 2>"$SERVER_ERR" &
+"${AS_USER[@]}" "${ENTRY[@]}" --listen=127.0.0.1:0 >"$SERVER_OUT" 2>"$SERVER_ERR" &
 SERVER_PID=$!
 ADDRESS=""
 for _ in $(seq 1 600); do
@@ -393,10 +394,10 @@ for _ in $(seq 1 600); do
 done
 [ -n "$ADDRESS" ] || { cat "$SERVER_ERR" >&2; die "riskplan-server did not say it listens within 60 s"; }
 echo "image-check: riskplan-server (uid $uid) listening on $ADDRESS" >&2
-as_user "$CLIENT_BIN" --server="$ADDRESS" maps || die "riskplan maps failed"
+"${AS_USER[@]}" "$CLIENT_BIN" --server="$ADDRESS" maps || die "riskplan maps failed"
 PLAN_OUT="$WORKDIR/plan.out"
 set +e
-as_user "$CLIENT_BIN" --server="$ADDRESS" plan --map=demo-city --start=1200,1500,250,0.785 \
+"${AS_USER[@]}" "$CLIENT_BIN" --server="$ADDRESS" plan --map=demo-city --start=1200,1500,250,0.785 \
   --goal=6800,6500,250,0.785 --budget_ms=10000 | tee "$PLAN_OUT"
 plan_rc=${PIPESTATUS[0]}
 set -e

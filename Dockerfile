@@ -15,11 +15,14 @@ RUN cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 
 FROM debian:12-slim
 # The shared libraries the binaries link against (gRPC, Protobuf, abseil,
-# prometheus-cpp, OpenSSL, libpng, GDAL, PROJ), resolved from the build stage's binaries.
+# prometheus-cpp, OpenSSL, libpng, GDAL, PROJ, and cpp-httplib for riskplan-web),
+# resolved from the build stage's binaries; scripts/image-check.sh checks that
+# every one resolves here (docs/deploy.md).
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       libgrpc++1.51 libprotobuf32 libabsl20220623 libssl3 libpng16-16 \
-      libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 libgdal32 libproj25 ca-certificates \
+      libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 libgdal32 libproj25 \
+      libcpp-httplib0.11 ca-certificates \
  && rm -rf /var/lib/apt/lists/* \
  && useradd --system --uid 10001 riskplan
 COPY --from=build /src/build/bin/ /usr/local/bin/

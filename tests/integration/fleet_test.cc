@@ -66,6 +66,31 @@ FleetOutcome RunFleet(client::RiskplanClient& client, const v1::FleetRequest& re
   return out;
 }
 
+// A gauge or counter of `server`'s metrics; -1 when it cannot be read.
+double ServerMetric(const ServerProcess& server, const std::string& series) {
+  absl::StatusOr<std::string> text = HttpGet(MetricsAddress(server.Stderr()), "/metrics");
+  if (!text.ok()) return -1;
+  return MetricValue(*text, series).value_or(-1);
+}
+
+// Every trajectory `out` reported (improvements and finals, at least 4) has
+// exactly EvaluateRisk's risk and length.
+void ExpectRisksAreEvaluateRisks(client::RiskplanClient& client, const FleetOutcome& out) {
+  int checked = 0;
+  for (const v1::FleetUpdate& u : out.updates) {
+    if (!u.update().has_trajectory()) continue;
+    v1::EvaluateRiskRequest eval;
+    eval.set_map("demo-city");
+    *eval.mutable_waypoints()->mutable_poses() = u.update().trajectory().waypoints();
+    v1::EvaluateRiskResponse response;
+    ASSERT_TRUE(client.EvaluateRisk(eval, &response).ok());
+    EXPECT_EQ(response.risk(), u.update().trajectory().risk()) << u.mission_id();
+    EXPECT_EQ(response.length_m(), u.update().trajectory().length_m()) << u.mission_id();
+    ++checked;
+  }
+  EXPECT_GE(checked, 4);
+}
+
 class FleetTest : public SharedServerTest<FleetTest> {
  public:
   static std::vector<std::string> ServerFlags() {
@@ -74,11 +99,7 @@ class FleetTest : public SharedServerTest<FleetTest> {
 
  protected:
   // A gauge or counter of the server's metrics; -1 when it cannot be read.
-  double Metric(const std::string& series) {
-    absl::StatusOr<std::string> text = HttpGet(MetricsAddress(server_->Stderr()), "/metrics");
-    if (!text.ok()) return -1;
-    return MetricValue(*text, series).value_or(-1);
-  }
+  double Metric(const std::string& series) { return ServerMetric(*server_, series); }
 };
 
 TEST_F(FleetTest, EveryMissionGetsExactlyOneFinalMessageTaggedWithItsId) {
@@ -116,19 +137,7 @@ TEST_F(FleetTest, EveryReportedRiskIsEvaluateRisksBitForBit) {
   request.set_send_improvements(true);
   FleetOutcome out = RunFleet(*client_, request);
   ASSERT_TRUE(out.status.ok()) << out.status.error_message();
-  int checked = 0;
-  for (const v1::FleetUpdate& u : out.updates) {
-    if (!u.update().has_trajectory()) continue;
-    v1::EvaluateRiskRequest eval;
-    eval.set_map("demo-city");
-    *eval.mutable_waypoints()->mutable_poses() = u.update().trajectory().waypoints();
-    v1::EvaluateRiskResponse response;
-    ASSERT_TRUE(client_->EvaluateRisk(eval, &response).ok());
-    EXPECT_EQ(response.risk(), u.update().trajectory().risk()) << u.mission_id();
-    EXPECT_EQ(response.length_m(), u.update().trajectory().length_m()) << u.mission_id();
-    ++checked;
-  }
-  EXPECT_GE(checked, 4);
+  ExpectRisksAreEvaluateRisks(*client_, out);
 }
 
 TEST_F(FleetTest, SameFleetAndSeedGiveTheSameTrajectories) {
@@ -242,11 +251,7 @@ class FleetFairShareTest : public SharedServerTest<FleetFairShareTest> {
   }
 
  protected:
-  double Metric(const std::string& series) {
-    absl::StatusOr<std::string> text = HttpGet(MetricsAddress(server_->Stderr()), "/metrics");
-    if (!text.ok()) return -1;
-    return MetricValue(*text, series).value_or(-1);
-  }
+  double Metric(const std::string& series) { return ServerMetric(*server_, series); }
 };
 
 // `n` missions of `tenant`, each to its own goal (a group each), at
@@ -403,28 +408,7 @@ class FleetGoalTreeCacheTest : public SharedServerTest<FleetGoalTreeCacheTest> {
   }
 
  protected:
-  double Metric(const std::string& series) {
-    absl::StatusOr<std::string> text = HttpGet(MetricsAddress(server_->Stderr()), "/metrics");
-    if (!text.ok()) return -1;
-    return MetricValue(*text, series).value_or(-1);
-  }
-
-  // Every trajectory the fleet reported has exactly EvaluateRisk's risk.
-  void ExpectEvaluateRisksBitForBit(const FleetOutcome& out) {
-    int checked = 0;
-    for (const v1::FleetUpdate& u : out.updates) {
-      if (!u.update().has_trajectory()) continue;
-      v1::EvaluateRiskRequest eval;
-      eval.set_map("demo-city");
-      *eval.mutable_waypoints()->mutable_poses() = u.update().trajectory().waypoints();
-      v1::EvaluateRiskResponse response;
-      ASSERT_TRUE(client_->EvaluateRisk(eval, &response).ok());
-      EXPECT_EQ(response.risk(), u.update().trajectory().risk()) << u.mission_id();
-      EXPECT_EQ(response.length_m(), u.update().trajectory().length_m()) << u.mission_id();
-      ++checked;
-    }
-    EXPECT_GE(checked, 4);
-  }
+  double Metric(const std::string& series) { return ServerMetric(*server_, series); }
 };
 
 TEST_F(FleetGoalTreeCacheTest, TheSameFleetTwiceHitsAndEveryRiskIsEvaluateRisks) {
@@ -444,13 +428,13 @@ TEST_F(FleetGoalTreeCacheTest, TheSameFleetTwiceHitsAndEveryRiskIsEvaluateRisks)
   EXPECT_EQ(Metric("riskplan_goal_tree_cache_hits_total"), hits);
   EXPECT_GE(Metric("riskplan_goal_tree_cache_entries"), 1);
   EXPECT_GT(Metric("riskplan_goal_tree_cache_bytes"), 0);
-  ExpectEvaluateRisksBitForBit(first);
+  ExpectRisksAreEvaluateRisks(*client_, first);
 
   FleetOutcome second = RunFleet(*client_, request);
   ASSERT_TRUE(second.status.ok()) << second.status.error_message();
   EXPECT_EQ(Metric("riskplan_goal_tree_cache_hits_total"), hits + 1);
   EXPECT_EQ(Metric("riskplan_goal_tree_cache_misses_total"), misses + 1);
-  ExpectEvaluateRisksBitForBit(second);
+  ExpectRisksAreEvaluateRisks(*client_, second);
   ASSERT_EQ(second.finals.size(), 4u);
   for (int i = 0; i < 3; ++i) {
     const v1::FleetUpdate& u = second.finals.at(absl::StrFormat("tree-%d", i));

@@ -1,6 +1,7 @@
 #include "server/goal_tree_cache.h"
 
 #include <utility>
+#include <vector>
 
 #include "absl/strings/str_format.h"
 #include "server/model_cache.h"
@@ -49,16 +50,16 @@ void GoalTreeCache::Put(const GoalTreeKey& key, std::shared_ptr<const GoalTree> 
   if (tree == nullptr || tree->nodes.empty()) return;
   std::string encoded = key.Encode();
   const size_t bytes = TreeBytes(*tree, encoded.size());
-  // The tree is dropped outside the lock: freeing a large tree's nodes need
-  // not hold up other requests.
-  std::shared_ptr<const GoalTree> dropped;
+  // Trees replaced or evicted are freed outside the lock (`dropped` outlives
+  // it): freeing a large tree's nodes need not hold up other requests.
+  std::vector<std::shared_ptr<const GoalTree>> dropped;
   absl::MutexLock lock(&mu_);
   if (bytes > max_bytes_) return;
   auto it = entries_.find(encoded);
   if (it != entries_.end()) {
     if (it->second.tree->nodes.size() >= tree->nodes.size()) return;
     stats_.bytes -= it->second.bytes;
-    dropped = std::exchange(it->second.tree, std::move(tree));
+    dropped.push_back(std::exchange(it->second.tree, std::move(tree)));
     it->second.bytes = bytes;
     lru_.splice(lru_.begin(), lru_, it->second.lru);
   } else {
@@ -66,14 +67,15 @@ void GoalTreeCache::Put(const GoalTreeKey& key, std::shared_ptr<const GoalTree> 
     entries_.emplace(std::move(encoded), Entry{std::move(tree), bytes, lru_.begin()});
   }
   stats_.bytes += bytes;
-  EvictLocked();
+  EvictLocked(&dropped);
 }
 
-void GoalTreeCache::EvictLocked() {
+void GoalTreeCache::EvictLocked(std::vector<std::shared_ptr<const GoalTree>>* dropped) {
   // The newest entry fits on its own (Put checked), so this stops before it.
   while (stats_.bytes > max_bytes_ && !lru_.empty()) {
     auto it = entries_.find(lru_.back());
     stats_.bytes -= it->second.bytes;
+    dropped->push_back(std::move(it->second.tree));
     entries_.erase(it);
     lru_.pop_back();
     ++stats_.evictions;

@@ -29,6 +29,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
@@ -94,7 +95,10 @@ class GoalTreeCache {
     std::list<std::string>::iterator lru;  // its place in lru_
   };
 
-  void EvictLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Evicts least recently used trees until the total is within max_bytes;
+  // their trees go to `dropped`, to be freed after the lock is released.
+  void EvictLocked(std::vector<std::shared_ptr<const GoalTree>>* dropped)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const size_t max_bytes_;
   mutable absl::Mutex mu_;

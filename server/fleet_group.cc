@@ -111,7 +111,8 @@ void FleetGroup::PlanShared() {
   SharedTreeOptions options{.seed = first.options.seed,
                             .params = first.options.params,
                             .record_tree = false,
-                            .max_edge_samples = first.options.max_edge_samples};
+                            .max_edge_samples = first.options.max_edge_samples,
+                            .initial_tree = nullptr};
   for (size_t m : group_.missions) {
     const PlanSpec& spec = *spec_->missions[m].plan;
     problem.missions.push_back({.start = spec.start, .budget = spec.options.budget});

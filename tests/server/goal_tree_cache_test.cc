@@ -148,7 +148,9 @@ TEST(GoalTreeCacheTest, ConcurrentFindsAndPutsKeepTheBound) {
       for (int i = 0; i < 500; ++i) {
         const GoalTreeKey key = Key(static_cast<double>((i + t) % 8));
         std::shared_ptr<const GoalTree> found = cache.Find(key);
-        if (found != nullptr) EXPECT_EQ(found->nodes.size() % 64, 0u);
+        if (found != nullptr) {
+          EXPECT_EQ(found->nodes.size() % 64, 0u);
+        }
         cache.Put(key, Tree(64 * (1 + i % 2)));
       }
     });

@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Shell functions shared by the scripts; sourced (`source scripts/lib.sh`),
 # not run.
 
@@ -26,4 +27,43 @@ start_and_wait() {
     exit 1
   fi
   printf -v "$address_var" '%s' "${line#"$name listening on "}"
+}
+
+# bg_build_start PASS / bg_build_wait / bg_build_stop
+#
+# Builds the sanitizer pass PASS (asan or tsan; `scripts/sanitize.sh
+# --build-only PASS`) in the background at nice 10 while the caller runs a test
+# suite in the foreground. The suites leave part of the two cores idle (tests
+# waiting on servers, sockets and timers), which the build takes without
+# slowing them: both are in the caller's session, and nice orders the
+# processes of one session (sched(7), autogroups; a new session would get an
+# equal share instead). The build runs in its own process group, so that
+# bg_build_stop (the caller's EXIT trap) ends all of it; its output is kept and
+# printed by bg_build_wait, which returns 0 either way: a failed build fails
+# again, with its errors, when the pass builds in the foreground.
+BG_BUILD_PID=""
+BG_BUILD_LOG=""
+bg_build_start() {
+  BG_BUILD_LOG=$(mktemp)
+  set -m
+  nice -n 10 bash scripts/sanitize.sh --build-only "$1" >"$BG_BUILD_LOG" 2>&1 &
+  BG_BUILD_PID=$!
+  set +m
+  echo "$(basename "$0" .sh): building the $1 pass in the background (nice 10)"
+}
+bg_build_wait() {
+  [ -n "$BG_BUILD_PID" ] || return 0
+  local rc=0
+  wait "$BG_BUILD_PID" || rc=$?
+  BG_BUILD_PID=""
+  echo "$(basename "$0" .sh): the background build's output (exit $rc):"
+  cat "$BG_BUILD_LOG"
+  rm -f "$BG_BUILD_LOG"
+}
+bg_build_stop() {
+  [ -n "$BG_BUILD_PID" ] || return 0
+  kill -- -"$BG_BUILD_PID" 2>/dev/null || true
+  wait "$BG_BUILD_PID" 2>/dev/null || true
+  BG_BUILD_PID=""
+  rm -f "$BG_BUILD_LOG"
 }

@@ -7,14 +7,21 @@
 #      smoke of every libFuzzer target of fuzz/ from the same build.
 #   2. TSan: the accel tests (engine, work queue, FPGA workers, shim, through
 #      the sanitized riskplan-fpga-shim), built into build-tsan/.
-# Usage: sanitize.sh [asan|tsan]... (default: both). RISKPLAN_JOBS bounds the
-# compile and test jobs (default: nproc). Exits non-zero on any failure or
+# Usage: sanitize.sh [--build-only] [asan|tsan]... (default: both).
+# --build-only builds the passes' directories and runs nothing (scripts/test.sh
+# builds build-asan/ that way while the normal suite runs). RISKPLAN_JOBS bounds
+# the compile and test jobs (default: nproc). Exits non-zero on any failure or
 # sanitizer report.
+#
+# When both passes run, the TSan build runs in the background (scripts/lib.sh's
+# bg_build_start: nice 10) while the ASan suite and the fuzz smoke run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh clang-14 libclang-rt-14-dev
 
 JOBS=${RISKPLAN_JOBS:-$(nproc)}
+BUILD_ONLY=0
+if [ "${1:-}" = --build-only ]; then BUILD_ONLY=1; shift; fi
 passes=("$@")
 if [ ${#passes[@]} -eq 0 ]; then passes=(asan tsan); fi
 
@@ -61,9 +68,30 @@ ASAN_SKIPPED_TESTS=(
   RiskMapTest.GlideOnAFullSizeGridIsFast
 )
 
-asan_pass() {
+asan_build() {
   configure build-asan -DRISKPLAN_SANITIZE=address,undefined -DRISKPLAN_FUZZ=ON
-  step "ASan + UBSan build (build-asan)" cmake --build build-asan -j "$JOBS" || return 0
+  step "ASan + UBSan build (build-asan)" cmake --build build-asan -j "$JOBS"
+}
+
+tsan_targets() {
+  local targets=(riskplan-fpga-shim riskplan_tsan_absl)
+  for f in tests/accel/*_test.cc; do targets+=("accel_$(basename "$f" .cc)"); done
+  echo "${targets[@]}"
+}
+
+tsan_build() {
+  configure build-tsan -DRISKPLAN_SANITIZE=thread
+  # shellcheck disable=SC2046
+  step "TSan build (build-tsan)" cmake --build build-tsan -j "$JOBS" --target $(tsan_targets)
+}
+
+source scripts/lib.sh
+trap bg_build_stop EXIT
+
+asan_pass() {
+  asan_build || return 0
+  # The TSan pass, if it comes next, builds while the ASan suite runs.
+  if [ "${next_pass:-}" = tsan ]; then bg_build_start tsan; fi
   # Each CTest test is one whole suite in the sanitized builds (tests/CMakeLists.txt).
   # The 60 s soak (label soak, run alone) is the normal suite's: its leaks are
   # LeakSanitizer's in the integration tests too, and under ASan it held both
@@ -77,11 +105,8 @@ asan_pass() {
 }
 
 tsan_pass() {
-  configure build-tsan -DRISKPLAN_SANITIZE=thread
-  local targets=(riskplan-fpga-shim riskplan_tsan_absl)
-  for f in tests/accel/*_test.cc; do targets+=("accel_$(basename "$f" .cc)"); done
-  step "TSan build (build-tsan)" cmake --build build-tsan -j "$JOBS" --target "${targets[@]}" ||
-    return 0
+  bg_build_wait
+  tsan_build || return 0
   # TSan sees abseil's locks through tests/tsan's library (its comment says
   # why); the shims the tests start inherit it.
   step "TSan suite (label accel)" env LD_PRELOAD="$PWD/build-tsan/lib/libriskplan_tsan_absl.so" \
@@ -89,15 +114,27 @@ tsan_pass() {
     -L accel || true
 }
 
-for pass in "${passes[@]}"; do
-  case "$pass" in
-    asan) asan_pass ;;
-    tsan) tsan_pass ;;
-    *) echo "sanitize: unknown pass '$pass' (asan, tsan)" >&2; exit 2 ;;
+for i in "${!passes[@]}"; do
+  case "${passes[$i]}" in asan | tsan) ;; *)
+    echo "sanitize: unknown pass '${passes[$i]}' (asan, tsan)" >&2; exit 2 ;;
   esac
 done
+for i in "${!passes[@]}"; do
+  pass=${passes[$i]}
+  next_pass=${passes[$((i + 1))]:-}
+  if [ "$BUILD_ONLY" = 1 ]; then
+    "${pass}_build" || true
+  else
+    "${pass}_pass"
+  fi
+done
+bg_build_wait
 if [ ${#failed[@]} -gt 0 ]; then
   printf 'sanitize: FAILED: %s\n' "${failed[@]}" >&2
   exit 1
 fi
-echo "sanitize: every pass passed (${passes[*]})"
+if [ "$BUILD_ONLY" = 1 ]; then
+  echo "sanitize: built (${passes[*]})"
+else
+  echo "sanitize: every pass passed (${passes[*]})"
+fi

@@ -241,17 +241,24 @@ TEST_F(FleetTest, CancellingTheCallStopsEveryMission) {
   EXPECT_TRUE(RunFleet(*client_, MixedFleet()).status.ok());
 }
 
-// One plan slot, and room for four admitted missions: the queue's order and
+// One plan slot, and room for five admitted missions: the queue's order and
 // the admission by missions can be seen from the outside.
 class FleetFairShareTest : public SharedServerTest<FleetFairShareTest> {
  public:
   static std::vector<std::string> ServerFlags() {
-    return {"--plan_threads=1", "--max_fleet_missions=4", "--max_admitted_missions=4",
+    return {"--plan_threads=1", "--max_fleet_missions=4", "--max_admitted_missions=5",
             "--metrics_listen=127.0.0.1:0"};
   }
 
  protected:
   double Metric(const std::string& series) { return ServerMetric(*server_, series); }
+  // Polls until the metric has `value` (or a minute has passed).
+  void AwaitMetric(const std::string& series, double value) {
+    const absl::Time start = absl::Now();
+    while (Metric(series) != value && absl::Now() - start < absl::Seconds(60)) {
+      absl::SleepFor(absl::Milliseconds(5));
+    }
+  }
 };
 
 // `n` missions of `tenant`, each to its own goal (a group each), at
@@ -268,6 +275,9 @@ v1::FleetRequest TenantFleet(const std::string& tenant, int n, int priority) {
   return r;
 }
 
+// The order is decided while every mission waits, so it depends on no timing:
+// a blocker holds the one slot until every fleet is queued, then its call is
+// cancelled and the queue alone decides.
 TEST_F(FleetFairShareTest, ATenantArrivingLaterGetsTheNextSlotAndAdmissionCountsMissions) {
   absl::Mutex mu;
   std::vector<std::string> ended;  // mission ids, in the order their finals arrived
@@ -279,32 +289,52 @@ TEST_F(FleetFairShareTest, ATenantArrivingLaterGetsTheNextSlotAndAdmissionCounts
       return true;
     });
   };
-  // "big" queues three groups at the highest priority and takes the one slot.
+  // The blocker: one mission that only a cancel ends.
+  v1::FleetRequest blocker = TenantFleet("blocker", 1, 0);
+  blocker.mutable_missions(0)->mutable_request()->mutable_budget()->set_time_ms(600000);
+  client::RiskplanClient blocker_client(server_->Channel());
+  grpc::ClientContext blocker_context;
+  std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> blocker_reader =
+      blocker_client.stub().PlanFleet(&blocker_context, blocker);
+  AwaitMetric("riskplan_fleet_missions{state=\"running\"}", 1);
+  ASSERT_EQ(Metric("riskplan_fleet_missions{state=\"running\"}"), 1);
+  // "big" queues three groups at the highest priority.
   grpc::Status big_status;
   std::thread big([&] { big_status = run(TenantFleet("big", 3, 1000)); });
-  const absl::Time start = absl::Now();
-  while (Metric("riskplan_fleet_missions{state=\"queued\"}") != 2 &&
-         absl::Now() - start < absl::Seconds(60)) {
-    absl::SleepFor(absl::Milliseconds(5));
-  }
-  ASSERT_EQ(Metric("riskplan_fleet_missions{state=\"running\"}"), 1);
-  // Three of four admitted missions: a fleet of two does not fit, and is
+  AwaitMetric("riskplan_fleet_missions{state=\"queued\"}", 3);
+  ASSERT_EQ(Metric("riskplan_fleet_missions{state=\"queued\"}"), 3);
+  // Four of five admitted missions: a fleet of two does not fit, and is
   // refused at once, whole.
-  v1::FleetRequest two = TenantFleet("other", 2, 0);
-  const grpc::Status refused = run(two);
+  const grpc::Status refused = run(TenantFleet("other", 2, 0));
   EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_THAT(refused.error_message(),
-              HasSubstr("cannot admit this fleet's 2 missions: at most 4 fleet missions are "
+              HasSubstr("cannot admit this fleet's 2 missions: at most 5 fleet missions are "
                         "admitted at once (--max_admitted_missions)"));
-  // "small" has one mission at priority 0: it plans as soon as the slot is
-  // free, before big's other two.
-  const grpc::Status small_status = run(TenantFleet("small", 1, 0));
+  // "small" queues one mission at priority 0.
+  grpc::Status small_status;
+  std::thread small([&] { small_status = run(TenantFleet("small", 1, 0)); });
+  AwaitMetric("riskplan_fleet_missions{state=\"queued\"}", 4);
+  ASSERT_EQ(Metric("riskplan_fleet_missions{state=\"queued\"}"), 4);
+  blocker_context.TryCancel();
+  v1::FleetUpdate update;
+  while (blocker_reader->Read(&update)) {
+  }
+  EXPECT_EQ(blocker_reader->Finish().error_code(), grpc::StatusCode::CANCELLED);
   big.join();
+  small.join();
   ASSERT_TRUE(big_status.ok()) << big_status.error_message();
   ASSERT_TRUE(small_status.ok()) << small_status.error_message();
-  ASSERT_EQ(ended.size(), 4u);
-  EXPECT_EQ(ended[1], "small-0");
-  EXPECT_EQ(Metric("riskplan_fleet_missions_admitted_total"), 4);
+  if (server_->connection().token_file.empty()) {
+    // Two tenants, neither has planned: big's priority takes the slot; then
+    // small is owed a turn, which big's priority cannot take from it.
+    EXPECT_THAT(ended, ::testing::ElementsAre("big-0", "small-0", "big-1", "big-2"));
+  } else {
+    // RISKPLAN_TEST_SECURITY=tls: every client has the suite's one token, so
+    // there is one caller, the tenant field is ignored, and priority alone
+    // orders its groups (docs/fleet.md).
+    EXPECT_THAT(ended, ::testing::ElementsAre("big-0", "big-1", "big-2", "small-0"));
+  }
+  EXPECT_EQ(Metric("riskplan_fleet_missions_admitted_total"), 5);
 }
 
 // Two missions with ten-minute budgets and goals of their own (two groups):
@@ -348,8 +378,9 @@ TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
   // The server's own finals, not re-submitted (the client's re-submission:
   // replicas_test.cc and the test below).
   std::vector<v1::FleetUpdate> finals;
-  const grpc::Status status = PlanFleetAndDrain(
-      **server, EndlessFleet(), client::FleetResubmitOptions{.max_resubmits = 0}, &finals);
+  client::FleetResubmitOptions no_resubmits;
+  no_resubmits.max_resubmits = 0;
+  const grpc::Status status = PlanFleetAndDrain(**server, EndlessFleet(), no_resubmits, &finals);
   EXPECT_TRUE(status.ok()) << status.error_message();
   ASSERT_EQ(finals.size(), 2u);
   // The waiting one ends at once, unplanned; the planning one at the end of

@@ -50,16 +50,21 @@ void CPL_STDCALL GdalErrorCapture::Handler(CPLErr level, CPLErrorNum /*number*/,
                                            const char* message) {
   auto* self = static_cast<GdalErrorCapture*>(CPLGetErrorHandlerUserData());
   if (self == nullptr) return;
+  const auto keep = [message](std::vector<std::string>& kept, uint64_t& count) {
+    if (++count <= kMaxMessages) kept.emplace_back(message == nullptr ? "" : message);
+  };
   if (level == CE_Failure || level == CE_Fatal) {
-    self->errors_.emplace_back(message == nullptr ? "" : message);
+    keep(self->errors_, self->error_count_);
   } else if (level == CE_Warning) {
-    self->warnings_.emplace_back(message == nullptr ? "" : message);
+    keep(self->warnings_, self->warning_count_);
   }
 }
 
 std::string GdalErrorCapture::Errors(const std::string& fallback) const {
   if (errors_.empty()) return fallback;
-  return absl::StrJoin(errors_, "; ");
+  std::string text = absl::StrJoin(errors_, "; ");
+  if (error_count_ > errors_.size()) absl::StrAppend(&text, "; and ", error_count_ - errors_.size(), " more");
+  return text;
 }
 
 absl::StatusOr<SpatialReferencePtr> SpatialReferenceFrom(const std::string& text) {

@@ -10,6 +10,8 @@
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -26,23 +28,33 @@ namespace riskplan::geo {
 void EnsureGdalRegistered();
 
 // While alive, collects the messages GDAL reports on this thread instead of
-// printing them to stderr (GDAL's handler stack is thread-local). Not copyable.
+// printing them to stderr (GDAL's handler stack is thread-local). Keeps the
+// first kMaxMessages failures and warnings and counts the rest: one call can
+// report a failure per point (a transformation of millions of points), and
+// the messages must not grow without bound. Not copyable.
 class GdalErrorCapture {
  public:
+  static constexpr size_t kMaxMessages = 16;
+
   GdalErrorCapture();
   ~GdalErrorCapture();
   GdalErrorCapture(const GdalErrorCapture&) = delete;
   GdalErrorCapture& operator=(const GdalErrorCapture&) = delete;
 
-  // Failures (CE_Failure, CE_Fatal) joined by "; ", or `fallback` when GDAL
-  // reported none.
+  // Failures (CE_Failure, CE_Fatal) joined by "; ", then "; and N more" for
+  // those not kept, or `fallback` when GDAL reported none.
   std::string Errors(const std::string& fallback = "no message from GDAL") const;
+  // The warnings kept (at most kMaxMessages), and how many there were.
   const std::vector<std::string>& warnings() const { return warnings_; }
+  uint64_t warning_count() const { return warning_count_; }
+  uint64_t error_count() const { return error_count_; }
 
  private:
   static void CPL_STDCALL Handler(CPLErr level, CPLErrorNum number, const char* message);
   std::vector<std::string> errors_;
   std::vector<std::string> warnings_;
+  uint64_t error_count_ = 0;
+  uint64_t warning_count_ = 0;
 };
 
 struct SpatialReferenceDeleter {

@@ -135,6 +135,7 @@ absl::StatusOr<std::vector<double>> DensityFromPolygons(ImportContext& ctx) {
   // Each polygon's people and whole area (not only the part in the map).
   std::vector<double> people, area_m2;
   std::vector<std::unique_ptr<OGRGeometry>> carried;
+  CarryBudget budget;  // this input's
   for (const SourceFeature& f : *features) {
     if (!IsPolygonal(*f.geometry)) {
       return absl::InvalidArgumentError(
@@ -147,7 +148,7 @@ absl::StatusOr<std::vector<double>> DensityFromPolygons(ImportContext& ctx) {
           f.fid, f.number.has_value() ? absl::StrFormat("%.9g in", *f.number) : "no value in",
           o.population_field));
     }
-    auto ea = Carry(*f.geometry, *in->srs, **to_equal_area);
+    auto ea = Carry(*f.geometry, *in->srs, **to_equal_area, budget);
     if (!ea.ok()) {
       return absl::InvalidArgumentError(
           absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, ea.status().message()));
@@ -157,7 +158,7 @@ absl::StatusOr<std::vector<double>> DensityFromPolygons(ImportContext& ctx) {
       return absl::InvalidArgumentError(
           absl::StrFormat("%s: feature %d has no area", in->Label(), f.fid));
     }
-    auto g = Carry(*f.geometry, *in->srs, **to_frame);
+    auto g = Carry(*f.geometry, *in->srs, **to_frame, budget);
     if (!g.ok()) {
       return absl::InvalidArgumentError(
           absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));

@@ -55,12 +55,13 @@ absl::StatusOr<const std::vector<float>*> BuiltUpShare(ImportContext& ctx) {
   if (!ct.ok()) return ct.status();
   std::vector<std::unique_ptr<OGRGeometry>> carried;
   int64_t not_polygons = 0;
+  CarryBudget budget;  // this input's
   for (const SourceFeature& f : *features) {
     if (!IsPolygonal(*f.geometry)) {
       ++not_polygons;
       continue;
     }
-    auto g = Carry(*f.geometry, *in->srs, **ct);
+    auto g = Carry(*f.geometry, *in->srs, **ct, budget);
     if (!g.ok()) {
       return absl::InvalidArgumentError(
           absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));

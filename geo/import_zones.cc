@@ -65,6 +65,7 @@ absl::StatusOr<std::vector<uint8_t>> ImportNoFly(ImportContext& ctx) {
     if (!features.ok()) return features.status();
     auto ct = ToFrame(*in->srs, ctx.grid);
     if (!ct.ok()) return ct.status();
+    CarryBudget budget;  // this input's
     for (const SourceFeature& f : *features) {
       if (buffer == 0.0 && !IsPolygonal(*f.geometry)) {
         return absl::InvalidArgumentError(absl::StrFormat(
@@ -72,7 +73,7 @@ absl::StatusOr<std::vector<uint8_t>> ImportNoFly(ImportContext& ctx) {
             "zone around it",
             in->Label(), f.fid, OGRGeometryTypeToName(f.geometry->getGeometryType())));
       }
-      auto g = Carry(*f.geometry, *in->srs, **ct);
+      auto g = Carry(*f.geometry, *in->srs, **ct, budget);
       if (!g.ok()) {
         return absl::InvalidArgumentError(
             absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));
@@ -136,10 +137,11 @@ absl::StatusOr<std::vector<LandingSite>> ImportLandingSites(
     auto ct = ToFrame(*in->srs, grid);
     if (!ct.ok()) return ct.status();
     int points = 0, areas = 0;
+    CarryBudget budget;  // this input's
     for (const SourceFeature& f : *features) {
       const std::string name =
           f.text.empty() ? absl::StrFormat("%s-%d", Stem(spec->path), f.fid) : f.text;
-      auto g = Carry(*f.geometry, *in->srs, **ct);
+      auto g = Carry(*f.geometry, *in->srs, **ct, budget);
       if (!g.ok()) {
         return absl::InvalidArgumentError(
             absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));

@@ -189,13 +189,63 @@ absl::StatusOr<std::vector<SourceFeature>> ReadFeatures(VectorInput& input, cons
   return features;
 }
 
+double VerticesAddedBySegmentize(const OGRGeometry& geometry, double max_length) {
+  const OGRwkbGeometryType type = wkbFlatten(geometry.getGeometryType());
+  double added = 0.0;
+  if (OGR_GT_IsSubClassOf(type, wkbGeometryCollection)) {
+    const OGRGeometryCollection* c = geometry.toGeometryCollection();
+    for (int k = 0; k < c->getNumGeometries(); ++k) {
+      added += VerticesAddedBySegmentize(*c->getGeometryRef(k), max_length);
+    }
+  } else if (OGR_GT_IsSubClassOf(type, wkbCurvePolygon)) {
+    const OGRCurvePolygon* p = geometry.toCurvePolygon();
+    if (p->getExteriorRingCurve() != nullptr) {
+      added += VerticesAddedBySegmentize(*p->getExteriorRingCurve(), max_length);
+    }
+    for (int k = 0; k < p->getNumInteriorRings(); ++k) {
+      added += VerticesAddedBySegmentize(*p->getInteriorRingCurve(k), max_length);
+    }
+  } else if (type == wkbCompoundCurve) {
+    const OGRCompoundCurve* c = geometry.toCompoundCurve();
+    for (int k = 0; k < c->getNumCurves(); ++k) {
+      added += VerticesAddedBySegmentize(*c->getCurve(k), max_length);
+    }
+  } else if (const auto* curve = dynamic_cast<const OGRSimpleCurve*>(&geometry)) {
+    // Line strings, linear rings and circular strings.
+    for (int k = 1; k < curve->getNumPoints(); ++k) {
+      const double length = std::hypot(curve->getX(k) - curve->getX(k - 1),
+                                       curve->getY(k) - curve->getY(k - 1));
+      if (!std::isfinite(length)) return std::numeric_limits<double>::infinity();
+      added += std::max(0.0, std::ceil(length / max_length) - 1.0);
+    }
+  }
+  // Points and polyhedral surfaces: segmentize adds nothing.
+  return added;
+}
+
 absl::StatusOr<std::unique_ptr<OGRGeometry>> Carry(const OGRGeometry& geometry,
                                                    const OGRSpatialReference& from,
-                                                   OGRCoordinateTransformation& ct) {
+                                                   OGRCoordinateTransformation& ct,
+                                                   CarryBudget& budget) {
   std::unique_ptr<OGRGeometry> g(geometry.clone());
   const OGRwkbGeometryType type = wkbFlatten(g->getGeometryType());
   if (type != wkbPoint && type != wkbMultiPoint) {
-    g->segmentize(IsGeographic(from) ? 0.001 : 100.0);
+    const bool geographic = IsGeographic(from);
+    const double step = geographic ? 0.001 : 100.0;
+    const double added = VerticesAddedBySegmentize(*g, step);
+    if (!(added <= budget.added_vertices_left)) {
+      OGREnvelope e;
+      g->getEnvelope(&e);
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "cutting its edges into pieces of at most %s for the change of CRS would add %.4g "
+          "vertices, more than the %.0f left of the %d the importer allows one input's features; "
+          "its envelope is x %.9g to %.9g, y %.9g to %.9g in the input's CRS: check its "
+          "coordinates, or clip the input to the map's area first (ogr2ogr -clipsrc)",
+          geographic ? "0.001 degrees" : "100 m", added, budget.added_vertices_left,
+          kMaxAddedVerticesPerInput, e.MinX, e.MaxX, e.MinY, e.MaxY));
+    }
+    budget.added_vertices_left -= added;
+    g->segmentize(step);
   }
   GdalErrorCapture errors;
   if (g->transform(&ct) != OGRERR_NONE) {

@@ -24,6 +24,20 @@ namespace riskplan::geo {
 // buildings are some 10^5 to 10^6.
 inline constexpr int64_t kMaxFeaturesPerInput = 20'000'000;
 
+// At most this many vertices may Carry's cutting of edges add to the features
+// of one input (16 to 24 bytes each, in one array per ring). Real inputs add
+// few: a building's edges are shorter than the pieces, and the outline of a
+// census district that meets the map some thousands. One wrong coordinate (a
+// latitude of 5919 degrees, an easting of 1e12 m) would make a single edge of
+// millions or billions of pieces.
+inline constexpr int64_t kMaxAddedVerticesPerInput = 4'000'000;
+
+// What is left of one input's kMaxAddedVerticesPerInput: one per input,
+// passed to every Carry of its features.
+struct CarryBudget {
+  double added_vertices_left = static_cast<double>(kMaxAddedVerticesPerInput);
+};
+
 // One open vector input. `layer` names the map layer it feeds ("population",
 // "buildings", "no-fly", "landing sites"), for messages.
 struct VectorInput {
@@ -80,11 +94,20 @@ absl::StatusOr<CoordinateTransformationPtr> ToFrame(const OGRSpatialReference& f
 
 // A copy of `geometry` carried through `ct`. Its straight edges are first
 // cut into pieces of at most 100 m (0.001 deg in a geographic CRS), so an
-// edge that is straight in the input's CRS stays so after the change of CRS.
-// InvalidArgument if PROJ cannot carry a point.
+// edge that is straight in the input's CRS stays so after the change of CRS;
+// the vertices that adds are counted against `budget` before any is made.
+// InvalidArgument if they would exceed what is left of it (naming the count,
+// the limit and the geometry's envelope) or if PROJ cannot carry a point.
 absl::StatusOr<std::unique_ptr<OGRGeometry>> Carry(const OGRGeometry& geometry,
                                                    const OGRSpatialReference& from,
-                                                   OGRCoordinateTransformation& ct);
+                                                   OGRCoordinateTransformation& ct,
+                                                   CarryBudget& budget);
+
+// How many vertices OGRGeometry::segmentize(max_length) adds to `geometry`
+// (an upper bound: ceil(length / max_length) - 1 per edge, arcs counted by
+// their chords), as a double so that no count overflows; +infinity when a
+// coordinate is not finite.
+double VerticesAddedBySegmentize(const OGRGeometry& geometry, double max_length);
 
 // An equal-area frame for the map (Lambert azimuthal equal-area on WGS84 at
 // the map's centre), where areas of polygons far beyond the map, such as

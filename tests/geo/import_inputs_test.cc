@@ -1,15 +1,23 @@
 // Every kind of input an import reads, and its refusals: census polygons,
 // buildings (vector and OpenStreetMap), land cover, no-fly zones, landing
 // sites.
+#include <cpl_error.h>
+#include <ogr_api.h>
+#include <ogr_geometry.h>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "absl/strings/str_format.h"
+#include "geo/gdal_util.h"
 #include "geo/map_importer.h"
 #include "geo/target_grid.h"
+#include "geo/vector_input.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
@@ -410,6 +418,95 @@ TEST(ImportInputsTest, BadInputsAreRefusedNamingLayerAndInput) {
   o = MapOptions(dir);
   o.name = "Bad Name";
   EXPECT_THAT(ImportMap(o).status().message(), HasSubstr("--name: map header: name 'Bad Name'"));
+}
+
+// Found by fuzz/geo_import_fuzz.cc: a no-fly polygon in WGS84 with one wrong
+// vertex (longitude 642, latitude 5919.61; the others on the map) was cut into 5.9 million pieces of
+// 0.001 degrees before PROJ refused every one of them, and the capture kept
+// every refusal's message: 1 GB for one feature of 300 bytes. The pieces are
+// now counted, against a budget per input, before any is made, and the
+// capture keeps 16 messages.
+TEST(ImportInputsTest, AWrongCoordinateIsRefusedBeforeItsEdgesAreCut) {
+  const std::string dir = FreshDir("wrong-coordinate");
+  ImportOptions o = MapOptions(dir);
+  ASSERT_TRUE(WriteVector(dir + "/zones.geojson", "GeoJSON", "EPSG:4326", "zones",
+                          {{"POLYGON ((642 5919.61, 6.1 49.6, 6.101 49.6, 6.1 49.601, "
+                            "642 5919.61))"}})
+                  .ok());
+  o.nofly = {dir + "/zones.geojson"};
+  const absl::Status refused = ImportMap(o).status();
+  EXPECT_EQ(refused.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(refused.message()),
+              HasSubstr("feature 0: cutting its edges into pieces of at most 0.001 degrees for "
+                        "the change of CRS would add 1.181e+07 vertices, more than the 4000000 "
+                        "left of the 4000000 the importer allows one input's features"));
+  EXPECT_THAT(std::string(refused.message()), HasSubstr("check its coordinates"));
+
+  // In metres: an easting of 1e12 m in the map's own frame.
+  const std::string frame = FrameCrs(o);
+  ASSERT_TRUE(WriteVector(dir + "/far.gpkg", "GPKG", frame, "zones",
+                          {{Rect(100, 100, 200, 200)}, {Rect(100, 300, 1e12, 400)}})
+                  .ok());
+  o.nofly = {dir + "/far.gpkg"};
+  EXPECT_THAT(std::string(ImportMap(o).status().message()),
+              HasSubstr("feature 2: cutting its edges into pieces of at most 100 m for the "
+                        "change of CRS would add 2e+10 vertices"));
+
+  // Within the budget, a polygon reaching past the pole: PROJ refuses
+  // thousands of its points, and the message keeps 16 of their reasons.
+  ASSERT_TRUE(WriteVector(dir + "/pole.geojson", "GeoJSON", "EPSG:4326", "zones",
+                          {{"POLYGON ((6.1 49.6, 6.101 49.6, 6.101 95, 6.1 49.6))"}})
+                  .ok());
+  o.nofly = {dir + "/pole.geojson"};
+  const absl::Status pole = ImportMap(o).status();
+  EXPECT_EQ(pole.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(pole.message()), HasSubstr("feature 0: PROJ cannot carry it into the map's frame"));
+  EXPECT_LT(pole.message().size(), 20000u) << pole.message().substr(0, 2000);
+}
+
+TEST(ImportInputsTest, VerticesAddedBySegmentizeCountsEveryEdge) {
+  const auto added = [](const char* wkt, double step) {
+    OGRGeometry* g = nullptr;
+    EXPECT_EQ(OGRGeometryFactory::createFromWkt(wkt, nullptr, &g), OGRERR_NONE) << wkt;
+    const double n = VerticesAddedBySegmentize(*g, step);
+    // An upper bound of what segmentize really adds (GDAL 3.6 adds
+    // floor(length / step - 0.01) to an edge), at most one more an edge.
+    if (std::isfinite(n) && wkbFlatten(g->getGeometryType()) == wkbLineString) {
+      std::unique_ptr<OGRGeometry> cut(g->clone());
+      cut->segmentize(step);
+      const int points = g->toLineString()->getNumPoints();
+      const int real = cut->toLineString()->getNumPoints() - points;
+      EXPECT_GE(n, real) << wkt;
+      EXPECT_LE(n, real + points - 1) << wkt;
+    }
+    OGRGeometryFactory::destroyGeometry(g);
+    return n;
+  };
+  EXPECT_EQ(added("LINESTRING (0 0, 250 0)", 100.0), 2.0);
+  EXPECT_EQ(added("LINESTRING (0 0, 1000 0, 1000 1000.5)", 100.0), 9.0 + 10.0);
+  EXPECT_EQ(added("LINESTRING (0 0, 100 0, 100 50)", 100.0), 0.0);
+  EXPECT_EQ(added("POINT (1 2)", 100.0), 0.0);
+  // A 300 m square with a 150 m square hole: 4 x 2 + 4 x 1.
+  EXPECT_EQ(added("POLYGON ((0 0, 300 0, 300 300, 0 300, 0 0), (10 10, 160 10, 160 160, 10 160, "
+                  "10 10))",
+                  100.0),
+            12.0);
+  EXPECT_EQ(added("MULTIPOLYGON (((0 0, 250 0, 0 1, 0 0)), ((0 0, 0 250, 1 0, 0 0)))", 100.0),
+            2.0 + 2.0 + 2.0 + 2.0);
+  EXPECT_EQ(added("LINESTRING (0 0, 1e300 0)", 1e-300), std::numeric_limits<double>::infinity());
+}
+
+TEST(ImportInputsTest, TheCaptureKeepsSixteenMessagesAndCountsTheRest) {
+  GdalErrorCapture capture;
+  for (int k = 0; k < 1000; ++k) CPLError(CE_Failure, CPLE_AppDefined, "failure %d", k);
+  for (int k = 0; k < 40; ++k) CPLError(CE_Warning, CPLE_AppDefined, "warning %d", k);
+  EXPECT_EQ(capture.error_count(), 1000u);
+  EXPECT_EQ(capture.warning_count(), 40u);
+  EXPECT_EQ(capture.warnings().size(), GdalErrorCapture::kMaxMessages);
+  const std::string errors = capture.Errors();
+  EXPECT_THAT(errors, HasSubstr("failure 0; failure 1; "));
+  EXPECT_THAT(errors, HasSubstr("failure 15; and 984 more"));
+  EXPECT_THAT(errors, ::testing::Not(HasSubstr("failure 16")));
 }
 
 // Found by fuzz/geo_import_fuzz.cc: a path that is not UTF-8 (a Latin-1 file

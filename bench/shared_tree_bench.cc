@@ -25,7 +25,7 @@
 //
 //   riskplan-bench-shared-tree [--missions=32] [--separate_s=1] [--seed=1]
 //                              [--separate_iterations=0] [--shared_params=path_bias=0.5]
-//                              [--separate_cache=FILE]
+//                              [--separate_cache=FILE] [--shared_seed=0]
 #include <time.h>
 
 #include <algorithm>
@@ -56,6 +56,7 @@ ABSL_FLAG(int64_t, separate_iterations, 0,
 ABSL_FLAG(double, cap_factor, 1.0,
           "the shared tree stops at this many times the separate plans' total CPU time");
 ABSL_FLAG(uint64_t, seed, 1, "seed of every plan");
+ABSL_FLAG(uint64_t, shared_seed, 0, "seed of the shared tree alone (0: --seed)");
 ABSL_FLAG(std::string, separate_cache, "",
           "file of the separate plans' results: read when it exists (and its plans are not run), "
           "else written after they are; for comparing shared-tree variants against one set");
@@ -236,7 +237,8 @@ void BM_SharedTree(benchmark::State& state) {
       problem.missions.push_back(m);
     }
     SharedTreeOptions options;
-    options.seed = absl::GetFlag(FLAGS_seed);
+    options.seed = absl::GetFlag(FLAGS_shared_seed) != 0 ? absl::GetFlag(FLAGS_shared_seed)
+                                                          : absl::GetFlag(FLAGS_seed);
     for (absl::string_view kv :
          absl::StrSplit(absl::GetFlag(FLAGS_shared_params), ',', absl::SkipEmpty())) {
       std::vector<std::string> parts = absl::StrSplit(kv, '=');

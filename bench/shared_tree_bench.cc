@@ -238,7 +238,7 @@ void BM_SharedTree(benchmark::State& state) {
     }
     SharedTreeOptions options;
     options.seed = absl::GetFlag(FLAGS_shared_seed) != 0 ? absl::GetFlag(FLAGS_shared_seed)
-                                                          : absl::GetFlag(FLAGS_seed);
+                                                         : absl::GetFlag(FLAGS_seed);
     for (absl::string_view kv :
          absl::StrSplit(absl::GetFlag(FLAGS_shared_params), ',', absl::SkipEmpty())) {
       std::vector<std::string> parts = absl::StrSplit(kv, '=');

@@ -6,7 +6,8 @@
 // (--separate_s) and keeps its final risk. BM_SharedTree then plans all the
 // missions on one tree and records, at every improvement, the CPU time of the
 // planning thread; it stops when every mission has reached the risk of its
-// separate plan (or at --cap_factor x the separate plans' CPU time). Both
+// separate plan (or at --cap_factor x the separate plans' CPU time and
+// configurations evaluated, whichever comes later). Both
 // report CPU time, not wall time: the machine may be shared, and a loaded
 // core stretches wall time but not the work done. Counters of BM_SharedTree:
 //   reach_cpu_s     CPU time at which the last mission reached its separate risk
@@ -14,15 +15,24 @@
 //   reached         missions that reached it (of --missions)
 //   q_median, q_max each mission's risk at 0.25 x the separate total CPU,
 //                   relative to its separate plan's risk (1: equal)
+//   reached_quarter, reached_half, reached_1x   missions at or below their
+//                   separate risk at 0.25 x, 0.5 x and 1 x the separate total CPU
+// The same in configurations evaluated (the risk evaluations both sides made,
+// a count of work that does not depend on the machine's load, so two variants
+// of the planner compare exactly): c_reached_quarter, c_reached_half,
+// c_reached_1x, cq_median, cq_max.
 // A per-mission table follows the benchmark output.
 //
 //   riskplan-bench-shared-tree [--missions=32] [--separate_s=1] [--seed=1]
 //                              [--separate_iterations=0] [--shared_params=path_bias=0.5]
+//                              [--separate_cache=FILE] [--shared_seed=0]
 #include <time.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
 #include <optional>
 #include <string>
@@ -36,6 +46,7 @@
 #include "core/base/random.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
+#include "core/planners/risk_rrt_star.h"
 #include "core/planners/shared_goal_tree.h"
 
 ABSL_FLAG(int, missions, 32, "missions, from scattered starts to one depot");
@@ -45,6 +56,10 @@ ABSL_FLAG(int64_t, separate_iterations, 0,
 ABSL_FLAG(double, cap_factor, 1.0,
           "the shared tree stops at this many times the separate plans' total CPU time");
 ABSL_FLAG(uint64_t, seed, 1, "seed of every plan");
+ABSL_FLAG(uint64_t, shared_seed, 0, "seed of the shared tree alone (0: --seed)");
+ABSL_FLAG(std::string, separate_cache, "",
+          "file of the separate plans' results: read when it exists (and its plans are not run), "
+          "else written after they are; for comparing shared-tree variants against one set");
 ABSL_FLAG(std::string, shared_params, "",
           "RISK_RRT_STAR parameters of the shared tree only, name=value,... (the separate plans "
           "keep the defaults)");
@@ -102,18 +117,49 @@ struct Separate {
   double risk = kInf;
   double cpu_s = 0.0;
   int64_t iterations = 0;
+  uint64_t configs = 0;  // configurations evaluated
 };
 std::vector<Separate>& SeparateResults() {
   static std::vector<Separate> results;
   return results;
 }
 
+// The cache file: one line per mission, risk (as a C99 hex float, exact),
+// CPU s, iterations, configurations.
+bool ReadSeparateCache(const std::string& path, std::vector<Separate>* out) {
+  std::ifstream in(path);
+  if (!in) return false;
+  std::vector<Separate> read;
+  std::string risk;
+  Separate s;
+  while (in >> risk >> s.cpu_s >> s.iterations >> s.configs) {
+    s.risk = std::strtod(risk.c_str(), nullptr);
+    read.push_back(s);
+  }
+  if (read.size() != TheFleet().starts.size()) return false;
+  *out = std::move(read);
+  return true;
+}
+
+void WriteSeparateCache(const std::string& path, const std::vector<Separate>& results) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return;
+  for (const Separate& s : results) {
+    std::fprintf(f, "%a %.6f %lld %llu\n", s.risk, s.cpu_s, static_cast<long long>(s.iterations),
+                 static_cast<unsigned long long>(s.configs));
+  }
+  std::fclose(f);
+}
+
 void RunSeparate() {
   const Fleet& fleet = TheFleet();
   std::vector<Separate>& out = SeparateResults();
   out.clear();
+  const std::string cache = absl::GetFlag(FLAGS_separate_cache);
+  if (!cache.empty() && ReadSeparateCache(cache, &out)) return;
   for (const Pose& start : fleet.starts) {
-    auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar);
+    DirectRiskEvaluator evaluator;
+    RiskRrtStar planner(&evaluator);
     PlanOptions options;
     options.seed = absl::GetFlag(FLAGS_seed);
     const int64_t iterations = absl::GetFlag(FLAGS_separate_iterations);
@@ -121,13 +167,15 @@ void RunSeparate() {
     options.budget.max_iterations = iterations;
     CancellationToken cancel;
     const double before = ThreadCpuSeconds();
-    auto result = (*planner)->Plan({Model(), start, fleet.depot}, options, cancel, nullptr);
+    auto result = planner.Plan({Model(), start, fleet.depot}, options, cancel, nullptr);
     Separate s;
     s.cpu_s = ThreadCpuSeconds() - before;
+    s.configs = evaluator.evaluated();
     if (result.ok() && result->best.has_value()) s.risk = result->best->risk;
     if (result.ok()) s.iterations = result->iterations;
     out.push_back(s);
   }
+  if (!cache.empty()) WriteSeparateCache(cache, out);
 }
 
 void BM_SeparatePlans(benchmark::State& state) {
@@ -147,6 +195,8 @@ struct SharedMission {
   double reach_cpu_s = kInf;      // CPU time when it first reached its separate risk
   double risk_at_quarter = kInf;  // its risk at 0.25 x the separate total CPU
   double final_risk = kInf;
+  double reach_configs = kInf;            // configurations evaluated by then
+  double risk_at_quarter_configs = kInf;  // its risk at 0.25 x the separate total configurations
 };
 std::vector<SharedMission>& SharedResults() {
   static std::vector<SharedMission> results;
@@ -156,19 +206,23 @@ int64_t shared_iterations = 0;
 int64_t shared_tree_size = 0;
 
 void BM_SharedTree(benchmark::State& state) {
-  if (SeparateResults().empty()) {
-    state.PauseTiming();
-    RunSeparate();
-    state.ResumeTiming();
-  }
+  // Before the timed loop (PauseTiming is only valid inside it): with
+  // --benchmark_filter=Shared, or the separate results from --separate_cache.
+  if (SeparateResults().empty()) RunSeparate();
   const Fleet& fleet = TheFleet();
   const std::vector<Separate>& separate = SeparateResults();
   double separate_cpu = 0.0;
-  for (const Separate& s : separate) separate_cpu += s.cpu_s;
+  double separate_configs = 0.0;
+  for (const Separate& s : separate) {
+    separate_cpu += s.cpu_s;
+    separate_configs += static_cast<double>(s.configs);
+  }
   const double quarter = 0.25 * separate_cpu;
+  const double quarter_configs = 0.25 * separate_configs;
   const double cap = absl::GetFlag(FLAGS_cap_factor) * separate_cpu;
   std::vector<SharedMission>& missions = SharedResults();
   double cpu_used = 0.0;
+  double configs_used = 0.0;
   for (auto _ : state) {
     missions.assign(fleet.starts.size(), SharedMission{});
     SharedTreeProblem problem;
@@ -183,7 +237,8 @@ void BM_SharedTree(benchmark::State& state) {
       problem.missions.push_back(m);
     }
     SharedTreeOptions options;
-    options.seed = absl::GetFlag(FLAGS_seed);
+    options.seed = absl::GetFlag(FLAGS_shared_seed) != 0 ? absl::GetFlag(FLAGS_shared_seed)
+                                                         : absl::GetFlag(FLAGS_seed);
     for (absl::string_view kv :
          absl::StrSplit(absl::GetFlag(FLAGS_shared_params), ',', absl::SkipEmpty())) {
       std::vector<std::string> parts = absl::StrSplit(kv, '=');
@@ -192,47 +247,83 @@ void BM_SharedTree(benchmark::State& state) {
     CancellationToken cancel;
     size_t reached = 0;
     const double before = ThreadCpuSeconds();
-    SharedGoalTreePlanner planner;
+    DirectRiskEvaluator evaluator;  // what the planner would make itself, counted here
+    SharedGoalTreePlanner planner(&evaluator);
     auto results = planner.Plan(
         problem, options, cancel,
         [&](size_t m, const PlanImprovement& i) {
           const double cpu = ThreadCpuSeconds() - before;
+          const double configs = static_cast<double>(evaluator.evaluated());
           SharedMission& sm = missions[m];
           sm.final_risk = i.risk;
           if (cpu <= quarter) sm.risk_at_quarter = i.risk;
+          if (configs <= quarter_configs) sm.risk_at_quarter_configs = i.risk;
+          if (!std::isfinite(sm.reach_configs) && i.risk <= separate[m].risk) {
+            sm.reach_configs = configs;
+          }
           if (!std::isfinite(sm.reach_cpu_s) && i.risk <= separate[m].risk) {
             sm.reach_cpu_s = cpu;
             ++reached;
           }
           shared_iterations = i.iterations;
           shared_tree_size = i.tree_size;
-          // Every mission there, or the cap: nothing more to measure.
-          if (reached == missions.size() || cpu >= cap) cancel.Cancel();
+          // Every mission there, or the cap in both CPU and configurations:
+          // nothing more to measure.
+          const double cap_configs = absl::GetFlag(FLAGS_cap_factor) * separate_configs;
+          if (reached == missions.size() || (cpu >= cap && configs >= cap_configs)) {
+            cancel.Cancel();
+          }
         },
         nullptr);
     cpu_used = ThreadCpuSeconds() - before;
+    configs_used = static_cast<double>(evaluator.evaluated());
     if (!results.ok()) state.SkipWithError(std::string(results.status().message()).c_str());
   }
   double reach = 0.0;
   int reached = 0;
+  int reached_quarter = 0;
+  int reached_half = 0;
+  int reached_1x = 0;
+  int c_reached[3] = {0, 0, 0};  // by 0.25 x, 0.5 x, 1 x the separate configurations
   std::vector<double> q;
+  std::vector<double> cq;
   for (size_t m = 0; m < missions.size(); ++m) {
-    if (std::isfinite(missions[m].reach_cpu_s)) {
+    const SharedMission& sm = missions[m];
+    if (std::isfinite(sm.reach_cpu_s)) {
       ++reached;
-      reach = std::max(reach, missions[m].reach_cpu_s);
+      reach = std::max(reach, sm.reach_cpu_s);
     } else {
       reach = kInf;
     }
-    q.push_back(missions[m].risk_at_quarter / separate[m].risk);
+    reached_quarter += sm.reach_cpu_s <= 0.25 * separate_cpu ? 1 : 0;
+    reached_half += sm.reach_cpu_s <= 0.5 * separate_cpu ? 1 : 0;
+    reached_1x += sm.reach_cpu_s <= separate_cpu ? 1 : 0;
+    const double fractions[3] = {0.25, 0.5, 1.0};
+    for (int k = 0; k < 3; ++k) {
+      c_reached[k] += sm.reach_configs <= fractions[k] * separate_configs ? 1 : 0;
+    }
+    q.push_back(sm.risk_at_quarter / separate[m].risk);
+    cq.push_back(sm.risk_at_quarter_configs / separate[m].risk);
   }
   std::sort(q.begin(), q.end());
+  std::sort(cq.begin(), cq.end());
   state.counters["separate_cpu_s"] = separate_cpu;
   state.counters["shared_cpu_s"] = cpu_used;
+  state.counters["shared_configs"] = configs_used;
   state.counters["reach_cpu_s"] = reach;
   state.counters["reach_ratio"] = reach / separate_cpu;
   state.counters["reached"] = reached;
   state.counters["q_median"] = q[q.size() / 2];
   state.counters["q_max"] = q.back();
+  state.counters["reached_quarter"] = reached_quarter;
+  state.counters["reached_half"] = reached_half;
+  state.counters["reached_1x"] = reached_1x;
+  state.counters["separate_configs"] = separate_configs;
+  state.counters["c_reached_quarter"] = c_reached[0];
+  state.counters["c_reached_half"] = c_reached[1];
+  state.counters["c_reached_1x"] = c_reached[2];
+  state.counters["cq_median"] = cq[cq.size() / 2];
+  state.counters["cq_max"] = cq.back();
 }
 BENCHMARK(BM_SharedTree)->Unit(benchmark::kSecond)->Iterations(1);
 

@@ -59,7 +59,8 @@ const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
        "midpoints per candidate edge in one risk batch; a losing edge is dropped between "
        "batches (0: whole edges, one batch per step, up to 4096 midpoints of an edge each)"},
       {"refine_edits", 8, 0, 100,
-       "local edits of the best trajectory tried per tree iteration once a solution exists "
+       "local edits of the best trajectory tried per tree iteration once a solution exists; "
+       "a shared goal tree with S > 4 missions that have one tries S / 4 times as many "
        "(fractions accumulate; 0: off)"},
       {"refine_scale_m", 0.0, 0.0, 5000.0,
        "largest standard deviation of an edit's new waypoint, horizontally, m (0: step_m / 2)"},

@@ -131,9 +131,12 @@ absl::Status Run::Extend(const Pose& q_new) {
 }
 
 absl::Status Run::Refine() {
-  size_t probe = refine_cursor_;
-  if (NextMission(&probe, Pick::kWithCost) < 0) return absl::OkStatus();
-  refine_credit_ += params_.refine_edits;
+  size_t with_solution = 0;
+  for (size_t m = 0; m < missions_.size(); ++m) {
+    if (Running(m) && std::isfinite(nodes_[StartNode(m)].cost)) ++with_solution;
+  }
+  if (with_solution == 0) return absl::OkStatus();
+  refine_credit_ += RefineEditsPerIteration(params_.refine_edits, with_solution);
   // The path of the mission last traced, while no edit has changed the tree.
   int traced = -1;
   for (; refine_credit_ >= 1.0; refine_credit_ -= 1.0) {

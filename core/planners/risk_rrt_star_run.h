@@ -93,6 +93,23 @@ struct CandidateEdge {
   double risk = kInf;      // set when complete: exactly the piece risk of EvaluateTrajectory
 };
 
+// The refinement edits one tree iteration earns (Run::Refine) when
+// `with_solution` running missions have a solution: refine_edits for up to
+// kMissionsPerEditShare of them (so the single-start planner's rule), else
+// refine_edits * with_solution / kMissionsPerEditShare. An iteration's sample
+// and extension serve every mission, an edit one only: with many missions at
+// the flat rate each gets a 1/M share of what a plan of its own would, and
+// the edits are what improves a trajectory once its guide route is in the
+// tree (docs/benchmarks.md, "Shared goal tree"). The divisor is measured, not
+// derived: 32 missions improved about equally with 4 to 50 times the flat
+// rate, and the flat rate was clearly worse.
+inline constexpr size_t kMissionsPerEditShare = 4;
+inline double RefineEditsPerIteration(double refine_edits, size_t with_solution) {
+  if (with_solution <= kMissionsPerEditShare) return refine_edits;
+  return refine_edits * static_cast<double>(with_solution) /
+         static_cast<double>(kMissionsPerEditShare);
+}
+
 // One start of a Run: a mission's start pose and its own budget.
 struct RunMission {
   Pose start;
@@ -118,9 +135,10 @@ struct RunCallbacks {
 //   could still use is refused.
 // - The goal-biased samples (a start) and the path-biased samples and
 //   refinement edits (around a mission's best trajectory) go round-robin over
-//   the running missions (those with a solution for the last two); each
-//   mission gets its own guide route, added in mission order before the first
-//   iteration.
+//   the running missions (those with a solution for the last two); an
+//   iteration earns RefineEditsPerIteration edits, more with more missions
+//   that have a solution. Each mission gets its own guide route, added in
+//   mission order before the first iteration.
 // - Each mission ends by its own budget (iterations of the shared tree,
 //   and/or wall time since the run began) or when its risk is 0; then it gets
 //   its result while the tree grows on for the others. The node bound, the

@@ -14,8 +14,10 @@
 //   is the largest current risk among running missions, +inf while any of
 //   them has no solution;
 // - the start samples, the samples around a best trajectory and the
-//   refinement edits go round-robin over the running missions; each start
-//   gets its own guide route (one coarse risk grid, built once);
+//   refinement edits go round-robin over the running missions; a tree
+//   iteration earns refine_edits edits, times S / 4 when S > 4 running
+//   missions have a solution (an edit serves one mission, the tree all);
+//   each start gets its own guide route (one coarse risk grid, built once);
 // - each mission has its own budget; when it ends, that mission's final
 //   result is reported while the tree grows on for the others.
 // Every reported risk is still the sum of exact piece risks: bit for bit what

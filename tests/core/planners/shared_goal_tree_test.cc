@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/map/demo_city.h"
+#include "core/planners/risk_rrt_star_run.h"
 #include "gtest/gtest.h"
 #include "tests/core/planner_test_util.h"
 
@@ -403,6 +404,25 @@ TEST_F(SharedGoalTreeTest, MaxNodesEndsEveryMission) {
 
 // Spec version 2: on a small city whose edges are close to every route, no
 // mission's trajectory flies where a fall's impact window reaches past the map.
+// The edit share: the single-start rule up to kMissionsPerEditShare missions
+// with a solution (so RISK_RRT_STAR and small fleets are unchanged), then in
+// proportion to them, fractions kept for Refine's credit to accumulate.
+TEST(RefineEditsPerIterationTest, GrowsWithTheMissionsThatHaveASolution) {
+  using rrt_star::kMissionsPerEditShare;
+  using rrt_star::RefineEditsPerIteration;
+  ASSERT_EQ(kMissionsPerEditShare, 4u);
+  EXPECT_EQ(RefineEditsPerIteration(8.0, 1), 8.0);
+  EXPECT_EQ(RefineEditsPerIteration(8.0, 4), 8.0);
+  EXPECT_EQ(RefineEditsPerIteration(8.0, 5), 10.0);
+  EXPECT_EQ(RefineEditsPerIteration(8.0, 32), 64.0);
+  EXPECT_EQ(RefineEditsPerIteration(0.5, 32), 4.0);
+  EXPECT_EQ(RefineEditsPerIteration(0.3, 6), 0.3 * 6 / 4);
+  EXPECT_EQ(RefineEditsPerIteration(0.0, 256), 0.0);  // refinement off stays off
+  for (size_t m = 1; m < 256; ++m) {
+    EXPECT_LE(RefineEditsPerIteration(8.0, m), RefineEditsPerIteration(8.0, m + 1));
+  }
+}
+
 TEST(SharedGoalTreeSmallMapTest, EveryImpactWindowStaysInsideTheMap) {
   DemoCityOptions city;
   city.size_m = 2000.0;

@@ -3,11 +3,13 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cstring>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
@@ -16,30 +18,52 @@
 
 namespace riskplan::testing {
 
+absl::StatusOr<pid_t> SpawnProcess(std::vector<std::string> argv, const SpawnOptions& options) {
+  if (argv.empty()) return absl::InvalidArgumentError("no program to start");
+  if (options.max_open_files > 0) {
+    argv.insert(
+        argv.begin(),
+        {"/usr/bin/prlimit",
+         absl::StrCat("--nofile=", options.max_open_files, ":", options.max_open_files), "--"});
+  }
+  std::vector<char*> args;
+  for (std::string& a : argv) args.push_back(a.data());
+  args.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawnattr_t attributes;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawnattr_init(&attributes);
+  if (options.stdout_fd >= 0) posix_spawn_file_actions_adddup2(&actions, options.stdout_fd, 1);
+  if (options.stderr_fd >= 0) posix_spawn_file_actions_adddup2(&actions, options.stderr_fd, 2);
+  if (options.own_process_group) {
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attributes, 0);
+  }
+  pid_t pid = -1;
+  const int error = posix_spawn(&pid, args[0], &actions, &attributes, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
+  if (error != 0) {
+    return absl::InternalError(absl::StrCat("cannot start ", argv[0], ": ", strerror(error)));
+  }
+  return pid;
+}
+
 absl::StatusOr<std::unique_ptr<ChildProcess>> ChildProcess::Start(const std::string& command) {
   std::unique_ptr<ChildProcess> child(new ChildProcess);
   child->command_ = command;
   int out[2];
   if (pipe2(out, O_CLOEXEC) != 0) return absl::InternalError("pipe failed");
-  const pid_t pid = fork();
-  if (pid < 0) {
-    close(out[0]);
-    close(out[1]);
-    return absl::InternalError("fork failed");
-  }
-  if (pid == 0) {
-    // Only async-signal-safe calls between fork and exec: the test process
-    // has other threads.
-    setpgid(0, 0);
-    dup2(out[1], STDOUT_FILENO);
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  // Also from the parent, so that the group exists before any kill of it,
-  // whichever process runs first.
-  setpgid(pid, pid);
+  // The pipe's ends are close-on-exec; the dup2 onto stdout is not.
+  absl::StatusOr<pid_t> pid = SpawnProcess(
+      {"/bin/sh", "-c", command}, SpawnOptions{.stdout_fd = out[1], .own_process_group = true});
   close(out[1]);
-  child->pid_ = pid;
+  if (!pid.ok()) {
+    close(out[0]);
+    return pid.status();
+  }
+  child->pid_ = *pid;
   child->stdout_fd_ = out[0];
   return child;
 }

@@ -9,11 +9,29 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
 
 namespace riskplan::testing {
+
+// How SpawnProcess starts a program.
+struct SpawnOptions {
+  int stdout_fd = -1;              // the child's stdout (-1: the test's own)
+  int stderr_fd = -1;              // the child's stderr (-1: the test's own)
+  bool own_process_group = false;  // in a new process group, led by the child
+  int max_open_files = 0;          // > 0: the child runs with that RLIMIT_NOFILE
+};
+
+// Starts argv[0] (a path) with `argv` through posix_spawn: its pid, or what
+// failed. Not fork: in a child of fork(), the handlers that libraries register
+// with pthread_atfork run before exec, and PROJ's closes its SQLite databases,
+// which frees memory. Under ASan that free waits forever for an allocator lock
+// that another thread of the test held at the fork (about one run in ten under
+// load: docs/reliability.md). posix_spawn runs no such handlers. A limit on
+// open files goes through prlimit(1) (util-linux), which sets it and execs.
+absl::StatusOr<pid_t> SpawnProcess(std::vector<std::string> argv, const SpawnOptions& options);
 
 // `/bin/sh -c COMMAND` in a process group of its own, its stdout read through
 // a pipe (stderr is inherited: redirect it in the command, e.g. `2>&1`).

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
@@ -41,6 +42,7 @@
 #include "core/map/demo_city.h"
 #include "core/risk/risk_model.h"
 #include "gtest/gtest.h"
+#include "tests/child_process.h"
 
 namespace riskplan::accel::testing {
 
@@ -154,22 +156,18 @@ class ShimProcess {
     }
     int out[2];
     if (pipe2(out, O_CLOEXEC) != 0) return nullptr;
-    const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-fpga-shim";
+    const std::string binary = absl::StrCat(RISKPLAN_BIN_DIR, "/riskplan-fpga-shim");
     std::vector<std::string> argv_text = {binary, "--listen=" + listen};
     argv_text.insert(argv_text.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : argv_text) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const pid_t pid = fork();
-    if (pid == 0) {
-      dup2(out[1], STDOUT_FILENO);
-      if (err_fd >= 0) dup2(err_fd, STDERR_FILENO);
-      execv(binary.c_str(), argv.data());
-      _exit(127);
-    }
+    absl::StatusOr<pid_t> pid = riskplan::testing::SpawnProcess(
+        argv_text, riskplan::testing::SpawnOptions{.stdout_fd = out[1], .stderr_fd = err_fd});
     close(out[1]);
     if (err_fd >= 0) close(err_fd);
-    shim->pid_ = pid;
+    if (!pid.ok()) {
+      close(out[0]);
+      return nullptr;
+    }
+    shim->pid_ = *pid;
     // Read up to the readiness line, with a deadline.
     std::string& text = shim->stdout_;
     const absl::Time deadline = absl::Now() + absl::Seconds(20);

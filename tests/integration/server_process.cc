@@ -13,9 +13,9 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -48,17 +48,18 @@ const TestSecurity* Security() {
     if (mkdtemp(dir_template) == nullptr) std::abort();
     const std::string dir = dir_template;
     const std::string pki = std::string(RISKPLAN_SOURCE_DIR) + "/tests/integration/test_pki.sh";
-    const std::string from = absl::FormatTime("%Y%m%d%H%M%SZ", absl::Now() - absl::Hours(1),
-                                              absl::UTCTimeZone());
-    const std::string until = absl::FormatTime("%Y%m%d%H%M%SZ", absl::Now() + absl::Hours(48),
-                                               absl::UTCTimeZone());
+    const std::string from =
+        absl::FormatTime("%Y%m%d%H%M%SZ", absl::Now() - absl::Hours(1), absl::UTCTimeZone());
+    const std::string until =
+        absl::FormatTime("%Y%m%d%H%M%SZ", absl::Now() + absl::Hours(48), absl::UTCTimeZone());
     const std::string token = "integration-suite-operator-token";
     for (const std::string& command :
          {absl::StrCat("bash ", pki, " init ", dir),
-          absl::StrCat("bash ", pki, " issue ", dir, " server a localhost 'DNS:localhost,IP:127.0.0.1' server ",
-                       from, " ", until),
-          absl::StrCat("bash ", pki, " issue ", dir, " client a integration-suite '' client ", from, " ",
+          absl::StrCat("bash ", pki, " issue ", dir,
+                       " server a localhost 'DNS:localhost,IP:127.0.0.1' server ", from, " ",
                        until),
+          absl::StrCat("bash ", pki, " issue ", dir, " client a integration-suite '' client ", from,
+                       " ", until),
           absl::StrCat("printf %s '", token, "' > ", dir, "/operator.token"),
           absl::StrCat("printf '%s suite operator\n' \"$(printf %s '", token,
                        "' | sha256sum | cut -c1-64)\" > ", dir, "/tokens.txt")}) {
@@ -162,27 +163,16 @@ absl::StatusOr<std::unique_ptr<ServerProcess>> ServerProcess::Spawn(std::vector<
     return absl::InternalError("pipe failed");
   }
 
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const rlimit files{static_cast<rlim_t>(max_open_files), static_cast<rlim_t>(max_open_files)};
-
-  server->pid_ = fork();
-  if (server->pid_ == 0) {
-    // Only async-signal-safe calls between fork and exec: the test process
-    // has other threads.
-    dup2(out[1], STDOUT_FILENO);
-    dup2(stderr_fd, STDERR_FILENO);
-    if (max_open_files > 0 && setrlimit(RLIMIT_NOFILE, &files) != 0) _exit(126);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
+  absl::StatusOr<pid_t> pid = SpawnProcess(
+      args,
+      SpawnOptions{.stdout_fd = out[1], .stderr_fd = stderr_fd, .max_open_files = max_open_files});
   close(out[1]);
   close(stderr_fd);
-  if (server->pid_ < 0) {
+  if (!pid.ok()) {
     close(out[0]);
-    return absl::InternalError(absl::StrFormat("cannot start %s: fork failed", argv[0]));
+    return pid.status();
   }
+  server->pid_ = *pid;
   server->pidfd_ = static_cast<int>(syscall(SYS_pidfd_open, server->pid_, 0));
 
   // Read stdout until the readiness line (or EOF: the server failed).

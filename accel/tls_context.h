@@ -38,14 +38,15 @@ typedef struct ssl_ctx_st SSL_CTX;
 namespace riskplan::accel {
 
 // One end's files. `flag_prefix` is prepended to every flag name in
-// messages ("fpga_" gives "--fpga_tls_cert=...").
+// messages ("fpga_" gives "--fpga_tls_cert=..."). Every member has an
+// initializer, so a designated initializer may name only the files it sets.
 struct TlsFiles {
-  std::string cert;  // own certificate chain (PEM); listener: required
-  std::string key;   // its private key (PEM)
-  std::string ca;    // CA that must have signed the peer's certificate; listener: the
-                     // client certificate is then required (mutual TLS)
-  std::string crl;   // optional revocation list (PEM) checked on the peer's chain
-  std::string flag_prefix;
+  std::string cert{};  // own certificate chain (PEM); listener: required
+  std::string key{};   // its private key (PEM)
+  std::string ca{};    // CA that must have signed the peer's certificate; listener: the
+                       // client certificate is then required (mutual TLS)
+  std::string crl{};   // optional revocation list (PEM) checked on the peer's chain
+  std::string flag_prefix{};
 
   bool enabled() const { return !cert.empty() || !key.empty() || !ca.empty(); }
 };

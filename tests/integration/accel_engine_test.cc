@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
@@ -203,7 +204,7 @@ TEST(AccelEngineTest, PlansAndEvaluationsThroughAnFpgaShim) {
 }
 
 TEST(AccelEngineTest, CacheFlagsAreListedAndChecked) {
-  const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-server";
+  const std::string binary = absl::StrCat(RISKPLAN_BIN_DIR, "/riskplan-server");
   const CommandResult help = RunCommand(binary + " --help 2>&1");
   for (const char* flag : {"-risk_cache_mb", "-kernel_weights_cache_mb", "-prepared_map_cache_mb",
                            "-blob_cache_mb", "-model_cache_size", "-feasibility_cache_size"}) {

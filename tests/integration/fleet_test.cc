@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/clock.h"
@@ -496,7 +497,7 @@ TEST_F(FleetTest, WithoutTheGoalTreeCacheIdenticalFleetsGiveIdenticalTrajectorie
 }
 
 TEST(FleetGoalTreeCacheFlagTest, AnOutOfRangeSizeIsRefusedAtStartUp) {
-  const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-server";
+  const std::string binary = absl::StrCat(RISKPLAN_BIN_DIR, "/riskplan-server");
   const CommandResult help = RunCommand(binary + " --help 2>&1");
   EXPECT_THAT(help.output, HasSubstr("-goal_tree_cache_mb"));
   for (const char* value : {"-1", "65537"}) {

@@ -6,6 +6,7 @@
 #include <regex>
 #include <string>
 
+#include "absl/strings/str_cat.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/integration/requests.h"
@@ -76,7 +77,7 @@ TEST(Float32KernelTest, PlanRiskIsWithin1e5OfTheExactReevaluation) {
 }
 
 TEST(Float32KernelTest, FlagIsListedAndChecked) {
-  const std::string binary = std::string(RISKPLAN_BIN_DIR) + "/riskplan-server";
+  const std::string binary = absl::StrCat(RISKPLAN_BIN_DIR, "/riskplan-server");
   const CommandResult help = RunCommand(binary + " --help 2>&1");
   EXPECT_THAT(help.output, HasSubstr("-cpu_kernel"));
   EXPECT_THAT(help.output, HasSubstr("float32"));

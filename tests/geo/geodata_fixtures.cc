@@ -23,9 +23,30 @@
 namespace riskplan::geo::testing {
 namespace fs = std::filesystem;
 
+namespace {
+
+// The process's own directory under the test temp dir, removed with
+// everything in it when the process exits normally (a test that fails still
+// exits normally; one that crashes leaves it, for a look at what it wrote).
+// A forked child that exits does not remove its parent's directory.
+const fs::path& ProcessDir() {
+  struct Owned {
+    pid_t owner = ::getpid();
+    fs::path path = fs::path(::testing::TempDir()) / absl::StrCat("riskplan-geo-", owner);
+    ~Owned() {
+      if (::getpid() != owner) return;
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  };
+  static const Owned owned;
+  return owned.path;
+}
+
+}  // namespace
+
 std::string FreshDir(const std::string& name) {
-  const fs::path dir =
-      fs::path(::testing::TempDir()) / absl::StrCat("riskplan-geo-", ::getpid()) / name;
+  const fs::path dir = ProcessDir() / name;
   std::error_code ec;
   fs::remove_all(dir, ec);
   fs::create_directories(dir, ec);

@@ -112,6 +112,13 @@ class RiskplanToolTest : public ::testing::Test {
     ASSERT_TRUE(WriteMapBundle(*GeoMap(95.0, kLonDeg), *dir_ + "/bad-geo").ok());
   }
 
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    std::filesystem::remove_all(*dir_, ec);
+    delete dir_;
+    dir_ = nullptr;
+  }
+
   static constexpr double kLatDeg = 50.0875;
   static constexpr double kLonDeg = 14.4213;
 

@@ -25,7 +25,6 @@ import selectors
 import socket
 import subprocess
 import sys
-import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -63,7 +62,7 @@ def post(address, path, body):
 
 
 def start_8km(bin_dir, extra_gateway=()):
-    maps = tempfile.mkdtemp(prefix="riskplan-bench-web-")
+    maps = wf.scratch_dir("riskplan-bench-web-")
     subprocess.run([os.path.join(bin_dir, "riskplan-tool"), "write-map", f"--out={maps}/demo-city"],
                    check=True, stdout=subprocess.DEVNULL)
     server = wf.start_server(bin_dir, maps)
@@ -106,7 +105,7 @@ def latency(bin_dir, plans):
 def screenshot(bin_dir, path):
     """The picture of docs/web.md: a 5 s plan across the 8 km demo-city, placed
     on WGS84, with the risk layer at 100 m, the plot and the final profile."""
-    maps = tempfile.mkdtemp(prefix="riskplan-bench-web-")
+    maps = wf.scratch_dir("riskplan-bench-web-")
     subprocess.run([os.path.join(bin_dir, "riskplan-tool"), "write-map",
                     f"--out={maps}/demo-city-wgs84"], check=True, stdout=subprocess.DEVNULL)
     manifest = os.path.join(maps, "demo-city-wgs84", "manifest.json")

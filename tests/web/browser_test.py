@@ -45,7 +45,6 @@ import struct
 import threading
 import subprocess
 import sys
-import tempfile
 import zlib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -185,7 +184,7 @@ def plan_and_check(driver, iterations):
 def main():
     bin_dir, out_dir = sys.argv[1], sys.argv[2]
     os.makedirs(out_dir, exist_ok=True)
-    work = tempfile.mkdtemp(prefix="riskplan-browser-test-")
+    work = wf.scratch_dir("riskplan-browser-test-")
     maps_dir = os.path.join(work, "maps")
     map_name = wf.write_local_city(bin_dir, maps_dir)
     geo_name = wf.write_geo_city(bin_dir, maps_dir)

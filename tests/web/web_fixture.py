@@ -7,6 +7,7 @@ Nothing here sleeps to synchronise: every wait polls a condition up to a
 generous deadline, so a loaded 2-core machine is slower but not wrong.
 """
 
+import atexit
 import json
 import math
 import os
@@ -37,11 +38,35 @@ def wait_for(condition, timeout_s, what):
         time.sleep(0.05)
 
 
+def _remove_at_exit(path):
+    """Removes a scratch file or directory when the script exits (also after a
+    failed check), unless RISKPLAN_KEEP_TEST_FILES is set, to keep it for a look."""
+    def remove():
+        if os.environ.get("RISKPLAN_KEEP_TEST_FILES"):
+            return
+        if os.path.isdir(path):
+            shutil.rmtree(path, ignore_errors=True)
+        elif os.path.exists(path):
+            os.unlink(path)
+    atexit.register(remove)
+
+
+def scratch_dir(prefix):
+    """A new directory under the temp dir, removed when the script exits."""
+    path = tempfile.mkdtemp(prefix=prefix)
+    _remove_at_exit(path)
+    return path
+
+
 class Process:
     """A program started with its stdout read up to a readiness line."""
 
     def __init__(self, args, ready_prefix, timeout_s=120, log_path=None):
-        self.log_path = log_path or tempfile.mktemp(prefix="riskplan-web-test-", suffix=".log")
+        if log_path is None:
+            fd, log_path = tempfile.mkstemp(prefix="riskplan-web-test-", suffix=".log")
+            os.close(fd)
+            _remove_at_exit(log_path)
+        self.log_path = log_path
         self.log = open(self.log_path, "wb")
         self.proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=self.log)
         self.address = None

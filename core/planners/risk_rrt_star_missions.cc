@@ -178,10 +178,17 @@ void Run::MaybeReportMission(size_t m) {
   }
   if (r.best.has_value() && !(risk < r.best->risk)) return;
   r.best_pieces.clear();
-  for (size_t i = 0; i + 1 < waypoints.size(); ++i) {
-    r.best_pieces.push_back(TrajectoryPiece::Manoeuvre(waypoints[i], waypoints[i + 1],
-                                                       mp.turn_radius_m, mp.max_climb_rad));
-    length += r.best_pieces.back().Length();
+  // The length of each piece, start to goal, as EvaluateTrajectory's pieces
+  // give it (the same manoeuvre between the same poses), made once per edge.
+  for (int32_t n = start; nodes_[n].parent >= 0; n = nodes_[n].parent) {
+    Node& node = nodes_[n];
+    if (node.length_parent != node.parent) {
+      node.edge_length = TrajectoryPiece::Manoeuvre(node.pose, nodes_[node.parent].pose,
+                                                    mp.turn_radius_m, mp.max_climb_rad)
+                             .Length();
+      node.length_parent = node.parent;
+    }
+    length += node.edge_length;
   }
   PlanImprovement improvement;
   improvement.waypoints = std::move(waypoints);

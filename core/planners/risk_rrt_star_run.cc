@@ -29,7 +29,15 @@ bool Run::SampleUniform(Pose* q) {
 }
 
 bool Run::SamplePathBiased(size_t m, Pose* q) {
-  const MissionRun& r = missions_[m];
+  MissionRun& r = missions_[m];
+  if (r.best_pieces.empty()) {
+    const ModelParams& mp = model_.params();
+    const std::vector<Pose>& w = r.best->waypoints;
+    for (size_t i = 0; i + 1 < w.size(); ++i) {
+      r.best_pieces.push_back(
+          TrajectoryPiece::Manoeuvre(w[i], w[i + 1], mp.turn_radius_m, mp.max_climb_rad));
+    }
+  }
   const double length = r.best->length_m;
   double s = rng_.Uniform() * length;
   Pose base = r.best_pieces.back().End();

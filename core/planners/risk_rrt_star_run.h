@@ -72,6 +72,11 @@ struct Node {
   double cost = kInf;       // R(q): risk from here to the goal along the tree
   double edge_risk = kInf;  // risk of the edge to the parent (a piece risk)
   std::vector<int32_t> children;
+  // The length of the piece to the parent, computed when a trajectory
+  // through this node is reported, for the parent `length_parent` (-1: not
+  // yet). Poses never change, so it stays valid until the node is re-parented.
+  int32_t length_parent = -1;
+  double edge_length = 0.0;
 };
 
 // A candidate edge, evaluated progressively: its midpoints are generated,
@@ -174,6 +179,10 @@ class Run {
     std::optional<std::chrono::steady_clock::time_point> deadline;
     MissionState state = MissionState::kRunning;
     std::optional<PlanImprovement> best;
+    // The pieces of best's trajectory, made when a path-biased sample needs
+    // them (empty: not made since best changed). A shared tree's edit can
+    // lower R of every mission through its nodes, so most reported
+    // trajectories are never sampled before the next replaces them.
     std::vector<TrajectoryPiece> best_pieces;
   };
 

@@ -26,6 +26,7 @@
 //   riskplan-bench-shared-tree [--missions=32] [--separate_s=1] [--seed=1]
 //                              [--separate_iterations=0] [--shared_params=path_bias=0.5]
 //                              [--separate_cache=FILE] [--shared_seed=0]
+//                              [--start_area=X,Y,R]
 #include <time.h>
 
 #include <algorithm>
@@ -63,6 +64,9 @@ ABSL_FLAG(std::string, separate_cache, "",
 ABSL_FLAG(std::string, shared_params, "",
           "RISK_RRT_STAR parameters of the shared tree only, name=value,... (the separate plans "
           "keep the defaults)");
+ABSL_FLAG(std::string, start_area, "",
+          "X,Y,R: draw the starts in the disc of radius R m around (X, Y) instead of over the "
+          "whole city (still 2 km from the depot and 200 m from each other)");
 
 namespace riskplan {
 namespace {
@@ -84,7 +88,8 @@ const std::shared_ptr<const RiskModel>& Model() {
 }
 
 // The depot in the south-east suburbs; starts drawn uniformly over the city
-// (fixed generator), at least 2 km from it and 200 m from each other.
+// (fixed generator), or over the disc --start_area, at least 2 km from it and
+// 200 m from each other.
 struct Fleet {
   Pose depot;
   std::vector<Pose> starts;
@@ -97,9 +102,29 @@ const Fleet& TheFleet() {
     f.depot = *bench::FindFlyablePose(model, 6500, 1500, kPi / 2);
     Rng rng(20261202);
     const double w = model.map().width_m();
+    std::vector<double> area;  // X, Y, R, or empty: the whole city
+    for (absl::string_view v :
+         absl::StrSplit(absl::GetFlag(FLAGS_start_area), ',', absl::SkipEmpty())) {
+      area.push_back(std::stod(std::string(v)));
+    }
+    if (!area.empty() && (area.size() != 3 || !(area[2] > 0.0))) {
+      std::fprintf(stderr, "--start_area: want X,Y,R with R > 0\n");
+      std::exit(2);
+    }
+    int64_t draws = 0;
     while (static_cast<int>(f.starts.size()) < absl::GetFlag(FLAGS_missions)) {
-      const double x = model.map().x0() + 600 + rng.Uniform() * (w - 1200);
-      const double y = model.map().y0() + 600 + rng.Uniform() * (w - 1200);
+      if (++draws > 1000000) {
+        std::fprintf(stderr, "cannot place %d starts (--start_area too small?)\n",
+                     absl::GetFlag(FLAGS_missions));
+        std::exit(2);
+      }
+      double x = model.map().x0() + 600 + rng.Uniform() * (w - 1200);
+      double y = model.map().y0() + 600 + rng.Uniform() * (w - 1200);
+      if (!area.empty()) {
+        x = area[0] + (2.0 * rng.Uniform() - 1.0) * area[2];
+        y = area[1] + (2.0 * rng.Uniform() - 1.0) * area[2];
+        if (std::hypot(x - area[0], y - area[1]) > area[2]) continue;
+      }
       const double theta = rng.Uniform() * kTwoPi;
       if (std::hypot(x - f.depot.x, y - f.depot.y) < 2000.0) continue;
       std::optional<Pose> p = bench::FindFlyablePose(model, x, y, theta);

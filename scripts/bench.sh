@@ -27,6 +27,8 @@ fi
 if [ "$what" = shared ] || [ "$what" = all ]; then
   echo "== 32 missions to one depot: shared goal tree vs separate plans (bench/shared_tree_bench.cc) =="
   "$BIN/riskplan-bench-shared-tree"
+  echo "== the same from one area: 32 starts within 1.2 km of (2000, 6000) =="
+  "$BIN/riskplan-bench-shared-tree" --start_area=2000,6000,1200
 fi
 if [ "$what" = rtl ] || [ "$what" = all ]; then
   echo "== the component's RTL under Verilator: cycles by lane count (bench/rtl_bench.cc) =="

@@ -43,8 +43,11 @@
 #
 # The checks (the thresholds are about leaks, hangs and wrong answers, not
 # speed, so that a loaded 2-core machine passes them):
-#  rss      after warm-up, every RSS sample within +-5 % of their median.
-#           Warm-up: the measurement phase (at saturation: the caches, the
+#  rss      after warm-up, no RSS sample more than 5 % above the median of
+#           the first quarter of the post-warm-up samples (growth: what a
+#           leak does). A fall is reported, not judged: glibc gives a
+#           per-thread arena's free top back to the system when it likes (a
+#           60 s run under stress-ng fell by 49 MB, 9 %, mid-run). Warm-up: the measurement phase (at saturation: the caches, the
 #           overridden parameters' model and the boards' blobs are all in
 #           place at its end) plus the first 20 % of DURATION, at least 30 s
 #           and at most 2 minutes. The RSS still steps up during the first

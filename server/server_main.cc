@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -556,6 +557,42 @@ void AnnounceServing(const Serving& serving, const ServiceOptions& options) {
                            options.max_running_plans, options.eval_threads));
 }
 
+// How long the orderly exit after a completed drain may take (destructors,
+// freeing the maps, a sanitizer's leak check) before the watchdog ends it.
+constexpr absl::Duration kTeardownAllowance = absl::Seconds(10);
+
+// Ends the process with exit code 1 if it still runs at a deadline: first
+// the drain's (drain_timeout), then, once the drain is done, the exit's
+// (teardown_timeout). One detached thread, started at SIGTERM.
+class ExitWatchdog {
+ public:
+  static void Start(absl::Time drain_deadline) {
+    deadline_ns_.store(absl::ToUnixNanos(drain_deadline));
+    std::thread([] {
+      for (;;) {
+        const absl::Time deadline = absl::FromUnixNanos(deadline_ns_.load());
+        const absl::Time now = absl::Now();
+        if (now >= deadline) break;
+        absl::SleepFor(std::min(deadline - now, absl::Milliseconds(200)));
+      }
+      if (tearing_down_.load()) {
+        LogEvent("teardown_timeout", "the exit after the drain is taking too long; exiting");
+      } else {
+        LogEvent("drain_timeout", "work still running after the grace period; exiting");
+      }
+      std::_Exit(1);
+    }).detach();
+  }
+  static void Teardown(absl::Time deadline) {
+    tearing_down_.store(true);
+    deadline_ns_.store(absl::ToUnixNanos(deadline));
+  }
+
+ private:
+  static inline std::atomic<int64_t> deadline_ns_{0};
+  static inline std::atomic<bool> tearing_down_{false};
+};
+
 // Waits for SIGTERM or SIGINT, then drains: refuse new work, let running
 // plans use the grace period, then stop them so that they send their best
 // trajectory before the server stops.
@@ -576,14 +613,10 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, Serving
   LogEvent("draining", absl::StrFormat("signal=%d running_plans=%d grace_ms=%d", signal_number,
                                        plans.running(), grace_ms));
   // A last resort, in case some work ignores its stop (a bug): the process
-  // ends two seconds after the grace period whatever is still running, so
-  // that a stuck thread cannot hold a terminating pod. Exit code 1 says the
-  // drain did not complete.
-  std::thread([deadline = drain_start + grace + absl::Seconds(2)] {
-    absl::SleepFor(deadline - absl::Now());
-    LogEvent("drain_timeout", "work still running after the grace period; exiting");
-    std::_Exit(1);
-  }).detach();
+  // ends two seconds after the grace period if the drain is still running,
+  // so that a stuck thread cannot hold a terminating pod. Exit code 1 says
+  // the drain did not complete.
+  ExitWatchdog::Start(drain_start + grace + absl::Seconds(2));
   if (!plans.WaitUntilIdle(drain_start + grace - stop_margin)) {
     LogEvent("stopping_plans", absl::StrFormat("running_plans=%d", plans.running()));
     plans.StopAll();
@@ -609,6 +642,12 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, Serving
   if (serving.health_server != nullptr) serving.health_server->Shutdown(absl::ToChronoTime(absl::Now()));
   LogEvent("stopped",
            absl::StrFormat("seconds=%.3f", absl::ToDoubleSeconds(absl::Now() - drain_start)));
+  // The drain is done; what is left is the orderly exit (destructors join
+  // the workers, the maps are freed), which gets its own allowance rather
+  // than the drain's: a drain that ended in milliseconds left the exit
+  // seconds, and under a sanitizer on a loaded machine (its leak check
+  // scans the heap at exit) that was not always enough.
+  ExitWatchdog::Teardown(absl::Now() + kTeardownAllowance);
 }
 
 // Exit codes: 2 for bad flags, 1 when the server cannot start, 0 after a

@@ -21,6 +21,14 @@
 namespace riskplan::testing {
 namespace {
 
+// The last 4 kB of a server's stderr: its last log lines, or a sanitizer's
+// report when it exited on one.
+std::string StderrTail(const ServerProcess& server) {
+  const std::string text = server.Stderr();
+  const size_t from = text.size() > 4096 ? text.size() - 4096 : 0;
+  return "\nserver stderr (last 4 kB):\n" + text.substr(from);
+}
+
 using ::testing::HasSubstr;
 
 // Starts on the small city, admissible under the default parameters.
@@ -391,7 +399,8 @@ TEST(FleetShutdownTest, EveryMissionEndsWithShutdownAndTheServerExits) {
   EXPECT_EQ(finals[1].mission_id(), "endless-0");
   EXPECT_TRUE(finals[1].update().has_trajectory());
   for (const v1::FleetUpdate& u : finals) EXPECT_EQ(u.update().end_reason(), v1::SHUTDOWN);
-  EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0);
+  // On another exit, what the server (or a sanitizer) said last.
+  EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0) << StderrTail(**server);
 }
 
 TEST(FleetShutdownTest, AMissionTheDrainLeftUnplannedKeepsThatFinalWhenNoReplicaIsLeft) {
@@ -427,7 +436,8 @@ TEST(FleetShutdownTest, AMissionTheDrainLeftUnplannedKeepsThatFinalWhenNoReplica
   EXPECT_FALSE(finals[1].update().has_trajectory());
   EXPECT_EQ(finals[1].missions_ended(), 2);
   for (const v1::FleetUpdate& u : finals) EXPECT_EQ(u.update().end_reason(), v1::SHUTDOWN);
-  EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0);
+  // On another exit, what the server (or a sanitizer) said last.
+  EXPECT_EQ((*server)->Wait(absl::Seconds(60)), 0) << StderrTail(**server);
 }
 
 // The goal tree cache (--goal_tree_cache_mb): a fleet to a goal a fleet

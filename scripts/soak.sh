@@ -47,7 +47,8 @@
 #           the first quarter of the post-warm-up samples (growth: what a
 #           leak does). A fall is reported, not judged: glibc gives a
 #           per-thread arena's free top back to the system when it likes (a
-#           60 s run under stress-ng fell by 49 MB, 9 %, mid-run). Warm-up: the measurement phase (at saturation: the caches, the
+#           60 s run under stress-ng fell by 49 MB, 9 %, mid-run).
+#           Warm-up: the measurement phase (at saturation: the caches, the
 #           overridden parameters' model and the boards' blobs are all in
 #           place at its end) plus the first 20 % of DURATION, at least 30 s
 #           and at most 2 minutes. The RSS still steps up during the first

@@ -275,13 +275,11 @@ def main():
     lines.append("")
     lines.append(f"## Resources (warm-up: measurement phase plus the first {warm_s:.0f} s of the "
                  f"soak; {len(post)} samples after it)")
-    rss_med = None
     rss_base = None
     if len(post) < 4:
         fails.append(f"samples: only {len(post)} samples after warm-up")
     else:
         rss = [s["rss_kb"] for s in post]
-        rss_med = statistics.median(rss)
         rss_base = judge_rss(rss, fails, lines)
         flat("fds", [s["fds"] for s in post], FD_BAND, fails, lines)
         flat("threads", [s["threads"] for s in post], THREAD_BAND, fails, lines)

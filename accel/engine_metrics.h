@@ -1,6 +1,6 @@
 // The RiskEngine's state as metric samples and log lines, for the server to
 // export (Prometheus through prometheus-cpp, structured logs) without accel/
-// knowing either. Names follow server/metrics.h: riskplan_accel_*.
+// knowing either. Names follow server/observability/metrics.h: riskplan_accel_*.
 //
 //   riskplan_accel_configurations_total{runner}      counter  runner: caller, cpu-N, fpga:HOST:PORT
 //   riskplan_accel_chunks_total{runner}               counter

@@ -14,8 +14,8 @@
 #include "core/map/demo_city.h"
 #include "core/map/risk_map.h"
 #include "fuzz/fuzz_support.h"
-#include "server/map_registry.h"
-#include "server/request_validation.h"
+#include "server/models/map_registry.h"
+#include "server/api/request_validation.h"
 
 namespace riskplan::fuzz {
 

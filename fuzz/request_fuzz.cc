@@ -1,5 +1,5 @@
 // Fuzz target: the server's handling of request bytes, from the raw gRPC
-// message to the answer: ParseRequest (server/message_codec.h), the
+// message to the answer: ParseRequest (server/api/message_codec.h), the
 // validation of an EvaluateRiskRequest or PlanRequest, and then what the
 // service does with a request that passes, on a small demo-city (1 km at
 // 10 m cells; "demo-city" without a geo-reference, and the same layers as
@@ -43,14 +43,14 @@
 #include "google/protobuf/stubs/logging.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.pb.h"
-#include "server/feasibility_cache.h"
-#include "server/fleet_request.h"
-#include "server/map_registry.h"
-#include "server/message_codec.h"
-#include "server/model_cache.h"
+#include "server/models/feasibility_cache.h"
+#include "server/fleet/fleet_request.h"
+#include "server/models/map_registry.h"
+#include "server/api/message_codec.h"
+#include "server/models/model_cache.h"
 #include "server/planner_service.h"
-#include "server/proto_convert.h"
-#include "server/request_validation.h"
+#include "server/api/proto_convert.h"
+#include "server/api/request_validation.h"
 
 namespace riskplan::fuzz {
 namespace {

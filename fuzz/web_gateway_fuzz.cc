@@ -50,11 +50,11 @@
 #include "google/protobuf/stubs/logging.h"
 #include "grpcpp/grpcpp.h"
 #include "nlohmann/json.hpp"
-#include "server/map_registry.h"
-#include "server/metrics.h"
-#include "server/model_cache.h"
+#include "server/models/map_registry.h"
+#include "server/observability/metrics.h"
+#include "server/models/model_cache.h"
 #include "server/planner_service.h"
-#include "server/rpc_log.h"
+#include "server/observability/rpc_log.h"
 #include "web/gateway.h"
 
 namespace riskplan::fuzz {

@@ -14,11 +14,11 @@
 #include "accel/kernel_evaluator.h"
 #include "core/flight/trajectory.h"
 #include "core/risk/risk_layer.h"
-#include "server/message_codec.h"
-#include "server/proto_convert.h"
-#include "server/risk_layer_request.h"
-#include "server/rpc_log.h"
-#include "server/status_util.h"
+#include "server/api/message_codec.h"
+#include "server/api/proto_convert.h"
+#include "server/api/risk_layer_request.h"
+#include "server/observability/rpc_log.h"
+#include "server/api/status_util.h"
 
 namespace riskplan::server {
 namespace {
@@ -104,7 +104,7 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   std::atomic<bool> completed_{false};
 };
 
-// Checks that the caller may call `method` (server/auth.h), records who it
+// Checks that the caller may call `method` (server/security/auth.h), records who it
 // is on `call`, and ends the call with UNAUTHENTICATED or PERMISSION_DENIED
 // if not: false then.
 template <typename Call>

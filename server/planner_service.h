@@ -19,18 +19,18 @@
 #include "core/base/cancellation.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
-#include "server/auth.h"
-#include "server/feasibility_cache.h"
-#include "server/fleet_scheduler.h"
-#include "server/goal_tree_cache.h"
-#include "server/map_registry.h"
-#include "server/metrics.h"
-#include "server/model_cache.h"
-#include "server/open_calls.h"
-#include "server/plan_call.h"
-#include "server/request_validation.h"
-#include "server/thread_pool.h"
-#include "server/timer_queue.h"
+#include "server/security/auth.h"
+#include "server/models/feasibility_cache.h"
+#include "server/fleet/fleet_scheduler.h"
+#include "server/models/goal_tree_cache.h"
+#include "server/models/map_registry.h"
+#include "server/observability/metrics.h"
+#include "server/models/model_cache.h"
+#include "server/plan/open_calls.h"
+#include "server/plan/plan_call.h"
+#include "server/api/request_validation.h"
+#include "server/plan/thread_pool.h"
+#include "server/plan/timer_queue.h"
 
 namespace riskplan::server {
 
@@ -46,7 +46,7 @@ struct ServiceOptions {
   int eval_threads = 2;            // EvaluateRisk and GetMapLayer workers
   size_t max_queued_evals = 1024;  // waiting evaluations; more: RESOURCE_EXHAUSTED
   size_t max_cached_checkers = 8;  // two-tier feasibility checkers kept (EvaluateRisk.two_tier)
-  // PlanFleet's goal trees kept across requests (server/goal_tree_cache.h),
+  // PlanFleet's goal trees kept across requests (server/models/goal_tree_cache.h),
   // bytes by GoalTreeCache::TreeBytes; 0: none, each shared group grows its
   // tree from the goal.
   size_t goal_tree_cache_bytes = 0;
@@ -54,7 +54,7 @@ struct ServiceOptions {
   // boards); null: each call computes its own on its thread. Not owned; must
   // outlive the service.
   accel::RiskEngine* engine = nullptr;
-  // Decides who may call what (server/auth.h); null: everyone may call
+  // Decides who may call what (server/security/auth.h); null: everyone may call
   // everything.
   std::shared_ptr<Authorizer> authorizer;
 };
@@ -70,7 +70,7 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
                            const EvaluateSpec& spec, const StopCondition& stop,
                            v1::EvaluateRiskResponse* response);
 
-// riskplan.v1.Planner with every method raw (server/message_codec.h says
+// riskplan.v1.Planner with every method raw (server/api/message_codec.h says
 // why): the service parses each request and serialises each response itself.
 using RawPlannerService = v1::Planner::WithRawCallbackMethod_PlanTrajectory<
     v1::Planner::WithRawCallbackMethod_PlanFleet<v1::Planner::WithRawCallbackMethod_EvaluateRisk<

@@ -62,7 +62,7 @@ inline constexpr size_t kMaxSharedTreeMissions = 256;
 // and the other nodes renumbered in their order, node 0 the goal.
 //
 // The model is not recorded: a tree is only valid for the model it was grown
-// with, and the caller must key it by that model (server/goal_tree_cache.h
+// with, and the caller must key it by that model (server/models/goal_tree_cache.h
 // keys by the map's name and identity and every model parameter).
 struct GoalTreeNode {
   Pose pose;

@@ -1,4 +1,4 @@
-#include "client/bitmap_font.h"
+#include "client/picture/bitmap_font.h"
 
 #include <set>
 #include <string>

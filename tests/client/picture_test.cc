@@ -1,10 +1,10 @@
-#include "client/picture.h"
+#include "client/picture/picture.h"
 
 #include <cmath>
 #include <string>
 
-#include "client/bitmap_font.h"
-#include "client/picture_layout.h"
+#include "client/picture/bitmap_font.h"
+#include "client/picture/picture_layout.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 
@@ -36,7 +36,7 @@ int CountIn(const RgbaImage& img, const PixelBox& box, Pixel c) {
   return n;
 }
 
-// The picture's colours, as the map draws them (client/picture_draw.h).
+// The picture's colours, as the map draws them (client/picture/picture_draw.h).
 constexpr Pixel kNoPeople = {236, 240, 230};
 constexpr Pixel kNoFlyOverNoPeople = {154, 110, 204};  // 65 % of (110, 40, 190) over kNoPeople
 constexpr Pixel kLandingSite = {20, 150, 60};

@@ -43,7 +43,7 @@ def main(source):
         return failures
     metric = pods[0]["metric"]["name"]
     check(metric in exported,
-          f"{server_yaml}: the autoscaler's metric {metric} is not one server/metrics.cc exports")
+          f"{server_yaml}: the autoscaler's metric {metric} is not one server/observability/metrics.cc exports")
 
     with open(adapter_yaml) as f:
         adapter = yaml.safe_load(f)

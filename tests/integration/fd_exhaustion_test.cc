@@ -1,7 +1,7 @@
 // Out of file descriptors at accept: the server keeps serving the calls and
 // connections it has, says so in its log, and accepts again once descriptors
 // are free. (gRPC 1.51's own listener stops accepting for good after one
-// EMFILE; server/connection_acceptor.h is why this passes.)
+// EMFILE; server/security/connection_acceptor.h is why this passes.)
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>

@@ -1,6 +1,6 @@
 // Roles per method, the token file and the decisions of Authorizer, without
-// gRPC's transport (server/auth.h).
-#include "server/auth.h"
+// gRPC's transport (server/security/auth.h).
+#include "server/security/auth.h"
 
 #include <unistd.h>
 

@@ -1,7 +1,7 @@
-// PlanFleet's admission and queue order (server/fleet_queue.h): missions
+// PlanFleet's admission and queue order (server/fleet/fleet_queue.h): missions
 // counted on admission, fair share between identities (fewest planning,
 // then turns), then priority, then arrival.
-#include "server/fleet_queue.h"
+#include "server/fleet/fleet_queue.h"
 
 #include <vector>
 

@@ -1,6 +1,6 @@
 // PlanFleet's request: the fleet's own bounds refuse the whole request, a
 // mission's errors are its own with its path, and which missions share a tree.
-#include "server/fleet_request.h"
+#include "server/fleet/fleet_request.h"
 
 #include "absl/strings/str_format.h"
 #include "gmock/gmock.h"

@@ -1,4 +1,4 @@
-#include "server/goal_tree_cache.h"
+#include "server/models/goal_tree_cache.h"
 
 #include <cmath>
 #include <memory>

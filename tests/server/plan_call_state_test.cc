@@ -1,7 +1,7 @@
 // How a plan stream ends: every transition of PlanCallState, and an
 // exhaustive check that any order of events finishes the call exactly once,
 // never while a write is in flight, and never leaves it hanging.
-#include "server/plan_call_state.h"
+#include "server/plan/plan_call_state.h"
 
 #include <string>
 #include <vector>

@@ -1,12 +1,12 @@
-#include "server/proto_convert.h"
+#include "server/api/proto_convert.h"
 
 #include <cmath>
 #include <vector>
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/feasibility_cache.h"
-#include "server/model_cache.h"
+#include "server/models/feasibility_cache.h"
+#include "server/models/model_cache.h"
 #include "tests/core/test_maps.h"
 
 namespace riskplan::server {

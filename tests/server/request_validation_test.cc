@@ -1,6 +1,6 @@
 // Validation at the edge: every bad input gets its code and a message naming
 // the field and the value.
-#include "server/request_validation.h"
+#include "server/api/request_validation.h"
 
 #include <cmath>
 #include <limits>

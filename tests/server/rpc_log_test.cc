@@ -1,6 +1,6 @@
 // The server's structured log: what reaches stderr stays one JSON object per
 // line, whatever a request holds.
-#include "server/rpc_log.h"
+#include "server/observability/rpc_log.h"
 
 #include <string>
 

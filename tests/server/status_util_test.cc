@@ -1,4 +1,4 @@
-#include "server/status_util.h"
+#include "server/api/status_util.h"
 
 #include <new>
 #include <stdexcept>

@@ -1,10 +1,10 @@
-#include "server/thread_pool.h"
+#include "server/plan/thread_pool.h"
 
 #include <atomic>
 
 #include "absl/synchronization/notification.h"
 #include "gtest/gtest.h"
-#include "server/timer_queue.h"
+#include "server/plan/timer_queue.h"
 
 namespace riskplan::server {
 namespace {

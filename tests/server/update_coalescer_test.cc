@@ -1,6 +1,6 @@
 // The write discipline of a plan stream: one write in flight, newest update
 // wins, minimum interval, final message never dropped.
-#include "server/update_coalescer.h"
+#include "server/plan/update_coalescer.h"
 
 #include <string>
 

@@ -12,9 +12,9 @@
 #include "geo/geo_frame.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/proto_convert.h"
-#include "server/request_validation.h"
-#include "server/risk_layer_request.h"
+#include "server/api/proto_convert.h"
+#include "server/api/request_validation.h"
+#include "server/api/risk_layer_request.h"
 #include "tests/core/test_maps.h"
 
 namespace riskplan::server {

@@ -1,6 +1,6 @@
 // A shared goal tree exported at the end of a plan and begun from by the
 // next one (GoalTree, SharedTreeOptions::initial_tree): what a cache of goal
-// trees (server/goal_tree_cache.h) relies on.
+// trees (server/models/goal_tree_cache.h) relies on.
 #include <map>
 #include <memory>
 #include <string>

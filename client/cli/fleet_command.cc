@@ -1,0 +1,177 @@
+// `riskplan fleet --missions=FILE.json`: one PlanFleet call, its progress
+// mission by mission as the stream runs, a summary table, and a picture of
+// every mission's trajectory.
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_format.h"
+#include "client/cli/commands.h"
+#include "client/cli/fleet_file.h"
+#include "client/picture/picture.h"
+
+namespace riskplan::client {
+namespace {
+
+int Usage(const std::string& message) {
+  std::fprintf(stderr, "riskplan: %s\n", message.c_str());
+  return 2;
+}
+
+// What the summary table says of one mission.
+struct MissionRow {
+  std::string id;
+  int priority = 0;
+  std::string algorithm;
+  std::string map;
+  std::string end = "(none)";  // end reason, or the error's code
+  v1::Trajectory best;         // the final trajectory, if any
+  bool has_best = false;
+  int64_t iterations = 0;
+  double elapsed_s = 0.0;
+  int order = 0;  // the order it ended in, 1-based
+};
+
+void PrintUpdate(const v1::FleetUpdate& u, int missions) {
+  if (u.error_code() != 0) {
+    std::printf("[%d/%d] %s: %s: %s\n", u.missions_ended(), missions, u.mission_id().c_str(),
+                StatusCodeName(static_cast<grpc::StatusCode>(u.error_code())).c_str(),
+                u.error_message().c_str());
+  } else if (!u.update().final()) {
+    std::printf("      %s: improvement %d, risk %.6g, length %.1f m, %d iterations\n",
+                u.mission_id().c_str(), static_cast<int>(u.update().improvements()),
+                u.update().trajectory().risk(), u.update().trajectory().length_m(),
+                static_cast<int>(u.update().iterations()));
+  } else if (u.update().has_trajectory()) {
+    std::printf("[%d/%d] %s: %s, risk %.9g, length %.1f m, %d iterations, %.2f s\n",
+                u.missions_ended(), missions, u.mission_id().c_str(),
+                v1::EndReason_Name(u.update().end_reason()).c_str(), u.update().trajectory().risk(),
+                u.update().trajectory().length_m(), static_cast<int>(u.update().iterations()),
+                u.update().elapsed_s());
+  } else {
+    std::printf("[%d/%d] %s: %s, no trajectory\n", u.missions_ended(), missions,
+                u.mission_id().c_str(), v1::EndReason_Name(u.update().end_reason()).c_str());
+  }
+  std::fflush(stdout);
+}
+
+void PrintSummary(const std::vector<MissionRow>& rows) {
+  std::printf("\n%-16s %4s %-14s %-16s %14s %10s %10s %9s %5s\n", "mission", "prio", "algorithm",
+              "end", "risk", "length_m", "iterations", "elapsed_s", "order");
+  for (const MissionRow& r : rows) {
+    std::printf("%-16s %4d %-14s %-16s %14s %10s %10d %9.2f %5s\n", r.id.c_str(), r.priority,
+                r.algorithm.c_str(), r.end.c_str(),
+                r.has_best ? absl::StrFormat("%.9g", r.best.risk()).c_str() : "-",
+                r.has_best ? absl::StrFormat("%.1f", r.best.length_m()).c_str() : "-",
+                static_cast<int>(r.iterations), r.elapsed_s,
+                r.order > 0 ? absl::StrFormat("%d", r.order).c_str() : "-");
+  }
+}
+
+// The picture of every mission on --map that has a trajectory.
+int WriteFleetPicture(const CliOptions& o, const std::vector<MissionRow>& rows,
+                      PictureInput& picture) {
+  for (const MissionRow& r : rows) {
+    if (!r.has_best || r.map != o.map || r.best.waypoints_size() < 2) continue;
+    picture.fleet.push_back(r.best);
+    picture.fleet_labels.push_back(r.id);
+    picture.fleet_starts.push_back(r.best.waypoints(0));
+  }
+  if (!picture.fleet.empty()) {
+    // The local endpoints are the trajectories' own ends (a mission may be
+    // given in WGS84); the goal drawn is the first mission's.
+    picture.start = picture.fleet_starts.front();
+    const v1::Trajectory& first = picture.fleet.front();
+    picture.goal = first.waypoints(first.waypoints_size() - 1);
+  }
+  picture.caption =
+      absl::StrFormat("%s: fleet of %d missions, %d trajectories drawn", o.map,
+                      static_cast<int>(rows.size()), static_cast<int>(picture.fleet.size()));
+  if (absl::Status s = WritePicture(o.picture, picture); !s.ok()) {
+    std::fprintf(stderr, "riskplan: %s\n", std::string(s.message()).c_str());
+    return 1;
+  }
+  std::printf("picture: %s\n", o.picture.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int RunFleet(const CliOptions& o, RiskplanClient& client) {
+  if (o.missions.empty()) {
+    return Usage("--missions=FILE.json is required (docs/api.md, \"Missions files\")");
+  }
+  absl::StatusOr<v1::FleetRequest> request = ReadMissionsFile(o.missions, o);
+  if (!request.ok()) return Usage(std::string(request.status().message()));
+  if (!o.picture.empty() && !o.picture.ends_with(".svg") && !o.picture.ends_with(".png")) {
+    return Usage("--picture must name a .svg or .png file");
+  }
+  PictureInput picture;
+  if (!o.picture.empty()) {
+    if (int code = FetchPictureLayers(o, client, &picture); code != 0) return code;
+  }
+  if (o.max_resubmits < 0 || o.max_resubmits > 10) {
+    return Usage(absl::StrFormat("--max_resubmits=%d: must be 0 to 10", o.max_resubmits));
+  }
+  const int n = request->missions_size();
+  std::vector<MissionRow> rows(n);
+  for (int i = 0; i < n; ++i) {
+    const v1::FleetMission& m = request->missions(i);
+    rows[i].id = m.id();
+    rows[i].priority = m.priority();
+    rows[i].algorithm = v1::Algorithm_Name(m.request().algorithm());
+    rows[i].map = m.request().map();
+  }
+  std::printf(
+      "fleet of %d missions from %s%s\n", n, o.missions.c_str(),
+      request->tenant().empty() ? "" : absl::StrFormat(", tenant %s", request->tenant()).c_str());
+  std::fflush(stdout);
+  int order = 0;
+  const absl::Duration timeout =
+      o.timeout > absl::ZeroDuration() ? o.timeout : absl::InfiniteDuration();
+  grpc::Status status = client.PlanFleet(
+      *request,
+      [&](const v1::FleetUpdate& u) {
+        PrintUpdate(u, n);
+        const int i = u.mission_index();
+        if (i < 0 || i >= n) return true;  // not a mission of ours: shown, not kept
+        MissionRow& row = rows[i];
+        if (u.error_code() != 0) {
+          row.end = StatusCodeName(static_cast<grpc::StatusCode>(u.error_code()));
+          row.order = ++order;
+        } else if (u.update().final()) {
+          row.end = v1::EndReason_Name(u.update().end_reason());
+          row.has_best = u.update().has_trajectory();
+          row.best = u.update().trajectory();
+          row.iterations = u.update().iterations();
+          row.elapsed_s = u.update().elapsed_s();
+          row.order = ++order;
+        }
+        return true;
+      },
+      timeout,
+      FleetResubmitOptions{
+          .max_resubmits = o.max_resubmits,
+          .on_resubmit =
+              [](const FleetResubmission& r) {
+                std::fprintf(stderr,
+                             "riskplan: PlanFleet ended %s (%s) with %d missions without a "
+                             "result; sending them again (re-submission %d)\n",
+                             StatusCodeName(r.broken.error_code()).c_str(),
+                             r.broken.error_message().c_str(), r.unfinished, r.attempt);
+              }});
+  PrintSummary(rows);
+  if (!o.picture.empty()) {
+    if (int code = WriteFleetPicture(o, rows, picture); code != 0) return code;
+  }
+  if (!status.ok()) return RpcError(o, "PlanFleet", status);
+  // 3: the call succeeded but some mission has no trajectory (its own
+  // error, NO_SOLUTION), as `plan` says of its one plan.
+  for (const MissionRow& r : rows) {
+    if (!r.has_best) return 3;
+  }
+  return 0;
+}
+
+}  // namespace riskplan::client

@@ -12,7 +12,7 @@ set -euo pipefail
 cd "$1"
 
 # Every #include line of the checked folders, as FILE<TAB>HEADER.
-includes=$(find cmdline core accel $(test -d net && echo net) geo tools server client web -name '*.h' -o -name '*.cc' | sort |
+includes=$(find cmdline core accel $(ls -d net formats 2>/dev/null) geo tools server client web -name '*.h' -o -name '*.cc' | sort |
   xargs grep -HE '^#include [<"]' |
   sed -E 's/^([^:]+):#include [<"]([^>"]+)[>"].*/\1\t\2/')
 
@@ -30,8 +30,8 @@ BEGIN {
   allowed["core/base"] = "core/base"
   allowed["core/map"] = "core/base core/map"
   allowed["core/risk"] = "core/base core/map core/risk"
-  allowed["core/flight"] = "core/base core/map core/risk core/flight"
-  allowed["core/planners"] = "core/base core/map core/risk core/flight core/planners"
+  allowed["core/flight"] = "core/base core/map core/risk core/flight formats"
+  allowed["core/planners"] = "core/base core/map core/risk core/flight core/planners formats"
   allowed["geo"] = "core geo"
   # The ground-station and GIS writers: plain values in, text out, so that
   # the client (which links neither core nor GDAL) can use them.
@@ -40,6 +40,9 @@ BEGIN {
   allowed["accel"] = "core accel net cmdline"
   # Sockets with deadlines and TLS: the shim link and the server both use them.
   allowed["net"] = "net"
+  # The trajectory JSON rule, parsed once for core and the client (neither
+  # links the other): abseil and nlohmann-json only.
+  allowed["formats"] = "formats"
   # server/: one room a library, each using only the rooms below it:
   # models < api < observability < security < plan < fleet < the service.
   srv = "core accel net geo riskplan cmdline"
@@ -51,7 +54,7 @@ BEGIN {
   allowed["server/fleet"] = allowed["server/plan"] " server/fleet"
   allowed["server"] = allowed["server/fleet"] " server"
   # client/ is the library; pictures, the load generator and the CLI use it.
-  allowed["client"] = "client riskplan cmdline geo/export"
+  allowed["client"] = "client riskplan cmdline geo/export formats"
   allowed["client/picture"] = "client client/picture riskplan geo/export"
   allowed["client/load"] = "client client/load riskplan"
   allowed["client/cli"] = "client client/picture client/load client/cli riskplan cmdline geo/export"
@@ -62,13 +65,14 @@ BEGIN {
   # server/*.h only, not server/api/*.h.
   exact["server"] = 1; exact["client"] = 1
   # An include whose first folder is one of these is the project'"'"'s own.
-  split("cmdline core accel net geo tools server client web riskplan tests bench", roots, " ")
+  split("cmdline core accel net formats geo tools server client web riskplan tests bench", roots, " ")
   for (r in roots) own[roots[r]] = 1
   # Third-party prefixes a top-level part must not include.
   forbidden["cmdline"] = "grpc grpcpp google/protobuf gdal ogr cpl_ proj httplib prometheus"
   forbidden["core"] = "grpc grpcpp google/protobuf gdal ogr cpl_ proj httplib prometheus"
   forbidden["accel"] = "grpc grpcpp google/protobuf gdal ogr cpl_ proj httplib prometheus"
   forbidden["net"] = forbidden["accel"]
+  forbidden["formats"] = forbidden["accel"]
   forbidden["geo"] = "grpc grpcpp google/protobuf httplib prometheus"
   forbidden["geo/export"] = "grpc grpcpp google/protobuf gdal ogr cpl_ proj geodesic httplib prometheus"
   forbidden["tools"] = "grpc grpcpp google/protobuf httplib prometheus"

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "formats/trajectory_json.h"
 #include "riskplan/v1/planner.pb.h"
 
 namespace riskplan::client {
@@ -53,14 +54,14 @@ absl::StatusOr<v1::Polyline> ParsePolyline(std::string_view text);
 // "x,y; x,y; ..." (any number of points, none for empty text).
 absl::StatusOr<std::vector<v1::Point2>> ParsePoints2(std::string_view text);
 
-// Trajectory JSON, by the rule of docs/api.md ("Trajectory files"), which
-// riskplan-tool's reader (core/flight/trajectory_io.h) follows too; the
-// client may not use core's, so the rule is written twice, and
+// Trajectory JSON, by the rule of docs/api.md ("Trajectory files"), parsed
+// by formats/trajectory_json.h as riskplan-tool's reader
+// (core/flight/trajectory_io.h) parses it, which the client may not use;
 // tests/data/trajectory_json_cases.json is the one table of cases both are
 // tested against. The limits are riskplan-tool's, so that a file one tool
 // reads the other reads too.
-inline constexpr size_t kMaxTrajectoryJsonPoints = 100000;
-inline constexpr size_t kMaxTrajectoryFileBytes = size_t{64} << 20;
+inline constexpr size_t kMaxTrajectoryJsonPoints = formats::kMaxTrajectoryJsonPoints;
+inline constexpr size_t kMaxTrajectoryFileBytes = formats::kMaxTrajectoryFileBytes;
 
 // Sets the trajectory of `request` (waypoints or polyline) from JSON text;
 // on error `request` is left unchanged. Errors are InvalidArgument: the

@@ -1,6 +1,6 @@
 // Fuzz target: the trajectory JSON rule of docs/api.md ("Trajectory files"),
-// which is written twice: riskplan-tool's reader
-// (core/flight/trajectory_io.h) and the CLI client's
+// parsed once (formats/trajectory_json.h) and read through two adapters:
+// riskplan-tool's reader (core/flight/trajectory_io.h) and the CLI client's
 // (client/trajectory_text.h), since the client may not use core.
 //
 // Input: the JSON text.

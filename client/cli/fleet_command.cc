@@ -7,17 +7,13 @@
 #include <vector>
 
 #include "absl/strings/str_format.h"
+#include "client/cli/command_support.h"
 #include "client/cli/commands.h"
 #include "client/cli/fleet_file.h"
 #include "client/picture/picture.h"
 
 namespace riskplan::client {
 namespace {
-
-int Usage(const std::string& message) {
-  std::fprintf(stderr, "riskplan: %s\n", message.c_str());
-  return 2;
-}
 
 // What the summary table says of one mission.
 struct MissionRow {
@@ -104,9 +100,7 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
   }
   absl::StatusOr<v1::FleetRequest> request = ReadMissionsFile(o.missions, o);
   if (!request.ok()) return Usage(std::string(request.status().message()));
-  if (!o.picture.empty() && !o.picture.ends_with(".svg") && !o.picture.ends_with(".png")) {
-    return Usage("--picture must name a .svg or .png file");
-  }
+  if (absl::Status s = CheckPictureName(o); !s.ok()) return Usage(std::string(s.message()));
   PictureInput picture;
   if (!o.picture.empty()) {
     if (int code = FetchPictureLayers(o, client, &picture); code != 0) return code;
@@ -128,8 +122,8 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
       request->tenant().empty() ? "" : absl::StrFormat(", tenant %s", request->tenant()).c_str());
   std::fflush(stdout);
   int order = 0;
-  const absl::Duration timeout =
-      o.timeout > absl::ZeroDuration() ? o.timeout : absl::InfiniteDuration();
+  // No deadline by default, as for `plan`: the budgets bound the missions.
+  const absl::Duration timeout = TimeoutOr(o, absl::InfiniteDuration());
   grpc::Status status = client.PlanFleet(
       *request,
       [&](const v1::FleetUpdate& u) {

@@ -9,6 +9,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "client/cli/option_requests.h"
 #include "nlohmann/json.hpp"
 
 namespace riskplan::client {

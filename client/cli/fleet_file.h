@@ -18,7 +18,7 @@
 #include <string_view>
 
 #include "absl/status/statusor.h"
-#include "client/cli/commands.h"
+#include "client/cli/command_options.h"
 #include "riskplan/v1/planner.pb.h"
 
 namespace riskplan::client {

@@ -5,10 +5,11 @@
 //   file:      JSON {"waypoints": [[x, y, z, theta], ...]} or
 //              JSON {"polyline": [[x, y, z], ...]}
 //
-// The JSON rule is documented in docs/api.md ("Trajectory files"). The CLI
-// client implements the same rule on its own (client/trajectory_text.h: the
-// client may not depend on core), and tests/data/trajectory_json_cases.json
-// is the one table of cases both implementations are tested against.
+// The JSON rule is documented in docs/api.md ("Trajectory files") and parsed
+// by formats/trajectory_json.h, which the CLI client uses too
+// (client/trajectory_text.h: the client may not depend on core);
+// tests/data/trajectory_json_cases.json is the one table of cases both are
+// tested against.
 #ifndef RISKPLAN_CORE_FLIGHT_TRAJECTORY_IO_H_
 #define RISKPLAN_CORE_FLIGHT_TRAJECTORY_IO_H_
 
@@ -19,14 +20,15 @@
 
 #include "absl/status/statusor.h"
 #include "core/base/geometry.h"
+#include "formats/trajectory_json.h"
 
 namespace riskplan {
 
 // Most points a trajectory JSON may hold: the default `max_points` of
 // PiecesFromWaypoints and PiecesFromPolyline (core/flight/trajectory.h).
-inline constexpr size_t kMaxTrajectoryJsonPoints = 100000;
+inline constexpr size_t kMaxTrajectoryJsonPoints = formats::kMaxTrajectoryJsonPoints;
 // Largest trajectory file read (the same bound as a map bundle's manifest).
-inline constexpr size_t kMaxTrajectoryFileBytes = size_t{64} << 20;
+inline constexpr size_t kMaxTrajectoryFileBytes = formats::kMaxTrajectoryFileBytes;
 
 struct TrajectoryInput {
   std::vector<Pose> waypoints;   // set for waypoint input

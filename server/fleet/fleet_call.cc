@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "core/base/check.h"
 #include "server/api/message_codec.h"
 #include "server/api/proto_convert.h"
 #include "server/observability/rpc_log.h"
@@ -32,21 +33,25 @@ FleetCall::FleetCall(grpc::CallbackServerContext* ctx, ServerMetrics* metrics,
       peer_(ctx == nullptr ? "" : ctx->peer()) {}
 
 void FleetCall::Reject(const grpc::Status& status) {
+  Step step;
   {
     absl::MutexLock lock(&mu_);
-    if (finished_) return;
-    finished_ = true;
-    status_ = status;
+    step = state_.Reject(status);
   }
-  Finish(status);
+  Perform(step);
 }
 
 void FleetCall::Start(std::shared_ptr<const FleetSpec> spec, int groups,
                       std::function<void()> on_cancel) {
   std::vector<v1::FleetUpdate> errors;
+  // Invalid missions never offer improvements: their interval is never read.
+  std::vector<absl::Duration> min_update_intervals(spec->missions.size(), absl::ZeroDuration());
   for (size_t i = 0; i < spec->missions.size(); ++i) {
     const FleetMissionSpec& m = spec->missions[i];
-    if (m.plan.ok()) continue;
+    if (m.plan.ok()) {
+      min_update_intervals[i] = m.plan->min_update_interval;
+      continue;
+    }
     v1::FleetUpdate u;
     u.set_mission_id(m.id);
     u.set_mission_index(static_cast<int>(i));
@@ -60,34 +65,28 @@ void FleetCall::Start(std::shared_ptr<const FleetSpec> spec, int groups,
     absl::MutexLock lock(&mu_);
     const size_t n = spec->missions.size();
     spec_ = std::move(spec);
-    groups_running_ = groups;
     on_cancel_ = std::move(on_cancel);
-    improvement_sent_.assign(n, absl::InfinitePast());
     mission_sequence_.assign(n, 0);
     mission_improvements_.assign(n, 0);
-    started_stream_ = true;
-    if (gone_) {
-      // The client left before the stream began: the groups are dropped.
-      step.cancel = true;
-    } else {
+    // The errors end their missions now, unless the client left before the
+    // stream began: then the state drops them, and the groups.
+    if (state_.phase() == FleetCallPhase::kCreated) {
       for (v1::FleetUpdate& u : errors) {
         u.set_missions_ended(++missions_ended_);
         ++failed_;
-        finals_.push_back(std::move(u));
       }
     }
-    Step next = NextLocked(absl::Now());
-    step.write = next.write;
-    step.finish = next.finish;
+    step = state_.Start(groups, std::move(min_update_intervals), std::move(errors), absl::Now());
+    TakeWriteLocked(&step);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
 void FleetCall::OfferImprovement(size_t mission, const PlanImprovement& improvement) {
   std::shared_ptr<const FleetSpec> spec;
   {
     absl::MutexLock lock(&mu_);
-    if (gone_ || finished_ || !spec_->send_improvements) return;
+    if (!state_.takes_offers() || !spec_->send_improvements) return;
     spec = spec_;
   }
   const FleetMissionSpec& m = spec->missions[mission];
@@ -98,15 +97,16 @@ void FleetCall::OfferImprovement(size_t mission, const PlanImprovement& improvem
   Step step;
   {
     absl::MutexLock lock(&mu_);
-    if (gone_ || finished_) return;
+    if (!state_.takes_offers()) return;
     update->set_improvements(++mission_improvements_[mission]);
-    v1::FleetUpdate& u = improvements_[mission];
+    v1::FleetUpdate u;
     u.set_mission_id(m.id);
     u.set_mission_index(static_cast<int>(mission));
     *u.mutable_update() = *std::move(update);
-    step = NextLocked(absl::Now());
+    step = state_.OfferImprovement(mission, std::move(u), absl::Now());
+    TakeWriteLocked(&step);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
 void FleetCall::OfferResult(size_t mission, const absl::StatusOr<PlanResult>& result) {
@@ -149,28 +149,27 @@ void FleetCall::OfferFinal(size_t mission, v1::FleetUpdate update) {
     absl::MutexLock lock(&mu_);
     // Once the client has gone, results are not counted: their missions
     // are the cancelled ones.
-    if (finished_ || gone_) return;
-    improvements_.erase(mission);  // the final carries the best trajectory
+    if (!state_.takes_offers()) return;
     update.set_missions_ended(++missions_ended_);
     if (update.has_update()) {
       ++completed_;
     } else {
       ++failed_;
     }
-    finals_.push_back(std::move(update));
-    step = NextLocked(absl::Now());
+    step = state_.OfferFinal(mission, std::move(update), absl::Now());
+    TakeWriteLocked(&step);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
 void FleetCall::GroupEnded() {
   Step step;
   {
     absl::MutexLock lock(&mu_);
-    --groups_running_;
-    step = NextLocked(absl::Now());
+    step = state_.GroupEnded(absl::Now());
+    TakeWriteLocked(&step);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
 void FleetCall::StopForShutdown() {
@@ -178,58 +177,22 @@ void FleetCall::StopForShutdown() {
   cancel_.Cancel();
 }
 
-FleetCall::Step FleetCall::NextLocked(absl::Time now) {
-  Step step;
-  if (finished_ || write_in_flight_ || !started_stream_) return step;
-  if (!gone_) {
-    bool take = false;
-    if (!finals_.empty()) {
-      write_buffer_ = std::move(finals_.front());
-      finals_.pop_front();
-      take = true;
-    } else {
-      for (auto it = improvements_.begin(); it != improvements_.end(); ++it) {
-        const size_t m = it->first;
-        if (now - improvement_sent_[m] < spec_->missions[m].plan->min_update_interval) continue;
-        improvement_sent_[m] = now;
-        write_buffer_ = std::move(it->second);
-        improvements_.erase(it);
-        take = true;
-        break;
-      }
-    }
-    if (take) {
-      const size_t m = static_cast<size_t>(write_buffer_.mission_index());
-      if (write_buffer_.has_update()) {
-        write_buffer_.mutable_update()->set_sequence(++mission_sequence_[m]);
-      }
-      write_buffer_.set_sequence(++sent_);
-      write_in_flight_ = true;
-      step.write = true;
-      return step;
-    }
+void FleetCall::TakeWriteLocked(Step* step) {
+  if (!step->write.has_value()) return;
+  write_buffer_ = std::move(*step->write);
+  // Numbered here, at the moment it is sent, so that sequence numbers have
+  // no gaps however many improvements were replaced.
+  const size_t m = static_cast<size_t>(write_buffer_.mission_index());
+  if (write_buffer_.has_update()) {
+    write_buffer_.mutable_update()->set_sequence(++mission_sequence_[m]);
   }
-  if (groups_running_ > 0 || (!gone_ && !finals_.empty())) return step;
-  finished_ = true;
-  status_ = gone_ ? grpc::Status(grpc::StatusCode::CANCELLED, "the call was cancelled")
-                  : grpc::Status::OK;
-  step.finish = status_;
-  return step;
+  write_buffer_.set_sequence(++sent_);
 }
 
-void FleetCall::GoneLocked(Step* step) {
-  if (gone_) return;
-  gone_ = true;
-  finals_.clear();
-  improvements_.clear();
-  // Before Start the groups are not queued yet: Start drops them.
-  if (started_stream_) step->cancel = true;
-}
-
-void FleetCall::Perform(Step step) {
-  if (step.cancel) {
+void FleetCall::Perform(const Step& step) {
+  if (step.stop_planners) {
     cancel_.Cancel();
-    // Set once by Start, before any step can cancel; run once (gone_).
+    // Set by Start, before the state can ask for this; asked once a call.
     if (on_cancel_) on_cancel_();
   }
   if (step.write) {
@@ -251,13 +214,12 @@ void FleetCall::OnWriteDone(bool ok) {
   Step step;
   {
     absl::MutexLock lock(&mu_);
-    write_in_flight_ = false;
-    if (!ok) GoneLocked(&step);
-    Step next = NextLocked(absl::Now());
-    step.write = next.write;
-    step.finish = next.finish;
+    // A failed write means the client is gone: the state stops the planners
+    // and finishes the call once every group has ended.
+    step = ok ? state_.WriteDone(absl::Now()) : state_.WriteFailed();
+    TakeWriteLocked(&step);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
 void FleetCall::OnCancel() {
@@ -265,13 +227,9 @@ void FleetCall::OnCancel() {
   Step step;
   {
     absl::MutexLock lock(&mu_);
-    deadline_ = deadline_passed;
-    GoneLocked(&step);
-    Step next = NextLocked(absl::Now());
-    step.write = next.write;
-    step.finish = next.finish;
+    step = state_.Cancel(deadline_passed ? CancelCause::kDeadline : CancelCause::kClient);
   }
-  Perform(std::move(step));
+  Perform(step);
 }
 
 void FleetCall::OnDone() {
@@ -280,12 +238,9 @@ void FleetCall::OnDone() {
   uint64_t sent = 0;
   {
     absl::MutexLock lock(&mu_);
-    status = status_;
-    if (gone_) {
-      status = deadline_
-                   ? grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the call's deadline passed")
-                   : grpc::Status(grpc::StatusCode::CANCELLED, "the client cancelled");
-    }
+    // gRPC calls OnDone only after Finish: the state must have got there.
+    RISKPLAN_DCHECK(state_.phase() == FleetCallPhase::kFinished);
+    status = state_.ReportedStatus();
     missions = spec_ == nullptr ? 0 : static_cast<int>(spec_->missions.size());
     completed = completed_;
     failed = failed_;

@@ -7,8 +7,11 @@
 //   - plan-pool threads, one per mission group (server/fleet/fleet_scheduler.h),
 //     offer improvements and results, and say when their group has ended;
 //   - the main thread, on shutdown, stops the planners (StopForShutdown).
-// They meet under mu_. gRPC operations (StartWrite, Finish) and the
-// cancel hook run after mu_ is released.
+// They meet under mu_, where a FleetCallState (server/fleet/fleet_call_state.h:
+// the phases of the call, with its transition table, and the messages
+// waiting to be written) turns each event into a Step. The Step is performed
+// after mu_ is released: gRPC operations (StartWrite, Finish), the cancel
+// token and the cancel hook never run under it.
 //
 // The stream. At most one write is in flight. Final messages (a mission's
 // result or its error) wait in order of arrival and are never dropped.
@@ -29,11 +32,8 @@
 
 #include <atomic>
 #include <cstdint>
-#include <deque>
 #include <functional>
-#include <map>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,10 +45,11 @@
 #include "core/planners/planner.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.pb.h"
-#include "server/security/auth.h"
+#include "server/fleet/fleet_call_state.h"
 #include "server/fleet/fleet_request.h"
 #include "server/observability/metrics.h"
 #include "server/plan/open_calls.h"
+#include "server/security/auth.h"
 
 namespace riskplan::server {
 
@@ -96,18 +97,16 @@ class FleetCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
   FleetCall(grpc::CallbackServerContext* ctx, ServerMetrics* metrics, OpenCalls* open_calls,
             Caller caller);
 
-  // What to do once mu_ is released.
-  struct Step {
-    bool write = false;  // StartWrite(&raw_write_) of write_buffer_
-    std::optional<grpc::Status> finish;
-    bool cancel = false;  // cancel the planners and run on_cancel_
-  };
+  using State = FleetCallState<v1::FleetUpdate>;
+  using Step = State::Step;
+
   // Offers `update` as mission `mission`'s final message.
   void OfferFinal(size_t mission, v1::FleetUpdate update) ABSL_LOCKS_EXCLUDED(mu_);
-  // The next write or the finish, if either is due.
-  Step NextLocked(absl::Time now) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-  void GoneLocked(Step* step) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-  void Perform(Step step) ABSL_LOCKS_EXCLUDED(mu_);
+  // Moves the message of `step`, if any, into write_buffer_ and numbers it;
+  // step->write stays engaged, telling Perform to start the write.
+  void TakeWriteLocked(Step* step) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Performs a Step the state returned: called without mu_ held.
+  void Perform(const Step& step) ABSL_LOCKS_EXCLUDED(mu_);
 
   grpc::CallbackServerContext* const ctx_;
   ServerMetrics* const metrics_;
@@ -122,18 +121,9 @@ class FleetCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer>,
 
   absl::Mutex mu_;
   std::shared_ptr<const FleetSpec> spec_ ABSL_GUARDED_BY(mu_);
-  int groups_running_ ABSL_GUARDED_BY(mu_) = 0;
-  bool started_stream_ ABSL_GUARDED_BY(mu_) = false;
-  bool gone_ ABSL_GUARDED_BY(mu_) = false;  // the client cancelled or a write failed
-  bool deadline_ ABSL_GUARDED_BY(mu_) = false;
-  bool finished_ ABSL_GUARDED_BY(mu_) = false;
-  bool write_in_flight_ ABSL_GUARDED_BY(mu_) = false;
-  grpc::Status status_ ABSL_GUARDED_BY(mu_);
-  std::deque<v1::FleetUpdate> finals_ ABSL_GUARDED_BY(mu_);
-  std::map<size_t, v1::FleetUpdate> improvements_ ABSL_GUARDED_BY(mu_);  // by mission
-  std::vector<absl::Time> improvement_sent_ ABSL_GUARDED_BY(mu_);        // by mission
-  std::vector<uint64_t> mission_sequence_ ABSL_GUARDED_BY(mu_);          // by mission
-  std::vector<int64_t> mission_improvements_ ABSL_GUARDED_BY(mu_);       // by mission
+  State state_ ABSL_GUARDED_BY(mu_);
+  std::vector<uint64_t> mission_sequence_ ABSL_GUARDED_BY(mu_);     // by mission
+  std::vector<int64_t> mission_improvements_ ABSL_GUARDED_BY(mu_);  // by mission
   int missions_ended_ ABSL_GUARDED_BY(mu_) = 0;
   int completed_ ABSL_GUARDED_BY(mu_) = 0;  // finals with a PlanUpdate
   int failed_ ABSL_GUARDED_BY(mu_) = 0;     // finals with an error

@@ -90,6 +90,22 @@ enum class PlanCallPhase { kPlanning, kStopping, kFinalOffered, kFinishWhenIdle,
 // Why OnCancel ran: the client cancelled, or the call's deadline passed.
 enum class CancelCause { kNone, kClient, kDeadline };
 
+// The status a stream reports in its log line and metrics: the client's
+// cancel or deadline when there was one (that is what the client saw), else
+// `finish_status`, the status given to Finish(). PlanCallState's and
+// FleetCallState's.
+inline grpc::Status ReportedCallStatus(CancelCause cause, const grpc::Status& finish_status) {
+  switch (cause) {
+    case CancelCause::kDeadline:
+      return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the call's deadline passed");
+    case CancelCause::kClient:
+      return grpc::Status(grpc::StatusCode::CANCELLED, "the client cancelled");
+    case CancelCause::kNone:
+      break;
+  }
+  return finish_status;
+}
+
 inline std::string_view PlanCallPhaseName(PlanCallPhase phase) {
   switch (phase) {
     case PlanCallPhase::kPlanning:
@@ -214,20 +230,9 @@ class PlanCallState {
     return step;
   }
 
-  // The status the call reports in its log line and metrics: the client's
-  // cancel or deadline when there was one (that is what the client saw),
-  // else the status given to Finish().
-  grpc::Status ReportedStatus() const {
-    switch (cancel_cause_) {
-      case CancelCause::kDeadline:
-        return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the call's deadline passed");
-      case CancelCause::kClient:
-        return grpc::Status(grpc::StatusCode::CANCELLED, "the client cancelled");
-      case CancelCause::kNone:
-        break;
-    }
-    return finish_status_;
-  }
+  // The status the call reports in its log line and metrics (see
+  // ReportedCallStatus): its cancel cause, else the status given to Finish().
+  grpc::Status ReportedStatus() const { return ReportedCallStatus(cancel_cause_, finish_status_); }
 
   PlanCallPhase phase() const { return phase_; }
   CancelCause cancel_cause() const { return cancel_cause_; }

@@ -7,25 +7,20 @@
 #include <vector>
 
 #include "gtest/gtest.h"
+#include "tests/server/call_state_testing.h"
 
 namespace riskplan::server {
 namespace {
 
 using State = PlanCallState<std::string>;
 using Step = State::Step;
+using testing_call_state::ExpectFinish;
 
 const absl::Time t0 = absl::FromUnixSeconds(1000);
 
 bool IsNothing(const Step& step) {
   return !step.stop_planner && !step.wake_at.has_value() && !step.write.has_value() &&
          !step.finish.has_value();
-}
-
-void ExpectFinish(const Step& step, grpc::StatusCode code, const std::string& message) {
-  ASSERT_TRUE(step.finish.has_value());
-  EXPECT_FALSE(step.write.has_value());
-  EXPECT_EQ(step.finish->error_code(), code);
-  EXPECT_EQ(step.finish->error_message(), message);
 }
 
 // --- kPlanning ---------------------------------------------------------------
@@ -347,12 +342,10 @@ bool Possible(const Harness& h, Event e) {
 
 // The events so far, for failure messages.
 std::string Trace(const Harness& h) {
-  static const char* names[] = {"Offer",     "Poll",        "EndPlan",        "RequestFinish",
-                                "WriteDone", "WriteFailed", "Cancel(client)", "Cancel(deadline)",
-                                "Shutdown"};
-  std::string trace;
-  for (int e : h.trace) trace += std::string(trace.empty() ? "" : ", ") + names[e];
-  return trace;
+  static const char* const names[] = {
+      "Offer",       "Poll",           "EndPlan",          "RequestFinish", "WriteDone",
+      "WriteFailed", "Cancel(client)", "Cancel(deadline)", "Shutdown"};
+  return testing_call_state::EventTrace(h.trace, names);
 }
 
 // Applies `e` and checks the Step; returns false (with a test failure) when
@@ -436,14 +429,10 @@ bool FinishesWhenLeftToEnd(Harness h, bool writes_succeed) {
 }
 
 bool Explore(const Harness& h, int depth) {
-  if (!FinishesWhenLeftToEnd(h, true) || !FinishesWhenLeftToEnd(h, false)) return false;
-  if (depth == 0) return true;
-  for (Event e : kEvents) {
-    if (!Possible(h, e)) continue;
-    Harness next = h;
-    if (!Apply(next, e) || !Explore(next, depth - 1)) return false;
-  }
-  return true;
+  return testing_call_state::ExploreEveryOrder(
+      h, depth, kEvents, Possible, Apply, [](const Harness& at) {
+        return FinishesWhenLeftToEnd(at, true) && FinishesWhenLeftToEnd(at, false);
+      });
 }
 
 TEST(PlanCallStateTest, EveryOrderOfEventsFinishesExactlyOnce) {

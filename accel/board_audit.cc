@@ -24,6 +24,8 @@ absl::Status AuditBoardSums(const RiskModel& model, const KernelSite& site,
       shelter_sum += in ? map.shelter(i, j) : 10.0;
     }
   }
+  // The format's bound, plus 1e-12 relative slack for the two double
+  // roundings (board_audit.h).
   const int cells = kernel.Side() * kernel.Side();
   const double impact_bound =
       FixedPointSumBound(scales.format, scales.density_exponent, density_sum, cells) +

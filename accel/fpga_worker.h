@@ -43,6 +43,7 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -52,6 +53,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "accel/blobs.h"
+#include "accel/board_audit.h"
 #include "accel/cpu_kernel.h"
 #include "accel/shim_client.h"
 #include "accel/work_queue.h"
@@ -139,6 +141,60 @@ class FpgaWorker {
   // status is NotFound, and the worker gives the chunk back and uploads it).
   absl::Status RunChunk(Chunk* chunk, bool* unsupported, bool* taken_over,
                         std::shared_ptr<const Blob>* missing);
+
+  // What a board's replies for a map must look like: the scales it must
+  // report and the largest sums the quantised inputs allow.
+  struct ReplyBounds {
+    BoardScales scales;
+    int impact_scale = 0;
+    int shelter_scale = 0;
+    double impact_max = 0.0;
+    double shelter_max = 0.0;
+  };
+  static ReplyBounds BoundsFor(const NumberFormat& format, double max_density);
+
+  // Run's steps, by state.
+  // Probing and suspect: Probe(), then up (reason `passed`) or down (reason
+  // `failed` and the error).
+  void Recheck(absl::string_view passed, absl::string_view failed);
+  // Down: waits the back-off, then probing.
+  void BackOff();
+  // Up: takes a chunk and runs it, or pings the board when none came within
+  // ping_interval.
+  void Serve();
+  // What Serve does after RunChunk: the chunk given back and the missing
+  // blob uploaded; the chunk completed; the chunk failed (given back, or
+  // left to the CPU).
+  void GiveBackAndUpload(Chunk* chunk, const Blob& missing, bool taken_over, double seconds);
+  void Completed(Chunk* chunk, size_t count, bool taken_over, double seconds);
+  void Failed(Chunk* chunk, const absl::Status& s, bool unsupported, bool taken_over,
+              double seconds);
+  // The board failed `s` (a request of `what`: "requests", "chunks"): drops
+  // the connection, and goes suspect, or down after max_consecutive_failures
+  // in a row.
+  void BoardFailed(const absl::Status& s, absl::string_view what);
+
+  // RunChunk's steps.
+  // Locates the chunk's configurations into sites_ and device_sites_.
+  void LocateSites(const RiskModel& model, Chunk& chunk);
+  // OK when both blobs exist (nullptr: larger than the blob cache) and fit
+  // the board's store; ResourceExhausted otherwise.
+  absl::Status CheckBlobsFit(const Blob* map, const Blob* kernels, const HelloReply& hello) const;
+  // Sends device_sites_ in EVALs of `step` sites, the replies into replies_;
+  // sets `missing` when the board lacks one of the blobs.
+  absl::Status AskBoard(const std::shared_ptr<const Blob>& map,
+                        const std::shared_ptr<const Blob>& kernels, size_t step,
+                        std::shared_ptr<const Blob>* missing);
+  // Checks replies_ and writes their risks into `out`.
+  absl::Status FinishSites(const RiskModel& model, double max_density, const HelloReply& hello,
+                           std::span<ConfigurationRisk> out);
+  // One reply's sums (sites first .. first + n - 1): scales and plausibility
+  // checked, then finished into `out`.
+  absl::Status StoreSums(const RiskModel& model, const EvalReply& reply, size_t first, size_t n,
+                         const ReplyBounds& bounds, std::span<ConfigurationRisk> out) const;
+  // Spot checks of one reply against the CPU (audited_sites_per_eval sites).
+  absl::Status SpotCheck(const RiskModel& model, const EvalReply& reply, size_t first, size_t n,
+                         const ReplyBounds& bounds);
   // Uploads a blob the board asked for, holding no chunk.
   absl::Status Upload(const Blob& blob);
   void SetState(WorkerState to, std::string reason);

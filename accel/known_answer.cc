@@ -68,6 +68,8 @@ absl::Status RunKnownAnswer(ShimClient& client) {
   if (!map.ok()) return map.status();
   if (!kernels.ok()) return kernels.status();
   absl::StatusOr<EvalReply> reply = client.Eval(batch.map.hash, batch.kernels.hash, batch.sites);
+  // At most two uploads, the map's and the kernels': a board that asks for
+  // more fails the check.
   for (int upload = 0; upload < 2 && !reply.ok() && absl::IsNotFound(reply.status()); ++upload) {
     const Blob& missing = client.missing_blob() == batch.map.hash ? batch.map : batch.kernels;
     if (absl::Status s = client.PutBlob(missing.kind, missing.hash, missing.bytes); !s.ok()) {

@@ -79,6 +79,8 @@ RiskEngine::~RiskEngine() {
   RISKPLAN_DCHECK(evaluating_.load() == 0);
   queue_.Stop();
   for (std::thread& t : cpu_threads_) t.join();
+  // Stopped outside mu_: a worker's Stop() may wait for a connection attempt
+  // (up to the connect timeout), and Stats() must not wait with it.
   std::vector<std::unique_ptr<FpgaWorker>> fpga;
   {
     absl::MutexLock lock(&mu_);
@@ -116,6 +118,7 @@ absl::Status RiskEngine::RemoveFpgaWorker(const std::string& endpoint) {
     worker = std::move(*it);
     fpga_.erase(it);
   }
+  // Outside mu_, as in the destructor.
   worker->Stop();  // its chunk in flight goes back to the queue
   return absl::OkStatus();
 }

@@ -96,6 +96,8 @@ absl::Status ShimClient::Call(MessageType type, const std::string& payload, Mess
         absl::StrFormat("%s: the shim speaks protocol version %d, this client %d%s", what,
                         header.version, kShimProtocolVersion, detail));
   }
+  // One request at a time (no pipelining): a reply to any other request
+  // means the stream is out of step.
   if (header.request_id != id) {
     return absl::DataLossError(
         absl::StrFormat("%s: reply to request %d, expected %d", what, header.request_id, id));
@@ -128,6 +130,9 @@ absl::Status ShimClient::Ping() {
 }
 
 absl::Status ShimClient::PutBlob(BlobKind kind, const BlobHash& hash, const std::string& bytes) {
+  // Each chunk leaves 1 KiB of the shim's payload limit for PUT_BLOB's own
+  // fields (56 bytes); Handshake refused a limit under 4 KiB, so the
+  // subtraction cannot wrap.
   const uint32_t chunk = std::max<uint32_t>(
       1024, std::min(options_.upload_chunk_bytes, hello_.max_payload_bytes - 1024));
   uint64_t offset = 0;

@@ -15,6 +15,8 @@ namespace {
 static_assert(std::endian::native == std::endian::little,
               "the shim protocol's encoders copy little-endian integers as they are");
 
+// CRC-32C (Castagnoli): the reflected polynomial 0x82F63B78 of the frame
+// header's and payload's checksums (docs/shim-protocol.md, "Frames").
 constexpr std::array<uint32_t, 256> MakeCrcTable() {
   std::array<uint32_t, 256> table{};
   for (uint32_t n = 0; n < 256; ++n) {
@@ -77,7 +79,7 @@ std::string EncodeFrame(MessageType type, uint64_t request_id, absl::string_view
   w.Put<uint64_t>(request_id);
   w.Put<uint32_t>(static_cast<uint32_t>(payload.size()));
   w.Put<uint32_t>(Crc32c(payload.data(), payload.size()));
-  w.Put<uint32_t>(Crc32c(frame.data(), 24));
+  w.Put<uint32_t>(Crc32c(frame.data(), 24));  // header bytes 0-23
   w.Put<uint32_t>(0);
   frame.append(payload.data(), payload.size());
   return frame;
@@ -96,6 +98,9 @@ absl::Status DecodeHeader(const uint8_t bytes[kFrameHeaderBytes], uint32_t max_p
   r.Get(&header->payload_crc);
   r.Get(&header_crc);
   r.Get(&reserved);
+  // The protocol's order: magic and header CRC first (after a mismatch the
+  // byte stream cannot be trusted, not even its length), then the length
+  // against the limit; the payload CRC comes once it is read (CheckPayload).
   if (magic != kShimMagic) {
     return absl::DataLossError(absl::StrFormat("shim protocol: bad magic 0x%08x", magic));
   }
@@ -248,6 +253,8 @@ std::string EncodeEval(const EvalRequest& m) {
 absl::Status DecodeEval(absl::string_view payload, EvalRequest* m) {
   ByteReader r(payload);
   uint32_t count = 0;
+  // The count is checked against the payload before anything is allocated
+  // for it: a corrupt count cannot ask for more than the frame holds.
   if (!GetHash(&r, &m->map) || !GetHash(&r, &m->kernels) || !r.Get(&count) ||
       r.remaining() != size_t{count} * 12) {
     return Malformed("EVAL");
@@ -285,6 +292,7 @@ std::string EncodeEvalReply(const EvalReply& m) {
 absl::Status DecodeEvalReply(absl::string_view payload, EvalReply* m) {
   ByteReader r(payload);
   uint32_t count = 0, words_per_acc = 0;
+  // As in DecodeEval: the count is checked against the payload first.
   if (!r.Get(&m->impact_scale) || !r.Get(&m->shelter_scale) || !r.Get(&m->device_cycles) ||
       !r.Get(&m->device_ns) || !r.Get(&count) || !r.Get(&words_per_acc) || words_per_acc != 4 ||
       r.remaining() != size_t{count} * 32) {

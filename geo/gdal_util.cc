@@ -25,6 +25,9 @@ void EnsureGdalRegistered() {
     // No PROJ grid is fetched from the CDN: an import never depends on the
     // network (the importer also refuses inputs that are not local files).
     CPLSetConfigOption("PROJ_NETWORK", "OFF");
+    // A GeoTIFF with AREA_OR_POINT=Point has its geotransform shifted by half
+    // a pixel, so that a sample sits at its coordinates, not at its pixel's
+    // corner (docs/geodata.md, "Pixel is point").
     CPLSetConfigOption("GTIFF_POINT_GEO_IGNORE", "FALSE");
     GDALAllRegister();
   });
@@ -75,6 +78,8 @@ absl::StatusOr<SpatialReferencePtr> SpatialReferenceFrom(const std::string& text
     return absl::InvalidArgumentError(
         absl::StrFormat("'%s' is not a CRS GDAL knows: %s", text, errors.Errors()));
   }
+  // EPSG:4326 officially lists latitude first; GDAL's rasters and OGR's
+  // geometries hold longitude first, and so does every reference built here.
   srs->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   return srs;
 }

@@ -107,6 +107,7 @@ absl::StatusOr<std::vector<float>> CoverageShare(const TargetGrid& grid,
       if (in[c] != 0) row[c / k] += unit;
     }
   }
+  // k^2 float additions of 1/k^2 may round to a little more than 1.
   for (float& s : share) s = s > 1.0f ? 1.0f : s;
   return share;
 }

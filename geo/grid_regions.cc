@@ -13,6 +13,8 @@ std::vector<int32_t> LabelComponents(const std::vector<uint8_t>& mask, int nx, i
                                      int32_t* count) {
   RISKPLAN_DCHECK(mask.size() == static_cast<size_t>(nx) * ny);
   std::vector<int32_t> labels(mask.size(), 0);
+  // A flood fill on an explicit stack, not by recursion: a region of
+  // millions of cells would overflow the thread's stack.
   std::vector<int64_t> stack;
   int32_t next = 0;
   for (int64_t start = 0; start < static_cast<int64_t>(mask.size()); ++start) {
@@ -41,6 +43,7 @@ std::vector<float> DepthInside(const std::vector<int32_t>& labels, int nx, int n
   RISKPLAN_DCHECK(labels.size() == static_cast<size_t>(nx) * ny);
   // Two-pass 3-4 chamfer transform. A neighbour outside the map, or with
   // another label, is at distance 0: the region's edge.
+  // Half the largest int, so that kInf plus a step cannot overflow.
   constexpr int kInf = std::numeric_limits<int>::max() / 2;
   std::vector<int> d(labels.size());
   for (size_t c = 0; c < labels.size(); ++c) d[c] = labels[c] > 0 ? kInf : 0;
@@ -69,6 +72,8 @@ std::vector<float> DepthInside(const std::vector<int32_t>& labels, int nx, int n
     }
   }
   std::vector<float> depth(labels.size());
+  // A step costs 3 (straight) or 4 (diagonal, about 3 sqrt 2): thirds of a
+  // cell, in integers.
   for (size_t c = 0; c < d.size(); ++c) depth[c] = static_cast<float>(d[c]) / 3.0f;
   return depth;
 }

@@ -105,6 +105,8 @@ absl::StatusOr<std::optional<LandCover>> ImportLandCover(ImportContext& ctx) {
   if (!pixel_m.ok()) return pixel_m.status();
   // Classes are never averaged: the class under the cell's centre when the
   // pixels are at least as large as the cells, else the most frequent one.
+  // The 0.999 leaves room for the rounding of the pixel size measured at the
+  // map.
   const Resampling r =
       *pixel_m >= 0.999 * ctx.grid.res_m ? Resampling::kNearest : Resampling::kMode;
   auto classes = WarpOntoGrid(*in, ctx.grid, r, o.threads);
@@ -119,6 +121,7 @@ absl::StatusOr<std::optional<LandCover>> ImportLandCover(ImportContext& ctx) {
       any_missing = true;
       continue;
     }
+    // Beyond 2e9 a class would not fit the table's int.
     if (v != std::floor(v) || std::abs(v) > 2e9) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "%s: cell (%d, %d) has class %.9g; land-cover classes must be integers", in->Label(),

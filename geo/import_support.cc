@@ -15,6 +15,8 @@
 namespace riskplan::geo::internal {
 namespace {
 
+// Points per edge when the missing cells' box is carried into WGS84 and the
+// input's CRS: its edges are curves there, so more than the corners count.
 constexpr int kEdgePoints = 16;
 
 struct Range {

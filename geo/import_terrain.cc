@@ -46,6 +46,7 @@ absl::StatusOr<std::vector<float>> ImportTerrain(ImportContext& ctx) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "%s: its heights are in '%s'; the terrain must be in metres (or feet)", in->Label(), unit));
   }
+  // Bilinear: the terrain is a surface, sampled at each cell's centre.
   auto values = WarpOntoGrid(*in, ctx.grid, Resampling::kBilinear, o.threads);
   if (!values.ok()) return values.status();
   std::vector<uint8_t> missing(values->size());
@@ -58,6 +59,8 @@ absl::StatusOr<std::vector<float>> ImportTerrain(ImportContext& ctx) {
     if (o.terrain_fill.kind == FillRule::Kind::kNone) {
       auto footprint = InputFootprint(*in, ctx.grid);
       if (!footprint.ok()) return footprint.status();
+      // Outside the footprint: the refusal tells the cells beyond the DEM's
+      // extent from those masked inside it.
       for (uint8_t& f : *footprint) f = f == 0 ? 1 : 0;
       return MissingCellsError(ctx, in->Label(), in->srs.get(), missing, *footprint,
                                "--fill_terrain=METRES|nearest");

@@ -49,6 +49,209 @@ bool CellOf(const TargetGrid& g, double x, double y, int* i, int* j) {
 
 std::string Stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
 
+// The landing sites found so far, in the order found; a site in a no-fly cell
+// is dropped and counted instead.
+struct SiteCollector {
+  const TargetGrid& grid;
+  const std::vector<uint8_t>& nofly;
+  ImportStats& stats;
+  std::vector<LandingSite> sites;
+  std::vector<std::string> dropped;  // the first kSitesNamed dropped, for the note
+
+  void Offer(LandingSite site) {
+    if (nofly[static_cast<size_t>(site.j) * grid.nx + site.i] != 0) {
+      ++stats.landing_dropped_nofly;
+      if (dropped.size() < kSitesNamed) dropped.push_back(site.name);
+      return;
+    }
+    sites.push_back(std::move(site));
+  }
+};
+
+// The polygons of every landing input, kept until all are read: they are
+// labelled together, so that each gets its own cells.
+struct LandingPolygons {
+  std::vector<std::unique_ptr<OGRGeometry>> geometries;
+  std::vector<std::string> names;
+};
+
+// Offers the cell under each point of `g` (a point or multipoint) as a site
+// named `name`; returns how many lie in the map.
+int OfferPoints(const OGRGeometry& g, const std::string& name, SiteCollector& collector) {
+  std::vector<const OGRPoint*> pts;
+  if (wkbFlatten(g.getGeometryType()) == wkbPoint) {
+    pts.push_back(g.toPoint());
+  } else {
+    for (const OGRPoint* p : *g.toMultiPoint()) pts.push_back(p);
+  }
+  int points = 0;
+  for (const OGRPoint* p : pts) {
+    int i = 0, j = 0;
+    if (!CellOf(collector.grid, p->getX(), p->getY(), &i, &j)) {
+      ++collector.stats.landing_outside_map;
+      continue;
+    }
+    ++points;
+    collector.Offer({name, i, j});
+  }
+  return points;
+}
+
+// Reads one --landing input: its points become sites at once, its polygons
+// are added to `polygons`; records the input.
+absl::Status ReadLandingInput(ImportContext& ctx, const std::string& text, SiteCollector& collector,
+                              LandingPolygons& polygons) {
+  const ImportOptions& o = ctx.options;
+  auto spec = ParseVectorSpec(text);
+  if (!spec.ok()) return spec.status();
+  auto in = OpenVectorInput("landing sites", spec->path, spec->layer_name, spec->where);
+  if (!in.ok()) return in.status();
+  auto features = ReadFeatures(*in, ctx.grid, 0.0, "", o.landing_name_field);
+  if (!features.ok()) return features.status();
+  auto ct = ToFrame(*in->srs, ctx.grid);
+  if (!ct.ok()) return ct.status();
+  int points = 0, areas = 0;
+  CarryBudget budget;  // this input's
+  for (const SourceFeature& f : *features) {
+    const std::string name =
+        f.text.empty() ? absl::StrFormat("%s-%d", Stem(spec->path), f.fid) : f.text;
+    auto g = Carry(*f.geometry, *in->srs, **ct, budget);
+    if (!g.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));
+    }
+    if (IsPoint(**g)) {
+      points += OfferPoints(**g, name, collector);
+    } else if (IsPolygonal(**g)) {
+      ++areas;
+      polygons.geometries.push_back(*std::move(g));
+      polygons.names.push_back(name);
+    } else {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: feature %d is a %s; landing sites are points or polygons", in->Label(), f.fid,
+          OGRGeometryTypeToName(f.geometry->getGeometryType())));
+    }
+  }
+  ctx.out->inputs.push_back(
+      {"landing sites", spec->path, in->driver, CrsShortName(in->srs.get()), CrsWkt(*in->srs),
+       absl::StrFormat("%s; %d points and %d polygons meet the map%s", in->Summary(), points, areas,
+                       o.landing_name_field.empty()
+                           ? ""
+                           : absl::StrFormat("; names from '%s'", o.landing_name_field))});
+  return absl::OkStatus();
+}
+
+// Offers a site for each polygon: the cell deepest inside it, or, when it
+// holds no cell of its own, the cell of a point on its surface.
+absl::Status OfferPolygonSites(const LandingPolygons& polygons, SiteCollector& collector) {
+  const TargetGrid& grid = collector.grid;
+  const size_t count = polygons.geometries.size();
+  std::vector<const OGRGeometry*> geometries;
+  std::vector<int32_t> ids;
+  for (size_t k = 0; k < count; ++k) {
+    geometries.push_back(polygons.geometries[k].get());
+    ids.push_back(static_cast<int32_t>(k + 1));
+  }
+  auto labels = BurnIds(grid, geometries, ids);
+  if (!labels.ok()) return labels.status();
+  // No-fly cells are outside every field: the deepest cell keeps away from them.
+  for (size_t c = 0; c < labels->size(); ++c) {
+    if (collector.nofly[c] != 0) (*labels)[c] = 0;
+  }
+  std::vector<uint8_t> placed(count, 0);
+  for (const Region& r : Regions(*labels, static_cast<int32_t>(count), grid.nx, grid.ny, {})) {
+    placed[r.label - 1] = 1;
+    collector.Offer({polygons.names[r.label - 1], r.deepest_i, r.deepest_j});
+  }
+  for (size_t k = 0; k < count; ++k) {
+    if (placed[k]) continue;
+    // Smaller than a cell, wholly in no-fly cells, or outside the map: the
+    // cell of a point on its surface, if the map holds it.
+    OGRGeometryH point = OGR_G_PointOnSurface(OGRGeometry::ToHandle(polygons.geometries[k].get()));
+    int i = 0, j = 0;
+    const bool inside =
+        point != nullptr && CellOf(grid, OGR_G_GetX(point, 0), OGR_G_GetY(point, 0), &i, &j);
+    if (point != nullptr) OGR_G_DestroyGeometry(point);
+    if (inside) {
+      collector.Offer({polygons.names[k], i, j});
+    } else {
+      ++collector.stats.landing_outside_map;
+    }
+  }
+  return absl::OkStatus();
+}
+
+// Adds a site at the deepest cell of each open field of the land cover
+// (--landing_min_area_m2): the largest fields first, at most
+// --max_landing_sites of them.
+absl::Status AddOpenFields(ImportContext& ctx, const std::optional<LandCover>& land_cover,
+                           const std::vector<uint8_t>& nofly, std::vector<LandingSite>& sites) {
+  const ImportOptions& o = ctx.options;
+  const TargetGrid& grid = ctx.grid;
+  if (!land_cover.has_value()) {
+    return absl::InvalidArgumentError(
+        "layer 'landing sites': open fields (--landing_min_area_m2) are found in the land "
+        "cover; give --landcover");
+  }
+  std::vector<uint8_t> open(static_cast<size_t>(grid.cells()), 0);
+  ClassRules rules(land_cover->table);
+  for (size_t c = 0; c < open.size(); ++c) {
+    const double v = land_cover->classes[c];
+    if (std::isnan(v) || nofly[c] != 0) continue;
+    open[c] = rules.Find(v)->landing ? 1 : 0;
+  }
+  int32_t count = 0;
+  const std::vector<int32_t> labels = LabelComponents(open, grid.nx, grid.ny, &count);
+  std::vector<Region> fields = Regions(labels, count, grid.nx, grid.ny, {});
+  // The 1e-9 keeps an area that is a whole number of cells from rounding up
+  // to one cell more.
+  const int64_t min_cells =
+      static_cast<int64_t>(std::ceil(o.landing_min_area_m2 / ctx.cell_area_m2() - 1e-9));
+  std::erase_if(fields, [&](const Region& r) { return r.cells < min_cells; });
+  // Stable: fields of equal size keep their labelling order, so which are
+  // kept and their field-N names do not depend on the sort's implementation.
+  std::stable_sort(fields.begin(), fields.end(),
+                   [](const Region& a, const Region& b) { return a.cells > b.cells; });
+  const size_t kept = std::min(fields.size(), static_cast<size_t>(o.max_landing_sites));
+  for (size_t k = 0; k < kept; ++k) {
+    sites.push_back({absl::StrFormat("field-%d", k + 1), fields[k].deepest_i, fields[k].deepest_j});
+  }
+  ctx.out->stats.landing_from_landcover = static_cast<int>(kept);
+  ctx.Note(absl::StrFormat(
+      "landing sites: %d open fields of at least %.9g m^2 in the land cover ('landing' "
+      "classes, no-fly cells excluded), %d kept (the largest first), each at its cell deepest "
+      "inside the field",
+      fields.size(), o.landing_min_area_m2, kept));
+  return absl::OkStatus();
+}
+
+// Keeps one site per cell (the first named), then refuses more than
+// kMaxLandingSites.
+absl::Status KeepOneSitePerCell(std::vector<LandingSite>& sites) {
+  std::set<std::pair<int, int>> seen;
+  std::erase_if(sites, [&](const LandingSite& s) { return !seen.insert({s.i, s.j}).second; });
+  if (sites.size() > static_cast<size_t>(kMaxLandingSites)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "layer 'landing sites': %d sites; a map holds at most %d", sites.size(), kMaxLandingSites));
+  }
+  return absl::OkStatus();
+}
+
+// Notes the sites dropped in no-fly cells (naming the first few) and those
+// outside the map.
+void NoteLeftOutSites(ImportContext& ctx, const std::vector<std::string>& dropped) {
+  const ImportStats& stats = ctx.out->stats;
+  if (stats.landing_dropped_nofly > 0) {
+    ctx.Note(absl::StrFormat("landing sites: %d inside no-fly cells dropped (%s%s)",
+                             stats.landing_dropped_nofly, absl::StrJoin(dropped, ", "),
+                             stats.landing_dropped_nofly > kSitesNamed ? ", ..." : ""));
+  }
+  if (stats.landing_outside_map > 0) {
+    ctx.Note(
+        absl::StrFormat("landing sites: %d outside the map left out", stats.landing_outside_map));
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<std::vector<uint8_t>> ImportNoFly(ImportContext& ctx) {
@@ -110,164 +313,25 @@ absl::StatusOr<std::vector<uint8_t>> ImportNoFly(ImportContext& ctx) {
 absl::StatusOr<std::vector<LandingSite>> ImportLandingSites(
     ImportContext& ctx, const std::optional<LandCover>& land_cover,
     const std::vector<uint8_t>& nofly) {
-  const ImportOptions& o = ctx.options;
-  const TargetGrid& grid = ctx.grid;
-  ImportStats& stats = ctx.out->stats;
-  std::vector<LandingSite> sites;
-  std::vector<std::string> dropped;
-  auto offer = [&](LandingSite site) {
-    if (nofly[static_cast<size_t>(site.j) * grid.nx + site.i] != 0) {
-      ++stats.landing_dropped_nofly;
-      if (dropped.size() < kSitesNamed) dropped.push_back(site.name);
-      return;
-    }
-    sites.push_back(std::move(site));
-  };
-
+  SiteCollector collector{ctx.grid, nofly, ctx.out->stats, {}, {}};
+  LandingPolygons polygons;
+  for (const std::string& text : ctx.options.landing) {
+    if (absl::Status s = ReadLandingInput(ctx, text, collector, polygons); !s.ok()) return s;
+  }
   // Polygons of every input, labelled together: the cell deepest inside each.
-  std::vector<std::unique_ptr<OGRGeometry>> polygons;
-  std::vector<std::string> polygon_names;
-  for (const std::string& text : o.landing) {
-    auto spec = ParseVectorSpec(text);
-    if (!spec.ok()) return spec.status();
-    auto in = OpenVectorInput("landing sites", spec->path, spec->layer_name, spec->where);
-    if (!in.ok()) return in.status();
-    auto features = ReadFeatures(*in, grid, 0.0, "", o.landing_name_field);
-    if (!features.ok()) return features.status();
-    auto ct = ToFrame(*in->srs, grid);
-    if (!ct.ok()) return ct.status();
-    int points = 0, areas = 0;
-    CarryBudget budget;  // this input's
-    for (const SourceFeature& f : *features) {
-      const std::string name =
-          f.text.empty() ? absl::StrFormat("%s-%d", Stem(spec->path), f.fid) : f.text;
-      auto g = Carry(*f.geometry, *in->srs, **ct, budget);
-      if (!g.ok()) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));
-      }
-      if (IsPoint(**g)) {
-        std::vector<const OGRPoint*> pts;
-        if (wkbFlatten((*g)->getGeometryType()) == wkbPoint) {
-          pts.push_back((*g)->toPoint());
-        } else {
-          for (const OGRPoint* p : *(*g)->toMultiPoint()) pts.push_back(p);
-        }
-        for (const OGRPoint* p : pts) {
-          int i = 0, j = 0;
-          if (!CellOf(grid, p->getX(), p->getY(), &i, &j)) {
-            ++stats.landing_outside_map;
-            continue;
-          }
-          ++points;
-          offer({name, i, j});
-        }
-      } else if (IsPolygonal(**g)) {
-        ++areas;
-        polygons.push_back(*std::move(g));
-        polygon_names.push_back(name);
-      } else {
-        return absl::InvalidArgumentError(absl::StrFormat(
-            "%s: feature %d is a %s; landing sites are points or polygons", in->Label(), f.fid,
-            OGRGeometryTypeToName(f.geometry->getGeometryType())));
-      }
-    }
-    ctx.out->inputs.push_back(
-        {"landing sites", spec->path, in->driver, CrsShortName(in->srs.get()), CrsWkt(*in->srs),
-         absl::StrFormat("%s; %d points and %d polygons meet the map%s", in->Summary(), points,
-                         areas,
-                         o.landing_name_field.empty()
-                             ? ""
-                             : absl::StrFormat("; names from '%s'", o.landing_name_field))});
+  if (!polygons.geometries.empty()) {
+    if (absl::Status s = OfferPolygonSites(polygons, collector); !s.ok()) return s;
   }
-  if (!polygons.empty()) {
-    std::vector<const OGRGeometry*> geometries;
-    std::vector<int32_t> ids;
-    for (size_t k = 0; k < polygons.size(); ++k) {
-      geometries.push_back(polygons[k].get());
-      ids.push_back(static_cast<int32_t>(k + 1));
-    }
-    auto labels = BurnIds(grid, geometries, ids);
-    if (!labels.ok()) return labels.status();
-    // No-fly cells are outside every field: the deepest cell keeps away from them.
-    for (size_t c = 0; c < labels->size(); ++c) {
-      if (nofly[c] != 0) (*labels)[c] = 0;
-    }
-    std::vector<uint8_t> placed(polygons.size(), 0);
-    for (const Region& r :
-         Regions(*labels, static_cast<int32_t>(polygons.size()), grid.nx, grid.ny, {})) {
-      placed[r.label - 1] = 1;
-      offer({polygon_names[r.label - 1], r.deepest_i, r.deepest_j});
-    }
-    for (size_t k = 0; k < polygons.size(); ++k) {
-      if (placed[k]) continue;
-      // Smaller than a cell, wholly in no-fly cells, or outside the map: the
-      // cell of a point on its surface, if the map holds it.
-      OGRGeometryH point = OGR_G_PointOnSurface(OGRGeometry::ToHandle(polygons[k].get()));
-      int i = 0, j = 0;
-      const bool inside =
-          point != nullptr && CellOf(grid, OGR_G_GetX(point, 0), OGR_G_GetY(point, 0), &i, &j);
-      if (point != nullptr) OGR_G_DestroyGeometry(point);
-      if (inside) {
-        offer({polygon_names[k], i, j});
-      } else {
-        ++stats.landing_outside_map;
-      }
-    }
+  std::vector<LandingSite>& sites = collector.sites;
+  ctx.out->stats.landing_from_inputs = static_cast<int>(sites.size());
+  // Open fields are found with the no-fly cells already taken out, so they
+  // are not offered (none can be dropped).
+  if (ctx.options.landing_min_area_m2 > 0.0) {
+    if (absl::Status s = AddOpenFields(ctx, land_cover, nofly, sites); !s.ok()) return s;
   }
-  stats.landing_from_inputs = static_cast<int>(sites.size());
-
-  if (o.landing_min_area_m2 > 0.0) {
-    if (!land_cover.has_value()) {
-      return absl::InvalidArgumentError(
-          "layer 'landing sites': open fields (--landing_min_area_m2) are found in the land "
-          "cover; give --landcover");
-    }
-    std::vector<uint8_t> open(static_cast<size_t>(grid.cells()), 0);
-    ClassRules rules(land_cover->table);
-    for (size_t c = 0; c < open.size(); ++c) {
-      const double v = land_cover->classes[c];
-      if (std::isnan(v) || nofly[c] != 0) continue;
-      open[c] = rules.Find(v)->landing ? 1 : 0;
-    }
-    int32_t count = 0;
-    const std::vector<int32_t> labels = LabelComponents(open, grid.nx, grid.ny, &count);
-    std::vector<Region> fields = Regions(labels, count, grid.nx, grid.ny, {});
-    const int64_t min_cells =
-        static_cast<int64_t>(std::ceil(o.landing_min_area_m2 / ctx.cell_area_m2() - 1e-9));
-    std::erase_if(fields, [&](const Region& r) { return r.cells < min_cells; });
-    std::stable_sort(fields.begin(), fields.end(),
-                     [](const Region& a, const Region& b) { return a.cells > b.cells; });
-    const size_t kept = std::min(fields.size(), static_cast<size_t>(o.max_landing_sites));
-    for (size_t k = 0; k < kept; ++k) {
-      sites.push_back(
-          {absl::StrFormat("field-%d", k + 1), fields[k].deepest_i, fields[k].deepest_j});
-    }
-    stats.landing_from_landcover = static_cast<int>(kept);
-    ctx.Note(absl::StrFormat(
-        "landing sites: %d open fields of at least %.9g m^2 in the land cover ('landing' "
-        "classes, no-fly cells excluded), %d kept (the largest first), each at its cell deepest "
-        "inside the field",
-        fields.size(), o.landing_min_area_m2, kept));
-  }
-
-  // One site per cell (the first named).
-  std::set<std::pair<int, int>> seen;
-  std::erase_if(sites, [&](const LandingSite& s) { return !seen.insert({s.i, s.j}).second; });
-  if (sites.size() > static_cast<size_t>(kMaxLandingSites)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "layer 'landing sites': %d sites; a map holds at most %d", sites.size(), kMaxLandingSites));
-  }
-  if (stats.landing_dropped_nofly > 0) {
-    ctx.Note(absl::StrFormat("landing sites: %d inside no-fly cells dropped (%s%s)",
-                             stats.landing_dropped_nofly, absl::StrJoin(dropped, ", "),
-                             stats.landing_dropped_nofly > kSitesNamed ? ", ..." : ""));
-  }
-  if (stats.landing_outside_map > 0) {
-    ctx.Note(
-        absl::StrFormat("landing sites: %d outside the map left out", stats.landing_outside_map));
-  }
-  return sites;
+  if (absl::Status s = KeepOneSitePerCell(sites); !s.ok()) return s;
+  NoteLeftOutSites(ctx, collector.dropped);
+  return std::move(sites);
 }
 
 }  // namespace riskplan::geo::internal

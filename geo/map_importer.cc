@@ -64,10 +64,13 @@ absl::Status ValidateOptions(const ImportOptions& o) {
       !s.ok()) {
     return s;
   }
+  // A map holds at most 100,000 landing sites (kMaxLandingSites in import_zones.cc).
   if (o.max_landing_sites < 0 || o.max_landing_sites > 100'000) {
     return absl::InvalidArgumentError(
         absl::StrFormat("--max_landing_sites=%d: must be in [0, 100000]", o.max_landing_sites));
   }
+  // A terrain fill must be a height the terrain step would accept from a
+  // DEM (kLowestTerrainM..kHighestTerrainM in import_terrain.cc).
   if (o.terrain_fill.kind == FillRule::Kind::kValue) {
     if (absl::Status s = CheckRange("fill_terrain", o.terrain_fill.value, -500.0, 9000.0);
         !s.ok()) {
@@ -162,6 +165,8 @@ absl::StatusOr<ImportedMap> ImportMap(const ImportOptions& options) {
     t = now;
   };
 
+  // Land cover before the shelter and the landing sites (both read it), and
+  // no-fly before the landing sites (no site may lie in a no-fly cell).
   auto terrain = internal::ImportTerrain(ctx);
   if (!terrain.ok()) return terrain.status();
   lap("terrain");

@@ -166,7 +166,9 @@ absl::StatusOr<std::vector<double>> WarpOntoGrid(const RasterInput& input, const
   }
   const std::string threads_text = absl::StrCat("NUM_THREADS=", threads < 1 ? 1 : threads);
   // -et: the approximate transformer's error, in destination pixels (GDAL's
-  // default is 0.125); -wm: the warp's working memory in MB.
+  // default is 0.125); -wm: the warp's working memory in MB; INIT_DEST=NO_DATA:
+  // cells no source pixel reaches stay NaN, not 0, so that they are refused
+  // or filled as missing (docs/geodata.md, "Coverage").
   const char* argv[] = {
       "-r",  ResamplingName(resampling), "-et",    "0.05", "-wm", "256", "-wo", "INIT_DEST=NO_DATA",
       "-wo", threads_text.c_str(),       "-multi", nullptr};
@@ -186,6 +188,7 @@ absl::StatusOr<std::vector<double>> WarpOntoGrid(const RasterInput& input, const
 
   // The band must not outlive the buffer it writes to.
   dst->reset();
+  // GDAL's rasters are north-up; bundles store the southernmost row first.
   FlipRows(grid.nx, grid.ny, values);
   int has_scale = 0, has_offset = 0;
   GDALRasterBand* in_band = input.dataset->GetRasterBand(1);

@@ -43,6 +43,8 @@ absl::Status WriteRiskLayerGeoTiff(const RiskLayer& layer, const GeoFrame* frame
   if (mem == nullptr || cog == nullptr) {
     return absl::InternalError("GDAL has no MEM or COG driver (GDAL >= 3.1 is needed)");
   }
+  // GDAL's COG driver writes only by CreateCopy (it lays out the tiles and
+  // overviews from a complete source), so the layer is built in memory first.
   DatasetPtr data(mem->Create("", layer.nx, layer.ny, 1, GDT_Float64, nullptr));
   if (data == nullptr) return GdalError("cannot create the in-memory raster");
   // North up: GeoTIFF rows run from the north, the layer's from the south.
@@ -74,6 +76,9 @@ absl::Status WriteRiskLayerGeoTiff(const RiskLayer& layer, const GeoFrame* frame
                         absl::StrFormat("%.17g", description.height_agl_m).c_str());
   data->SetMetadataItem("RISKPLAN_HEADING", description.heading.c_str());
 
+  // PREDICTOR=YES is the floating-point predictor for a Float64 band; the
+  // overviews average the defined cells (NaN is the nodata value). Written
+  // to a temporary file and renamed, so that a reader never sees a part.
   const char* options[] = {"COMPRESS=DEFLATE", "PREDICTOR=YES", "BLOCKSIZE=512",
                            "RESAMPLING=AVERAGE", nullptr};
   const std::string tmp = absl::StrFormat("%s.tmp-%d.tif", path, getpid());

@@ -103,6 +103,8 @@ ShelterTable WorldCoverTable() {
 ShelterTable CorineTable() {
   ShelterTable t;
   t.name = "corine";
+  // Both the raster product's pixel values (1-44) and the vector product's
+  // codes (111-523) are known: the two do not overlap.
   int index = 1;
   for (const CorineClass& c : kCorine) {
     t.rules[c.code] = {c.shelter, c.landing, c.label};
@@ -123,6 +125,8 @@ absl::StatusOr<ShelterTable> DefaultShelterTable(const std::string& name) {
 absl::Status ApplyShelterFile(const std::string& path, ShelterTable* table) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return absl::NotFoundError(absl::StrFormat("shelter table '%s': cannot read it", path));
+  // One byte more than the limit is read, to tell a file of exactly the
+  // limit from a larger one.
   std::string text(kMaxFileBytes + 1, '\0');
   in.read(text.data(), static_cast<std::streamsize>(text.size()));
   text.resize(static_cast<size_t>(in.gcount()));
@@ -138,6 +142,7 @@ absl::Status ApplyShelterFile(const std::string& path, ShelterTable* table) {
       label = std::string(absl::StripAsciiWhitespace(line.substr(hash + 1)));
       line = line.substr(0, hash);
     }
+    // '\r' among the separators: a file with CRLF line ends reads the same.
     std::vector<absl::string_view> words =
         absl::StrSplit(line, absl::ByAnyChar(" \t\r,;"), absl::SkipEmpty());
     if (words.empty()) continue;

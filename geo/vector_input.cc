@@ -68,6 +68,8 @@ absl::StatusOr<VectorInput> OpenVectorInput(const std::string& layer, const std:
     return absl::InvalidArgumentError(absl::StrFormat("%s: it holds no layer", label));
   }
   std::string name = layer_name;
+  // The OSM driver's first layer is its points; building footprints are in
+  // "multipolygons" (docs/geodata.md, "OpenStreetMap buildings").
   if (name.empty() && in.driver == "OSM" && layer == "buildings") name = "multipolygons";
   if (name.empty()) {
     in.ogr_layer = in.dataset->GetLayer(0);
@@ -88,7 +90,7 @@ absl::StatusOr<VectorInput> OpenVectorInput(const std::string& layer, const std:
         "EPSG:XXXX",
         in.Label()));
   }
-  in.srs = GisOrderCopy(*srs);
+  in.srs = GisOrderCopy(*srs);  // longitude first, as the geometries hold it
   if (!where.empty() && in.ogr_layer->SetAttributeFilter(where.c_str()) != OGRERR_NONE) {
     return absl::InvalidArgumentError(
         absl::StrFormat("%s: OGR refuses the filter '%s': %s", in.Label(), where, errors.Errors()));
@@ -131,6 +133,8 @@ absl::StatusOr<std::vector<SourceFeature>> ReadFeatures(VectorInput& input, cons
   const double x0 = grid.frame.x0() - margin_m, y0 = grid.frame.y0() - margin_m;
   const double x1 = grid.frame.x0() + grid.width_m() + margin_m;
   const double y1 = grid.frame.y0() + grid.height_m() + margin_m;
+  // Points along every edge, not just the corners: in the input's CRS the
+  // outline's edges are curves, and the envelope must hold all of them.
   std::vector<double> xs, ys;
   for (int k = 0; k <= kOutlinePoints; ++k) {
     const double t = static_cast<double>(k) / kOutlinePoints;
@@ -153,6 +157,8 @@ absl::StatusOr<std::vector<SourceFeature>> ReadFeatures(VectorInput& input, cons
     min_y = std::min(min_y, ys[k]);
     max_y = std::max(max_y, ys[k]);
   }
+  // When no outline point could be carried into the input's CRS, no filter
+  // rather than a wrong one: every feature is read.
   if (min_x <= max_x && min_y <= max_y) {
     layer.SetSpatialFilterRect(min_x, min_y, max_x, max_y);
   } else {
@@ -230,6 +236,9 @@ absl::StatusOr<std::unique_ptr<OGRGeometry>> Carry(const OGRGeometry& geometry,
   std::unique_ptr<OGRGeometry> g(geometry.clone());
   const OGRwkbGeometryType type = wkbFlatten(g->getGeometryType());
   if (type != wkbPoint && type != wkbMultiPoint) {
+    // Straight edges are cut into pieces of at most 100 m (0.001 degrees in a
+    // geographic CRS) so that they stay straight in the map's frame; the
+    // vertices that adds are counted against the budget first.
     const bool geographic = IsGeographic(from);
     const double step = geographic ? 0.001 : 100.0;
     const double added = VerticesAddedBySegmentize(*g, step);

@@ -86,6 +86,8 @@ ABSL_FLAG(int, max_landing_sites, 1000, "import: open fields kept as landing sit
 namespace riskplan {
 namespace {
 
+// Exit code 2 for bad input (InvalidArgument), 1 for any other failure: the
+// codes riskplan-tool's help promises for every command.
 int Fail(const absl::Status& status) {
   std::fprintf(stderr, "riskplan-tool: %s\n", std::string(status.message()).c_str());
   return status.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
@@ -108,6 +110,8 @@ absl::StatusOr<std::vector<double>> Numbers(const char* flag, const std::string&
   return values;
 }
 
+// Empty items (a trailing comma, ",,") are skipped, not read as inputs
+// named "".
 std::vector<std::string> List(const std::string& text) {
   return absl::StrSplit(text, ',', absl::SkipWhitespace());
 }
@@ -115,15 +119,19 @@ std::vector<std::string> List(const std::string& text) {
 // A map name from a directory: lower case, other characters as '-'.
 std::string NameFromDirectory(const std::string& dir) {
   std::string leaf = std::filesystem::path(dir).lexically_normal().filename().string();
+  // "maps/city/" has an empty last part: the folder before the separator.
   if (leaf.empty()) leaf = std::filesystem::path(dir).lexically_normal().parent_path().filename();
   std::string name;
   for (char c : absl::AsciiStrToLower(leaf)) {
     const bool ok = absl::ascii_isalnum(c) || c == '.' || c == '_' || c == '-';
     name.push_back(ok ? c : '-');
   }
-  return name.substr(0, 64);
+  return name.substr(0, 64);  // a map name has at most 64 characters
 }
 
+// The command line as the provenance records it: each word that a shell
+// would split or expand single-quoted, so that the import can be run again
+// from the manifest.
 std::string CommandLine(int argc, char** argv) {
   std::vector<std::string> words;
   for (int k = 0; k < argc; ++k) {
@@ -281,6 +289,8 @@ int ImportCommand(int argc, char** argv) {
   if (!imported->provenance_json.empty()) {
     private_fields.emplace_back("x_import", imported->provenance_json);
   }
+  // Written beside --out and renamed into place: a reader sees the old
+  // bundle or the new one (docs/geodata.md, "Provenance").
   if (absl::Status st =
           WriteMapBundleAtomically(**map, out, ExistingDirectory::kReplace, private_fields);
       !st.ok()) {

@@ -17,6 +17,7 @@ absl::Status WriteAsciiGrid(const RiskLayer& layer, const std::string& path) {
   if (f == nullptr) return absl::InternalError(absl::StrFormat("cannot write '%s'", path));
   std::fprintf(f.get(), "ncols %d\nnrows %d\nxllcorner %.6f\nyllcorner %.6f\ncellsize %.6f\n",
                layer.nx, layer.ny, layer.x0, layer.y0, layer.res_m);
+  // The format has no NaN: an undefined M is written as the NODATA value.
   std::fprintf(f.get(), "NODATA_value -9999\n");
   // ESRI ASCII grids list the northernmost row first.
   for (int r = layer.ny - 1; r >= 0; --r) {
@@ -37,6 +38,8 @@ absl::Status WriteHeatMapPng(const RiskLayer& layer, const std::string& path) {
   }
   double lo = 0.0;
   double hi = 1.0;
+  // The colours span the 1st to the 99.9th percentile of log10 M (cells with
+  // M > 0): a few extreme cells do not set the scale for all the others.
   if (!positive.empty()) {
     std::sort(positive.begin(), positive.end());
     lo = positive[static_cast<size_t>(0.01 * (positive.size() - 1))];

@@ -111,6 +111,8 @@ cmdline::ProgramHelp Help() {
   return help;
 }
 
+// The exit codes of the help's footer: 2 for bad input (InvalidArgument), 1
+// for any other failure.
 int Fail(const absl::Status& status) {
   std::fprintf(stderr, "riskplan-tool: %s\n", std::string(status.message()).c_str());
   return status.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;

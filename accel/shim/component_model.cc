@@ -94,13 +94,16 @@ void ComponentModel::Write32(uint32_t offset, uint32_t value) {
       const uint32_t index = waddr_ & 0xffff;
       const size_t per_slot = static_cast<size_t>(config_.max_side) * config_.max_side;
       if (status_ & regs::kStatusBusy) {
-        // Weights are loaded between jobs (a lane may be reading them).
+        // Weights are loaded between jobs: in the RTL a write during a job
+        // would race the lanes' reads (error 3, docs/rtl.md).
         Fail(regs::kErrorWeightBusy);
         return;
       }
       if (slot < config_.weight_slots && index < per_slot) {
         weights_[slot * per_slot + index] = uint64_t{value} << 32 | wdata_lo_;
       }
+      // The index steps by itself: a kernel loads with one WADDR write, then
+      // WDATA_LO and WDATA_HI per weight.
       waddr_ = (slot << 16) | ((index + 1) & 0xffff);
       return;
     }
@@ -110,6 +113,8 @@ void ComponentModel::Write32(uint32_t offset, uint32_t value) {
         return;
       }
       words_.push_back(value);
+      // A cell is its density then its shelter, each one 32-bit word when
+      // M <= 32, else two (low word first), as the register map says.
       const size_t per_value = config_.format.cell_bits <= 32 ? 1 : 2;
       if (words_.size() == 2 * per_value) {
         const auto value_at = [&](size_t first) {
@@ -145,6 +150,10 @@ void ComponentModel::Fail(uint32_t code) {
   status_ = regs::kStatusError | regs::kStatusDone | (code << 8);
 }
 
+// START's checks are the RTL's (docs/rtl.md, "Job control"): every lane in
+// LANE_MASK exists, has its slot and side in range and its window inside the
+// cut, and the cut is at most 65535 x 65535; any other job is refused with
+// error 1 before a cell is taken.
 void ComponentModel::Start() {
   for (Lane& lane : lanes_) {
     lane.impact = 0;
@@ -190,7 +199,7 @@ void ComponentModel::AddCell(uint64_t density, uint64_t shelter) {
     lane.impact += static_cast<Accumulator>(w) * density;
     lane.shelter += static_cast<Accumulator>(w) * shelter;
   }
-  ++cycles_;
+  ++cycles_;  // one cut cell per clock
   if (++cells_ == uint64_t{cut_cols_} * cut_rows_) {
     cycles_ += kPipelineCycles;
     status_ = regs::kStatusDone;

@@ -62,6 +62,8 @@ uint32_t MmioDevice::SlotFor(const QuantizedKernelTable& kernels, int b, int k,
       return s;
     }
   }
+  // Not loaded: the least recently used slot that no lane of this job uses
+  // is replaced (kernels stay in their slots between jobs).
   uint32_t victim = slots_count_;
   for (uint32_t s = 0; s < slots_count_; ++s) {
     if (std::find(busy.begin(), busy.end(), s) != busy.end()) continue;
@@ -112,6 +114,8 @@ absl::Status MmioDevice::RunJob(const QuantizedMap& map, const QuantizedKernelTa
   bus_->Write32(regs::kCutRows, static_cast<uint32_t>(j1 - j0));
   bus_->Write32(regs::kLaneMask, job.size() >= 32 ? 0xffffffffu : (uint32_t{1} << job.size()) - 1);
   bus_->Write32(regs::kCtrl, regs::kCtrlStart);
+  // STATUS is read once before streaming, to see a refused job before its
+  // cells are sent (the RTL spends one clock on it, docs/rtl.md, "Cycles").
   uint32_t status = bus_->Read32(regs::kStatus);
   if (status & regs::kStatusError) {
     return absl::InternalError(
@@ -128,6 +132,7 @@ absl::Status MmioDevice::RunJob(const QuantizedMap& map, const QuantizedKernelTa
   const absl::Time deadline = absl::Now() + options_.job_timeout;
   while (!((status = bus_->Read32(regs::kStatus)) & regs::kStatusDone)) {
     if (absl::Now() > deadline) {
+      // The component may still be running the job: RESET aborts it.
       bus_->Write32(regs::kCtrl, regs::kCtrlReset);
       return absl::DeadlineExceededError("mmio: the component did not finish a job in time");
     }

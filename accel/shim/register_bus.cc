@@ -27,6 +27,8 @@ absl::StatusOr<std::unique_ptr<MappedRegisterBus>> MappedRegisterBus::Open(const
     return absl::FailedPreconditionError(
         absl::StrCat("mmio: cannot open ", path, ": ", std::strerror(errno)));
   }
+  // mmap takes a page-aligned offset: the page holding `base` is mapped and
+  // the registers start `offset` bytes into it.
   const uint64_t page = static_cast<uint64_t>(sysconf(_SC_PAGESIZE));
   const uint64_t aligned = base / page * page;
   const size_t offset = static_cast<size_t>(base - aligned);
@@ -49,6 +51,8 @@ MappedRegisterBus::~MappedRegisterBus() {
   if (fd_ >= 0) close(fd_);
 }
 
+// An access outside the mapped span or not 32-bit aligned is no register of
+// the component: it is dropped, and a read of it gives all ones.
 uint32_t MappedRegisterBus::Read32(uint32_t offset) {
   if (offset + 4 > span_bytes_ || offset % 4 != 0) return 0xffffffffu;
   return registers_[offset / 4];

@@ -193,7 +193,8 @@ absl::StatusOr<std::shared_ptr<TlsContext>> ListenerTls() {
 }
 
 int Main() {
-  // Block the stop signals before any thread starts, and wait for them here.
+  // Block the stop signals before any thread starts (threads inherit the
+  // mask, so none of them takes the signal), and wait for them here.
   sigset_t stop;
   sigemptyset(&stop);
   sigaddset(&stop, SIGTERM);
@@ -250,6 +251,7 @@ int Main() {
     std::cerr << ", times reported at " << static_cast<double>(info.clock_hz) / 1e6 << " MHz";
   }
   std::cerr << "\n";
+  // Flushed at once: whoever started the shim learns the port from this line.
   std::cout << "riskplan-fpga-shim listening on " << *bound << std::endl;
   int signal = 0;
   sigwait(&stop, &signal);

@@ -70,6 +70,7 @@ void ShimServer::AcceptLoop() {
     if (!socket.ok()) continue;
     absl::MutexLock lock(&mu_);
     if (stopping_) return;
+    // Over the limit the socket is closed unanswered (it goes out of scope).
     if (static_cast<int>(connections_.size()) >= options_.max_connections) continue;
     ++accepted_;
     connections_.emplace_back();
@@ -104,6 +105,9 @@ void ShimServer::Serve(Connection* connection) {
     absl::Status s = ReadFrame(connection->socket, options_.limits.max_payload_bytes,
                                absl::Now() + options_.idle_timeout, &header, &payload);
     if (!s.ok()) {
+      // A corrupt header or an oversized payload is answered with ERROR
+      // MALFORMED (request id 0: the header cannot be trusted), then the
+      // connection is closed (docs/shim-protocol.md, "Frames").
       if (s.code() == absl::StatusCode::kDataLoss ||
           s.code() == absl::StatusCode::kResourceExhausted) {
         SendAll(connection->socket,

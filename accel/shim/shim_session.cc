@@ -38,6 +38,8 @@ absl::Status BlobStore::Install(BlobKind kind, const BlobHash& hash, absl::strin
         "blob of %d bytes once quantised exceeds the store's %d", entry.bytes, capacity_bytes_));
   }
   absl::MutexLock lock(&mu_);
+  // Quantised outside the lock: another connection may have installed the
+  // same blob meanwhile.
   if (entries_.count(hash) != 0) return absl::OkStatus();
   MakeRoom(entry.bytes);
   entry.last_use = ++clock_;
@@ -82,6 +84,7 @@ std::string ShimSession::ErrorFrame(uint64_t id, ShimErrorCode code, absl::strin
                                     const BlobHash& blob) {
   ErrorMessage e;
   e.code = code;
+  // The protocol's strings are at most 4096 bytes.
   e.message = std::string(message.substr(0, 4000));
   e.blob = blob;
   return EncodeFrame(MessageType::kError, id, EncodeError(e));
@@ -90,6 +93,8 @@ std::string ShimSession::ErrorFrame(uint64_t id, ShimErrorCode code, absl::strin
 std::string ShimSession::Handle(const FrameHeader& header, absl::string_view payload, bool* close) {
   *close = false;
   if (header.version != kShimProtocolVersion) {
+    // Refused in this shim's own version: ERROR's layout is the same in
+    // every version, so the client can read the refusal.
     *close = true;
     return ErrorFrame(header.request_id, ShimErrorCode::kVersionMismatch,
                       absl::StrFormat("this shim speaks protocol version %d only, not %d",
@@ -222,6 +227,7 @@ std::string ShimSession::HandleEval(uint64_t id, absl::string_view payload, bool
   const auto start = std::chrono::steady_clock::now();
   absl::Status s;
   {
+    // Each connection has its session; device access is serialised.
     absl::MutexLock lock(&context_->device_mu);
     s = context_->device->Evaluate(*map, *kernels, eval.sites, reply.impact, reply.shelter,
                                    &reply.device_cycles);

@@ -42,6 +42,9 @@ absl::Status CheckExportTrajectory(const ExportTrajectory& t) {
   return absl::OkStatus();
 }
 
+// A temporary file renamed over the name, so that a reader sees the old file
+// or the new one, never a part; the pid keeps two processes writing the same
+// name apart.
 absl::Status WriteTextFileAtomically(const std::string& text, const std::string& path) {
   const std::string tmp = absl::StrFormat("%s.tmp-%d", path, getpid());
   {

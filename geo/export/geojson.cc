@@ -22,6 +22,9 @@ absl::StatusOr<std::string> TrajectoryGeoJson(const ExportTrajectory& t) {
   Json coordinates = Json::array();
   Json alt = Json::array(), heading = Json::array(), arc = Json::array(), risk = Json::array();
   Json features = Json::array();
+  // Positions are [longitude, latitude] with no third element: RFC 7946
+  // makes it the height above the WGS84 ellipsoid, and riskplan's altitudes
+  // are above mean sea level, so they go in the alt_amsl_m properties.
   for (const ExportSample& s : t.samples) {
     coordinates.push_back({s.lon_deg, s.lat_deg});
     alt.push_back(s.alt_m);

@@ -10,6 +10,8 @@
 namespace riskplan::geo {
 namespace {
 
+// 10 decimals of a degree (about 0.01 mm) and 4 of a metre. KML's absolute
+// altitudes are above sea level, as riskplan's are.
 std::string Coordinates(const ExportSample& s) {
   return absl::StrFormat("%.10f,%.10f,%.4f", s.lon_deg, s.lat_deg, s.alt_m);
 }

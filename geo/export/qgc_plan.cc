@@ -32,12 +32,14 @@ absl::StatusOr<std::string> QgcPlanJson(const ExportTrajectory& t, const QgcPlan
          {o.hold_s, o.acceptance_radius_m, o.pass_radius_m, nullptr, s.lat_deg, s.lon_deg,
           s.alt_m}},
         {"autoContinue", true},
-        {"doJumpId", static_cast<int64_t>(k) + 1},
+        {"doJumpId", static_cast<int64_t>(k) + 1},  // from 1, as QGroundControl numbers them
         {"AltitudeMode", kQgcAltitudeModeAbsolute},
         {"Altitude", s.alt_m},
         {"AMSLAltAboveTerrain", nullptr},
     });
   }
+  // Home is the ground under the start, or the start's own altitude where
+  // the terrain is unknown.
   const ExportSample& start = t.samples.front();
   const double home_alt_m = std::isfinite(start.terrain_m) ? start.terrain_m : start.alt_m;
   Json plan = {
@@ -48,13 +50,15 @@ absl::StatusOr<std::string> QgcPlanJson(const ExportTrajectory& t, const QgcPlan
        {
            {"version", 2},
            {"firmwareType", o.firmware_type},
-           {"vehicleType", kMavTypeFixedWing},
+           {"vehicleType", kMavTypeFixedWing},  // riskplan plans for small fixed wings
            {"cruiseSpeed", t.airspeed_mps},
            {"hoverSpeed", o.hover_speed_mps},
            {"globalPlanAltitudeMode", kQgcAltitudeModeAbsolute},
            {"plannedHomePosition", {start.lat_deg, start.lon_deg, home_alt_m}},
            {"items", std::move(items)},
        }},
+      // Optional in the format; written empty so that QGroundControl opens the
+      // file without asking.
       {"geoFence", {{"version", 2}, {"circles", Json::array()}, {"polygons", Json::array()}}},
       {"rallyPoints", {{"version", 2}, {"points", Json::array()}}},
   };

@@ -1,4 +1,4 @@
-#include "accel/net.h"
+#include "net/net.h"
 
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -21,7 +21,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 
-namespace riskplan::accel {
+namespace riskplan::net {
 namespace {
 
 absl::Status Errno(absl::string_view what) {
@@ -343,16 +343,4 @@ absl::Status RecvAll(const Socket& socket, void* data, size_t size, absl::Time d
   return absl::OkStatus();
 }
 
-absl::Status ReadFrame(const Socket& socket, uint32_t max_payload_bytes, absl::Time deadline,
-                       FrameHeader* header, std::string* payload) {
-  uint8_t bytes[kFrameHeaderBytes];
-  if (absl::Status s = RecvAll(socket, bytes, sizeof(bytes), deadline); !s.ok()) return s;
-  if (absl::Status s = DecodeHeader(bytes, max_payload_bytes, header); !s.ok()) return s;
-  payload->resize(header->payload_bytes);
-  if (absl::Status s = RecvAll(socket, payload->data(), payload->size(), deadline); !s.ok()) {
-    return s;
-  }
-  return CheckPayload(*header, *payload);
-}
-
-}  // namespace riskplan::accel
+}  // namespace riskplan::net

@@ -20,6 +20,7 @@
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
+#include "net/tls_files.h"
 
 namespace riskplan::net {
 namespace {
@@ -242,13 +243,7 @@ namespace {
 absl::Status TlsError(SSL* ssl, int rc, absl::string_view what) {
   const int e = SSL_get_error(ssl, rc);
   if (e == SSL_ERROR_ZERO_RETURN) return absl::UnavailableError("connection closed by peer");
-  std::string reason;
-  while (unsigned long code = ERR_get_error()) {
-    char buffer[256];
-    ERR_error_string_n(code, buffer, sizeof(buffer));
-    if (!reason.empty()) reason += "; ";
-    reason += buffer;
-  }
+  const std::string reason = OpenSslErrors();
   if (e == SSL_ERROR_SYSCALL && reason.empty()) {
     return errno != 0 ? Errno(what) : absl::UnavailableError("connection closed by peer");
   }

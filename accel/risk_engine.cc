@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/base/check.h"
+#include "net/net.h"
 
 namespace riskplan::accel {
 namespace {
@@ -56,7 +57,7 @@ absl::StatusOr<std::unique_ptr<RiskEngine>> RiskEngine::Create(const RiskEngineO
   for (const std::string& endpoint : options.fpga_shims) {
     std::string host;
     int port = 0;
-    if (absl::Status s = SplitHostPort(endpoint, &host, &port); !s.ok()) return s;
+    if (absl::Status s = net::SplitHostPort(endpoint, &host, &port); !s.ok()) return s;
   }
   auto engine = std::unique_ptr<RiskEngine>(new RiskEngine(options));
   engine->queue_.AddCpuWorkers(options.cpu_workers);
@@ -92,7 +93,7 @@ RiskEngine::~RiskEngine() {
 absl::Status RiskEngine::AddFpgaWorker(const std::string& endpoint) {
   std::string host;
   int port = 0;
-  if (absl::Status s = SplitHostPort(endpoint, &host, &port); !s.ok()) return s;
+  if (absl::Status s = net::SplitHostPort(endpoint, &host, &port); !s.ok()) return s;
   absl::MutexLock lock(&mu_);
   for (const auto& w : fpga_) {
     if (w->endpoint() == endpoint) {

@@ -4,6 +4,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "accel/frame_io.h"
 
 namespace riskplan::accel {
 namespace {
@@ -37,13 +38,13 @@ absl::Status FromShimError(const ErrorMessage& e, absl::string_view endpoint) {
 absl::StatusOr<std::unique_ptr<ShimClient>> ShimClient::Connect(const std::string& endpoint,
                                                                 const ShimClientOptions& options) {
   const absl::Time connect_deadline = absl::Now() + options.connect_timeout;
-  absl::StatusOr<Socket> socket = ConnectTcp(endpoint, connect_deadline);
+  absl::StatusOr<net::Socket> socket = net::ConnectTcp(endpoint, connect_deadline);
   if (!socket.ok()) return socket.status();
   if (options.tls != nullptr) {
     std::string name = options.tls_server_name;
     if (name.empty()) {
       int port = 0;
-      if (absl::Status s = SplitHostPort(endpoint, &name, &port); !s.ok()) return s;
+      if (absl::Status s = net::SplitHostPort(endpoint, &name, &port); !s.ok()) return s;
     }
     if (absl::Status s = options.tls->Connect(&*socket, name, connect_deadline); !s.ok()) {
       return absl::Status(s.code(), absl::StrCat("shim ", endpoint, ": ", s.message()));
@@ -53,7 +54,7 @@ absl::StatusOr<std::unique_ptr<ShimClient>> ShimClient::Connect(const std::strin
 }
 
 absl::StatusOr<std::unique_ptr<ShimClient>> ShimClient::Handshake(
-    const std::string& endpoint, Socket socket, const ShimClientOptions& options) {
+    const std::string& endpoint, net::Socket socket, const ShimClientOptions& options) {
   auto client = std::unique_ptr<ShimClient>(new ShimClient(endpoint, options, std::move(socket)));
   std::string reply;
   if (absl::Status s = client->Call(MessageType::kHello, EncodeHello({options.client_name}),
@@ -78,7 +79,7 @@ absl::Status ShimClient::Call(MessageType type, const std::string& payload, Mess
   const absl::Time deadline = absl::Now() + timeout;
   const uint64_t id = next_request_id_++;
   const std::string what = absl::StrCat("shim ", endpoint_, ": ", MessageTypeName(type));
-  if (absl::Status s = SendAll(socket_, EncodeFrame(type, id, payload), deadline); !s.ok()) {
+  if (absl::Status s = net::SendAll(socket_, EncodeFrame(type, id, payload), deadline); !s.ok()) {
     return absl::Status(s.code(), absl::StrCat(what, ": ", s.message()));
   }
   FrameHeader header;

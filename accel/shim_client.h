@@ -26,9 +26,9 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "accel/net.h"
 #include "accel/shim_protocol.h"
-#include "accel/tls_context.h"
+#include "net/net.h"
+#include "net/tls_context.h"
 
 namespace riskplan::accel {
 
@@ -45,10 +45,10 @@ struct ShimClientOptions {
   // Upload chunk size (capped by the shim's max_payload_bytes).
   uint32_t upload_chunk_bytes = 4u << 20;
   std::string client_name = "riskplan";
-  // TLS to the shim (accel/tls_context.h); null: plaintext. The shim's
+  // TLS to the shim (net/tls_context.h); null: plaintext. The shim's
   // certificate must be for `tls_server_name`, or for the endpoint's host
   // when that is empty. The handshake has connect_timeout.
-  std::shared_ptr<TlsContext> tls;
+  std::shared_ptr<net::TlsContext> tls;
   std::string tls_server_name;
 };
 
@@ -63,7 +63,7 @@ class ShimClient {
   // ConnectTcp and then this; tests and fuzz targets give it one end of a
   // socketpair.
   static absl::StatusOr<std::unique_ptr<ShimClient>> Handshake(const std::string& endpoint,
-                                                               Socket socket,
+                                                               net::Socket socket,
                                                                const ShimClientOptions& options);
 
   const HelloReply& hello() const { return hello_; }
@@ -81,7 +81,7 @@ class ShimClient {
   void Interrupt() { socket_.Shutdown(); }
 
  private:
-  ShimClient(std::string endpoint, ShimClientOptions options, Socket socket)
+  ShimClient(std::string endpoint, ShimClientOptions options, net::Socket socket)
       : endpoint_(std::move(endpoint)), options_(std::move(options)), socket_(std::move(socket)) {}
 
   // Sends a request and reads its reply, checking version, id and type.
@@ -91,7 +91,7 @@ class ShimClient {
 
   const std::string endpoint_;
   const ShimClientOptions options_;
-  Socket socket_;
+  net::Socket socket_;
   HelloReply hello_;
   uint64_t next_request_id_ = 1;
   BlobHash missing_blob_{};

@@ -27,10 +27,10 @@
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/shim_server.h"
 #include "accel/shim_client.h"
-#include "accel/tls_context.h"
 #include "bench/demo_city_configs.h"
 #include "benchmark/benchmark.h"
 #include "core/map/demo_city.h"
+#include "net/tls_context.h"
 
 namespace riskplan {
 namespace {
@@ -39,13 +39,13 @@ std::string g_external_shim;
 std::string g_tls_dir;
 
 // The two ends' TLS from --tls_dir (null without it).
-std::shared_ptr<accel::TlsContext> ShimTls(bool listener) {
+std::shared_ptr<net::TlsContext> ShimTls(bool listener) {
   if (g_tls_dir.empty()) return nullptr;
   const std::string d = g_tls_dir + "/";
-  absl::StatusOr<std::shared_ptr<accel::TlsContext>> tls =
-      listener ? accel::TlsContext::ForListener(
+  absl::StatusOr<std::shared_ptr<net::TlsContext>> tls =
+      listener ? net::TlsContext::ForListener(
                      {.cert = d + "shim.pem", .key = d + "shim.key", .ca = d + "ca-a.pem"})
-               : accel::TlsContext::ForClient(
+               : net::TlsContext::ForClient(
                      {.cert = d + "client.pem", .key = d + "client.key", .ca = d + "ca-a.pem"});
   if (!tls.ok()) {
     std::fprintf(stderr, "--tls_dir: %s\n", std::string(tls.status().message()).c_str());

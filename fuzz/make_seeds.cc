@@ -20,8 +20,8 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "accel/blobs.h"
+#include "accel/frame_io.h"
 #include "accel/known_answer.h"
-#include "accel/net.h"
 #include "accel/shim/device.h"
 #include "accel/shim/shim_session.h"
 #include "accel/shim_client.h"
@@ -31,6 +31,7 @@
 #include "fuzz/fuzz_support.h"
 #include "fuzz/shim_records.h"
 #include "geo/geo_frame.h"
+#include "net/net.h"
 #include "nlohmann/json.hpp"
 #include "riskplan/v1/planner.pb.h"
 
@@ -219,7 +220,7 @@ std::string RecordExchange(const std::string& ops, uint16_t blob_size) {
       FrameHeader reply_header;
       const absl::string_view reply_payload = TakeFrame(&rest, &reply_header);
       replies.push_back(Request(reply_header.type, std::string(reply_payload)));
-      if (!SendAll(shim, reply, absl::Now() + absl::Seconds(5)).ok() || close) break;
+      if (!net::SendAll(shim, reply, absl::Now() + absl::Seconds(5)).ok() || close) break;
     }
   });
   // The same operations as shim_client_fuzz.cc, on the same test blob.

@@ -27,11 +27,11 @@
 
 #include "accel/blobs.h"
 #include "accel/known_answer.h"
-#include "accel/net.h"
 #include "accel/shim_client.h"
 #include "accel/shim_protocol.h"
 #include "fuzz/fuzz_support.h"
 #include "fuzz/shim_records.h"
+#include "net/net.h"
 
 namespace riskplan::fuzz {
 namespace {
@@ -81,7 +81,7 @@ std::string FixBlobs(const Record& r, const BlobHash& test_blob) {
 }
 
 // Reads what the client has sent so far and checks every frame of it.
-void CheckRequests(const Socket& shim, uint64_t* next_id) {
+void CheckRequests(const net::Socket& shim, uint64_t* next_id) {
   const std::string sent = ReceiveAll(shim);
   absl::string_view rest = sent;
   while (!rest.empty()) {

@@ -28,9 +28,9 @@
 
 #include "absl/strings/string_view.h"
 #include "accel/byte_io.h"
-#include "accel/net.h"
 #include "accel/shim_protocol.h"
 #include "fuzz/fuzz_support.h"
+#include "net/net.h"
 
 namespace riskplan::fuzz {
 
@@ -86,17 +86,17 @@ inline void AppendRecord(std::string* out, const Record& r) {
 
 // A connected pair of non-blocking stream sockets (a socketpair: the
 // protocol's code reads and writes it as it would a TCP connection).
-inline std::pair<accel::Socket, accel::Socket> SocketPair() {
+inline std::pair<net::Socket, net::Socket> SocketPair() {
   int fds[2];
   if (socketpair(AF_UNIX, SOCK_STREAM, 0, fds) != 0) Fail("socketpair");
   for (int fd : fds) fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
-  return {accel::Socket(fds[0]), accel::Socket(fds[1])};
+  return {net::Socket(fds[0]), net::Socket(fds[1])};
 }
 
 // Writes as much of `bytes` as the socket takes without blocking, then
 // closes the sending side: the peer reads what was written, then end of
 // stream. (The socket buffer holds far more than a fuzz input.)
-inline void SendAndClose(const accel::Socket& socket, absl::string_view bytes) {
+inline void SendAndClose(const net::Socket& socket, absl::string_view bytes) {
   while (!bytes.empty()) {
     const ssize_t n = send(socket.fd(), bytes.data(), bytes.size(), MSG_NOSIGNAL);
     if (n <= 0) break;
@@ -106,7 +106,7 @@ inline void SendAndClose(const accel::Socket& socket, absl::string_view bytes) {
 }
 
 // Everything waiting on a non-blocking socket.
-inline std::string ReceiveAll(const accel::Socket& socket) {
+inline std::string ReceiveAll(const net::Socket& socket) {
   std::string out;
   char buffer[1 << 14];
   ssize_t n;

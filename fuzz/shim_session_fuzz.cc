@@ -21,7 +21,7 @@
 #include "absl/strings/string_view.h"
 #include "absl/time/clock.h"
 #include "accel/blobs.h"
-#include "accel/net.h"
+#include "accel/frame_io.h"
 #include "accel/shim/device.h"
 #include "accel/shim/shim_session.h"
 #include "accel/shim_protocol.h"

@@ -23,14 +23,14 @@
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
 #include "accel/engine_metrics.h"
-#include "accel/net.h"
 #include "accel/risk_engine.h"
-#include "accel/tls_context.h"
 #include "cmdline/help.h"
 #include "core/planners/planner.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/health_check_service_interface.h"
+#include "net/net.h"
+#include "net/tls_context.h"
 #include "server/observability/accel_metrics.h"
 #include "server/observability/cache_metrics.h"
 #include "server/security/connection_acceptor.h"
@@ -222,7 +222,7 @@ struct ServerConfig {
   // --listen (HOST:PORT) and its HOST; --health_listen (empty: off).
   std::string listen, listen_host, health_listen;
   // TLS to the FPGA shims (--fpga_tls_*).
-  accel::TlsFiles shim_tls;
+  net::TlsFiles shim_tls;
   std::string shim_tls_server_name;
   int64_t grace_ms = 0;
   accel::KernelPrecision cpu_kernel = accel::KernelPrecision::kExact;
@@ -337,11 +337,11 @@ absl::StatusOr<ServerConfig> ConfigFromFlags() {
   config.listen = absl::GetFlag(FLAGS_listen);
   config.listen_host = config.listen.substr(0, config.listen.rfind(':'));
   config.health_listen = absl::GetFlag(FLAGS_health_listen);
-  config.shim_tls = accel::TlsFiles{.cert = absl::GetFlag(FLAGS_fpga_tls_cert),
-                                    .key = absl::GetFlag(FLAGS_fpga_tls_key),
-                                    .ca = absl::GetFlag(FLAGS_fpga_tls_ca),
-                                    .crl = "",
-                                    .flag_prefix = "fpga_"};
+  config.shim_tls = net::TlsFiles{.cert = absl::GetFlag(FLAGS_fpga_tls_cert),
+                                  .key = absl::GetFlag(FLAGS_fpga_tls_key),
+                                  .ca = absl::GetFlag(FLAGS_fpga_tls_ca),
+                                  .crl = "",
+                                  .flag_prefix = "fpga_"};
   config.shim_tls_server_name = absl::GetFlag(FLAGS_fpga_tls_server_name);
   return config;
 }
@@ -407,8 +407,8 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(const ServerConfig
     engine_options.fpga_shims.emplace_back(s);
   }
   if (config.shim_tls.enabled() || !config.shim_tls_server_name.empty()) {
-    absl::StatusOr<std::shared_ptr<accel::TlsContext>> tls =
-        accel::TlsContext::ForClient(config.shim_tls);
+    absl::StatusOr<std::shared_ptr<net::TlsContext>> tls =
+        net::TlsContext::ForClient(config.shim_tls);
     if (!tls.ok()) return tls.status();
     engine_options.fpga.client.tls = *std::move(tls);
     engine_options.fpga.client.tls_server_name = config.shim_tls_server_name;
@@ -416,7 +416,7 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(const ServerConfig
     for (const std::string& endpoint : engine_options.fpga_shims) {
       std::string host;
       int port = 0;
-      if (accel::SplitHostPort(endpoint, &host, &port).ok() && !accel::IsLoopbackHost(host)) {
+      if (net::SplitHostPort(endpoint, &host, &port).ok() && !net::IsLoopbackHost(host)) {
         return absl::InvalidArgumentError(absl::StrFormat(
             "--fpga_shims: %s is not on loopback and no --fpga_tls_* flags were given: "
             "plaintext to it needs --allow_plaintext (docs/security.md)",

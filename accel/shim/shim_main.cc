@@ -35,8 +35,9 @@
 #include "accel/shim/mmio_device.h"
 #include "accel/shim/register_bus.h"
 #include "accel/shim/shim_server.h"
-#include "accel/tls_context.h"
 #include "cmdline/help.h"
+#include "net/net.h"
+#include "net/tls_context.h"
 #ifdef RISKPLAN_HAVE_VERILATOR
 #include "accel/rtl/verilated_component.h"
 #endif
@@ -165,31 +166,31 @@ absl::StatusOr<OpenedDevice> MakeDevice() {
 
 // The listener's TLS from the flags (null: plaintext, only on loopback
 // unless --allow_plaintext).
-absl::StatusOr<std::shared_ptr<TlsContext>> ListenerTls() {
-  TlsFiles files{.cert = absl::GetFlag(FLAGS_tls_cert),
-                 .key = absl::GetFlag(FLAGS_tls_key),
-                 .ca = absl::GetFlag(FLAGS_tls_client_ca),
-                 .crl = absl::GetFlag(FLAGS_tls_crl),
-                 .flag_prefix = ""};
+absl::StatusOr<std::shared_ptr<net::TlsContext>> ListenerTls() {
+  net::TlsFiles files{.cert = absl::GetFlag(FLAGS_tls_cert),
+                      .key = absl::GetFlag(FLAGS_tls_key),
+                      .ca = absl::GetFlag(FLAGS_tls_client_ca),
+                      .crl = absl::GetFlag(FLAGS_tls_crl),
+                      .flag_prefix = ""};
   if (!files.enabled()) {
     std::string host;
     int port = 0;
-    if (absl::Status s = SplitHostPort(absl::GetFlag(FLAGS_listen), &host, &port); !s.ok()) {
+    if (absl::Status s = net::SplitHostPort(absl::GetFlag(FLAGS_listen), &host, &port); !s.ok()) {
       return s;
     }
     if (!files.crl.empty()) return absl::InvalidArgumentError("--tls_crl needs TLS");
-    if (!IsLoopbackHost(host) && !absl::GetFlag(FLAGS_allow_plaintext)) {
+    if (!net::IsLoopbackHost(host) && !absl::GetFlag(FLAGS_allow_plaintext)) {
       return absl::InvalidArgumentError(
           "--listen is not a loopback address and no --tls_cert/--tls_key/--tls_client_ca were "
           "given: plaintext there needs --allow_plaintext (docs/security.md)");
     }
-    return std::shared_ptr<TlsContext>();
+    return std::shared_ptr<net::TlsContext>();
   }
   if (files.ca.empty()) {
     return absl::InvalidArgumentError(
         "--tls_client_ca is required with TLS: the shim must authenticate the server");
   }
-  return TlsContext::ForListener(files);
+  return net::TlsContext::ForListener(files);
 }
 
 int Main() {
@@ -221,7 +222,7 @@ int Main() {
     device = std::make_unique<ReportedClockDevice>(std::move(device), wanted_clock_hz);
   }
   ShimServerOptions options;
-  absl::StatusOr<std::shared_ptr<TlsContext>> tls = ListenerTls();
+  absl::StatusOr<std::shared_ptr<net::TlsContext>> tls = ListenerTls();
   if (!tls.ok()) {
     std::cerr << "riskplan-fpga-shim: cannot start: " << tls.status().message() << "\n";
     return 1;

@@ -7,12 +7,13 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "accel/frame_io.h"
 
 namespace riskplan::accel {
 namespace {
 
 // "127.0.0.1:51234" or "[::1]:51234", for the log of a refused handshake.
-std::string PeerName(const Socket& socket) {
+std::string PeerName(const net::Socket& socket) {
   sockaddr_storage peer{};
   socklen_t length = sizeof(peer);
   if (getpeername(socket.fd(), reinterpret_cast<sockaddr*>(&peer), &length) != 0) return "?";
@@ -43,7 +44,7 @@ ShimServer::~ShimServer() { Stop(); }
 
 absl::StatusOr<std::string> ShimServer::Start(const std::string& listen) {
   std::string bound;
-  absl::StatusOr<Socket> listener = ListenTcp(listen, &bound);
+  absl::StatusOr<net::Socket> listener = net::ListenTcp(listen, &bound);
   if (!listener.ok()) return listener.status();
   listener_ = *std::move(listener);
   accept_thread_ = std::thread([this] { AcceptLoop(); });
@@ -66,7 +67,8 @@ void ShimServer::AcceptLoop() {
       }
     }
     // Short waits so that Stop() is noticed promptly.
-    absl::StatusOr<Socket> socket = Accept(listener_, absl::Now() + absl::Milliseconds(100));
+    absl::StatusOr<net::Socket> socket =
+        net::Accept(listener_, absl::Now() + absl::Milliseconds(100));
     if (!socket.ok()) continue;
     absl::MutexLock lock(&mu_);
     if (stopping_) return;
@@ -110,16 +112,17 @@ void ShimServer::Serve(Connection* connection) {
       // connection is closed (docs/shim-protocol.md, "Frames").
       if (s.code() == absl::StatusCode::kDataLoss ||
           s.code() == absl::StatusCode::kResourceExhausted) {
-        SendAll(connection->socket,
-                ShimSession::ErrorFrame(0, ShimErrorCode::kMalformed, s.message()),
-                absl::Now() + absl::Seconds(1))
+        net::SendAll(connection->socket,
+                     ShimSession::ErrorFrame(0, ShimErrorCode::kMalformed, s.message()),
+                     absl::Now() + absl::Seconds(1))
             .IgnoreError();
       }
       break;
     }
     bool close = false;
     const std::string reply = session.Handle(header, payload, &close);
-    if (!SendAll(connection->socket, reply, absl::Now() + options_.idle_timeout).ok() || close) {
+    if (!net::SendAll(connection->socket, reply, absl::Now() + options_.idle_timeout).ok() ||
+        close) {
       break;
     }
   }

@@ -19,10 +19,10 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
-#include "accel/net.h"
-#include "accel/tls_context.h"
 #include "accel/shim/device.h"
 #include "accel/shim/shim_session.h"
+#include "net/net.h"
+#include "net/tls_context.h"
 
 namespace riskplan::accel {
 
@@ -30,9 +30,9 @@ struct ShimServerOptions {
   ShimLimits limits;
   absl::Duration idle_timeout = absl::Minutes(10);
   int max_connections = 64;
-  // TLS on every connection (accel/tls_context.h); null: plaintext. With a
+  // TLS on every connection (net/tls_context.h); null: plaintext. With a
   // client CA the shim refuses a server whose certificate it cannot verify.
-  std::shared_ptr<TlsContext> tls;
+  std::shared_ptr<net::TlsContext> tls;
   absl::Duration handshake_timeout = absl::Seconds(10);
   // Called on a connection's thread for every refused handshake and every
   // certificate reload (the daemon prints them); may be null.
@@ -56,7 +56,7 @@ class ShimServer {
 
  private:
   struct Connection {
-    Socket socket;
+    net::Socket socket;
     std::thread thread;
     bool finished = false;
   };
@@ -67,7 +67,7 @@ class ShimServer {
   std::unique_ptr<BlobStore> store_;
   const ShimServerOptions options_;
   ShimContext context_;
-  Socket listener_;
+  net::Socket listener_;
   std::thread accept_thread_;
   mutable absl::Mutex mu_;
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;

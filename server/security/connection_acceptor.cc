@@ -18,7 +18,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
-#include "accel/net.h"
+#include "net/net.h"
 #include "server/observability/grpc_log.h"
 #include "server/observability/rpc_log.h"
 
@@ -82,7 +82,7 @@ absl::StatusOr<std::unique_ptr<ConnectionAcceptor>> ConnectionAcceptor::Listen(
     const std::string& host_port) {
   std::string host;
   int port = 0;
-  if (absl::Status s = accel::SplitHostPort(host_port, &host, &port); !s.ok()) return s;
+  if (absl::Status s = net::SplitHostPort(host_port, &host, &port); !s.ok()) return s;
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = SOCK_STREAM;

@@ -5,10 +5,10 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "accel/net.h"
-#include "accel/tls_files.h"
 #include "grpcpp/security/tls_certificate_provider.h"
 #include "grpcpp/security/tls_credentials_options.h"
+#include "net/net.h"
+#include "net/tls_files.h"
 
 namespace riskplan::server {
 
@@ -31,7 +31,7 @@ absl::StatusOr<ServerSecurity> MakeServerSecurity(const ServerSecurityOptions& o
       return absl::InvalidArgumentError(
           "--tls_client_ca and --tls_crl_dir need TLS: give --tls_cert and --tls_key too");
     }
-    if (!o.allow_plaintext && !accel::IsLoopbackHost(listen_host)) {
+    if (!o.allow_plaintext && !net::IsLoopbackHost(listen_host)) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "--listen=%s:... is not a loopback address and no --tls_cert/--tls_key were given: "
           "plaintext there needs --allow_plaintext (docs/security.md)",
@@ -45,13 +45,13 @@ absl::StatusOr<ServerSecurity> MakeServerSecurity(const ServerSecurityOptions& o
     return absl::InvalidArgumentError("--tls_cert and --tls_key go together");
   }
   if (o.tls_reload_s < 1) return absl::InvalidArgumentError("--tls_reload_s must be >= 1");
-  if (absl::Status s = accel::CheckCertificateAndKey({"tls_cert", o.tls_cert},
-                                                     {"tls_key", o.tls_key});
+  if (absl::Status s =
+          net::CheckCertificateAndKey({"tls_cert", o.tls_cert}, {"tls_key", o.tls_key});
       !s.ok()) {
     return s;
   }
   if (!o.tls_client_ca.empty()) {
-    if (absl::Status s = accel::CheckCaBundle({"tls_client_ca", o.tls_client_ca}); !s.ok()) {
+    if (absl::Status s = net::CheckCaBundle({"tls_client_ca", o.tls_client_ca}); !s.ok()) {
       return s;
     }
   }
@@ -60,7 +60,7 @@ absl::StatusOr<ServerSecurity> MakeServerSecurity(const ServerSecurityOptions& o
       return absl::InvalidArgumentError(
           "--tls_crl_dir revokes client certificates: it needs --tls_client_ca");
     }
-    if (absl::Status s = accel::CheckCrl({"tls_crl_dir", o.tls_crl_dir}); !s.ok()) return s;
+    if (absl::Status s = net::CheckCrl({"tls_crl_dir", o.tls_crl_dir}); !s.ok()) return s;
   }
   auto provider = std::make_shared<grpc::experimental::FileWatcherCertificateProvider>(
       o.tls_key, o.tls_cert, o.tls_client_ca, static_cast<unsigned>(o.tls_reload_s));

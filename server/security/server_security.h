@@ -9,7 +9,7 @@
 // rename it over the old one, or flip a symlink to it (Kubernetes Secret
 // volumes do the latter). Connections made before a rotation keep their
 // session; new ones get the new certificate. The files are checked at
-// start-up (accel/tls_files.h) because gRPC would start with bad ones.
+// start-up (net/tls_files.h) because gRPC would start with bad ones.
 //
 // Thread-compatible; built once at start-up.
 #ifndef RISKPLAN_SERVER_SECURITY_SERVER_SECURITY_H_
@@ -47,7 +47,7 @@ struct ServerSecurity {
 // Checks the options and their files and builds the port's credentials.
 // `listen_host` is --listen's host. Refuses: a key without a certificate or
 // the reverse, a client CA, CRL or reload interval without TLS, any bad file
-// (accel/tls_files.h), a bad token file, and plaintext on a non-loopback
+// (net/tls_files.h), a bad token file, and plaintext on a non-loopback
 // host without allow_plaintext. Every message names the flag and the file.
 absl::StatusOr<ServerSecurity> MakeServerSecurity(const ServerSecurityOptions& options,
                                                   const std::string& listen_host);

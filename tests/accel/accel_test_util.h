@@ -34,7 +34,7 @@
 #include "absl/time/time.h"
 #include "accel/blobs.h"
 #include "accel/fixed_point.h"
-#include "accel/net.h"
+#include "accel/frame_io.h"
 #include "accel/risk_engine.h"
 #include "accel/shim/device.h"
 #include "accel/shim/shim_session.h"
@@ -42,6 +42,7 @@
 #include "core/map/demo_city.h"
 #include "core/risk/risk_model.h"
 #include "gtest/gtest.h"
+#include "net/net.h"
 #include "tests/child_process.h"
 
 namespace riskplan::accel::testing {
@@ -254,7 +255,7 @@ class ReservedPort {
   const std::string& endpoint() const { return endpoint_; }
 
  private:
-  Socket socket_;
+  net::Socket socket_;
   std::string endpoint_;
   std::string error_;
 };
@@ -337,7 +338,7 @@ class FakeShim {
       : misbehaviour_(misbehaviour), device_(format, "fake"), store_(format, 63, 1u << 30) {
     context_.device = &device_;
     context_.store = &store_;
-    auto listener = ListenTcp("127.0.0.1:0", &endpoint_);
+    auto listener = net::ListenTcp("127.0.0.1:0", &endpoint_);
     EXPECT_TRUE(listener.ok()) << listener.status();
     listener_ = *std::move(listener);
     accept_thread_ = std::thread([this] { AcceptLoop(); });
@@ -348,7 +349,7 @@ class FakeShim {
     std::list<std::thread> threads;
     {
       absl::MutexLock lock(&mu_);
-      for (Socket& s : sockets_) s.Shutdown();
+      for (net::Socket& s : sockets_) s.Shutdown();
       threads.swap(threads_);
     }
     for (std::thread& t : threads) t.join();
@@ -365,16 +366,16 @@ class FakeShim {
 
   void AcceptLoop() {
     while (!stop_.load()) {
-      auto socket = Accept(listener_, absl::Now() + absl::Milliseconds(20));
+      auto socket = net::Accept(listener_, absl::Now() + absl::Milliseconds(20));
       if (!socket.ok()) continue;
       absl::MutexLock lock(&mu_);
       sockets_.push_back(*std::move(socket));
-      Socket* s = &sockets_.back();
+      net::Socket* s = &sockets_.back();
       threads_.emplace_back([this, s] { Serve(s); });
     }
   }
 
-  void Serve(Socket* socket) {
+  void Serve(net::Socket* socket) {
     ShimSession session(&context_);
     std::string payload;
     while (!stop_.load()) {
@@ -435,7 +436,7 @@ class FakeShim {
           reply = EncodeFrame(MessageType::kEvalReply, header.request_id, EncodeEvalReply(r));
         }
       }
-      if (!SendAll(*socket, reply, absl::Now() + absl::Seconds(10)).ok() || close) break;
+      if (!net::SendAll(*socket, reply, absl::Now() + absl::Seconds(10)).ok() || close) break;
     }
     socket->Shutdown();
   }
@@ -444,14 +445,14 @@ class FakeShim {
   ModelDevice device_;
   BlobStore store_;
   ShimContext context_;
-  Socket listener_;
+  net::Socket listener_;
   std::string endpoint_;
   std::atomic<bool> stop_{false};
   std::atomic<bool> release_slow_{false};
   std::atomic<int> misbehaved_{0};
   std::thread accept_thread_;
   absl::Mutex mu_;
-  std::list<Socket> sockets_ ABSL_GUARDED_BY(mu_);
+  std::list<net::Socket> sockets_ ABSL_GUARDED_BY(mu_);
   std::list<std::thread> threads_ ABSL_GUARDED_BY(mu_);
 };
 

@@ -14,9 +14,9 @@
 #include "accel/shim/device.h"
 #include "accel/shim/shim_server.h"
 #include "accel/shim_client.h"
-#include "accel/tls_context.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "net/tls_context.h"
 #include "tests/child_process.h"
 #include "tests/integration/test_pki.h"
 
@@ -69,7 +69,7 @@ class ShimTlsTest : public ::testing::Test {
   static std::string P(const std::string& f) { return pki_->Path(f); }
 
   // A shim listening on 127.0.0.1 with `tls` (null: plaintext).
-  std::string StartShim(std::shared_ptr<TlsContext> tls) {
+  std::string StartShim(std::shared_ptr<net::TlsContext> tls) {
     ShimServerOptions options;
     options.tls = std::move(tls);
     options.on_tls_event = [this](const std::string& line) { events_.Add(line); };
@@ -79,21 +79,21 @@ class ShimTlsTest : public ::testing::Test {
     EXPECT_TRUE(bound.ok()) << bound.status();
     return bound.value_or("");
   }
-  static std::shared_ptr<TlsContext> ShimTls(const std::string& cert = "shim",
-                                             const std::string& crl = "") {
-    absl::StatusOr<std::shared_ptr<TlsContext>> tls = TlsContext::ForListener(
+  static std::shared_ptr<net::TlsContext> ShimTls(const std::string& cert = "shim",
+                                                  const std::string& crl = "") {
+    absl::StatusOr<std::shared_ptr<net::TlsContext>> tls = net::TlsContext::ForListener(
         {.cert = P(cert + ".pem"), .key = P(cert + ".key"), .ca = P("ca-a.pem"), .crl = crl});
     EXPECT_TRUE(tls.ok()) << tls.status();
     return tls.value_or(nullptr);
   }
   static ShimClientOptions Client(const std::string& cert, const std::string& ca = "ca-a.pem",
                                   const std::string& name = "") {
-    TlsFiles files{.ca = P(ca)};
+    net::TlsFiles files{.ca = P(ca)};
     if (!cert.empty()) {
       files.cert = P(cert + ".pem");
       files.key = P(cert + ".key");
     }
-    absl::StatusOr<std::shared_ptr<TlsContext>> tls = TlsContext::ForClient(files);
+    absl::StatusOr<std::shared_ptr<net::TlsContext>> tls = net::TlsContext::ForClient(files);
     EXPECT_TRUE(tls.ok()) << tls.status();
     ShimClientOptions options;
     options.tls = tls.value_or(nullptr);
@@ -181,17 +181,17 @@ TEST_F(ShimTlsTest, RevokedServerCertificateIsRefusedByTheShim) {
 }
 
 TEST_F(ShimTlsTest, ExpiredOrMismatchedShimCertificateIsRefusedAtStart) {
-  absl::StatusOr<std::shared_ptr<TlsContext>> expired = TlsContext::ForListener(
+  absl::StatusOr<std::shared_ptr<net::TlsContext>> expired = net::TlsContext::ForListener(
       {.cert = P("expired.pem"), .key = P("expired.key"), .ca = P("ca-a.pem")});
   ASSERT_FALSE(expired.ok());
   EXPECT_THAT(std::string(expired.status().message()),
               HasSubstr("--tls_cert=" + P("expired.pem") + ": the certificate expired on"));
-  absl::StatusOr<std::shared_ptr<TlsContext>> mismatched = TlsContext::ForListener(
+  absl::StatusOr<std::shared_ptr<net::TlsContext>> mismatched = net::TlsContext::ForListener(
       {.cert = P("shim.pem"), .key = P("server.key"), .ca = P("ca-a.pem")});
   ASSERT_FALSE(mismatched.ok());
   EXPECT_THAT(std::string(mismatched.status().message()),
               HasSubstr("the certificate does not match the private key --tls_key=" + P("server.key")));
-  absl::StatusOr<std::shared_ptr<TlsContext>> missing = TlsContext::ForListener(
+  absl::StatusOr<std::shared_ptr<net::TlsContext>> missing = net::TlsContext::ForListener(
       {.cert = P("shim.pem"), .key = P("missing.key"), .ca = P("ca-a.pem")});
   ASSERT_FALSE(missing.ok());
   EXPECT_THAT(std::string(missing.status().message()),
@@ -230,10 +230,10 @@ TEST_F(ShimTlsTest, CertificateRotatedByADirectorySwapWhileAConnectionRuns) {
     fs::create_directory_symlink(version, root / "live.next");
     fs::rename(root / "live.next", root / "live");
   };
-  absl::StatusOr<std::shared_ptr<TlsContext>> tls = TlsContext::ForListener(
-      {.cert = (root / "live" / "tls.crt").string(),
-       .key = (root / "live" / "tls.key").string(),
-       .ca = P("ca-a.pem")});
+  absl::StatusOr<std::shared_ptr<net::TlsContext>> tls =
+      net::TlsContext::ForListener({.cert = (root / "live" / "tls.crt").string(),
+                                    .key = (root / "live" / "tls.key").string(),
+                                    .ca = P("ca-a.pem")});
   ASSERT_TRUE(tls.ok()) << tls.status();
   const std::string endpoint = StartShim(*tls);
   absl::StatusOr<std::unique_ptr<ShimClient>> running =

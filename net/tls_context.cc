@@ -1,4 +1,4 @@
-#include "accel/tls_context.h"
+#include "net/tls_context.h"
 
 #include <arpa/inet.h>
 #include <openssl/err.h>
@@ -13,15 +13,15 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
-#include "accel/tls_files.h"
+#include "net/tls_files.h"
 
-namespace riskplan::accel {
+namespace riskplan::net {
 namespace {
 
 constexpr absl::Duration kReloadCheckEvery = absl::Seconds(1);
 
 // OpenSSL writes to its socket with write(2), not send(MSG_NOSIGNAL) as
-// accel/net.cc does: a peer that has gone would kill the process with
+// net/net.cc does: a peer that has gone would kill the process with
 // SIGPIPE. A process that speaks TLS on the shim link ignores the signal, so
 // that a broken connection is the EPIPE error it should be.
 void IgnoreSigpipe() {
@@ -242,4 +242,4 @@ absl::Status TlsContext::Connect(Socket* socket, const std::string& server_name,
   return Handshake(socket, ssl, deadline, "this client");
 }
 
-}  // namespace riskplan::accel
+}  // namespace riskplan::net

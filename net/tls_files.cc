@@ -1,4 +1,4 @@
-#include "accel/tls_files.h"
+#include "net/tls_files.h"
 
 #include <dirent.h>
 #include <openssl/bio.h>
@@ -16,7 +16,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 
-namespace riskplan::accel {
+namespace riskplan::net {
 namespace {
 
 constexpr int64_t kMaxFileBytes = 1 << 20;
@@ -204,4 +204,4 @@ std::string CertificateSubject(const std::string& pem) {
   return std::string(data, static_cast<size_t>(n));
 }
 
-}  // namespace riskplan::accel
+}  // namespace riskplan::net

@@ -1,26 +1,26 @@
-// Blocking TCP with deadlines, for the shim protocol on both ends. Every
+// Blocking TCP with deadlines: the shim link on both ends (accel/, the
+// riskplan-fpga-shim daemon), and the server's host:port checks. Every
 // call that waits takes an absolute deadline and fails with
 // DeadlineExceeded when it passes; a closed or reset connection is
 // Unavailable. Sockets are non-blocking underneath and waited on with
 // poll(), so a deadline holds even when the peer never answers.
-#ifndef RISKPLAN_ACCEL_NET_H_
-#define RISKPLAN_ACCEL_NET_H_
+#ifndef RISKPLAN_NET_NET_H_
+#define RISKPLAN_NET_NET_H_
 
-#include <cstdint>
+#include <cstddef>
 #include <string>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "absl/time/time.h"
-#include "accel/shim_protocol.h"
 
 typedef struct ssl_st SSL;
 
-namespace riskplan::accel {
+namespace riskplan::net {
 
 // Owns a file descriptor, and the TLS session on it once one is attached
-// (accel/tls_context.h); closes both on destruction. Move-only.
+// (net/tls_context.h); closes both on destruction. Move-only.
 class Socket {
  public:
   Socket() = default;
@@ -74,11 +74,6 @@ absl::Status WaitReady(const Socket& socket, bool write, absl::Time deadline,
 absl::Status SendAll(const Socket& socket, absl::string_view data, absl::Time deadline);
 absl::Status RecvAll(const Socket& socket, void* data, size_t size, absl::Time deadline);
 
-// Reads one frame: header checked (DecodeHeader), payload read and checked
-// against its CRC. The version is left to the caller.
-absl::Status ReadFrame(const Socket& socket, uint32_t max_payload_bytes, absl::Time deadline,
-                       FrameHeader* header, std::string* payload);
+}  // namespace riskplan::net
 
-}  // namespace riskplan::accel
-
-#endif  // RISKPLAN_ACCEL_NET_H_
+#endif  // RISKPLAN_NET_NET_H_

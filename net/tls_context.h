@@ -1,6 +1,6 @@
 // TLS for the shim link (OpenSSL): riskplan-fpga-shim's listener and the
 // server's board client, on the blocking-with-deadlines sockets of
-// accel/net.h. TLS 1.2 at least; mutual TLS when a CA for the peer is given.
+// net/net.h. TLS 1.2 at least; mutual TLS when a CA for the peer is given.
 //
 // Why OpenSSL rather than a pre-shared key: the boards run Linux (the
 // DE10-Nano's ARM cores run Debian), where OpenSSL is at hand, and TLS gives
@@ -18,8 +18,8 @@
 // writes with write(2); see tls_context.cc).
 //
 // Thread-safe.
-#ifndef RISKPLAN_ACCEL_TLS_CONTEXT_H_
-#define RISKPLAN_ACCEL_TLS_CONTEXT_H_
+#ifndef RISKPLAN_NET_TLS_CONTEXT_H_
+#define RISKPLAN_NET_TLS_CONTEXT_H_
 
 #include <cstdint>
 #include <memory>
@@ -31,11 +31,11 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
-#include "accel/net.h"
+#include "net/net.h"
 
 typedef struct ssl_ctx_st SSL_CTX;
 
-namespace riskplan::accel {
+namespace riskplan::net {
 
 // One end's files. `flag_prefix` is prepended to every flag name in
 // messages ("fpga_" gives "--fpga_tls_cert=..."). Every member has an
@@ -53,7 +53,7 @@ struct TlsFiles {
 
 class TlsContext {
  public:
-  // Checks the files (accel/tls_files.h: missing, unreadable, mismatched or
+  // Checks the files (net/tls_files.h: missing, unreadable, mismatched or
   // expired ones refused, naming the flag and file) and builds the context.
   static absl::StatusOr<std::shared_ptr<TlsContext>> ForListener(const TlsFiles& files);
   static absl::StatusOr<std::shared_ptr<TlsContext>> ForClient(const TlsFiles& files);
@@ -94,6 +94,6 @@ class TlsContext {
   std::vector<std::string> reload_log_ ABSL_GUARDED_BY(mu_);
 };
 
-}  // namespace riskplan::accel
+}  // namespace riskplan::net
 
-#endif  // RISKPLAN_ACCEL_TLS_CONTEXT_H_
+#endif  // RISKPLAN_NET_TLS_CONTEXT_H_

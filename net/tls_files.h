@@ -8,8 +8,8 @@
 // flag that gave it).
 //
 // Thread-safe (no state).
-#ifndef RISKPLAN_ACCEL_TLS_FILES_H_
-#define RISKPLAN_ACCEL_TLS_FILES_H_
+#ifndef RISKPLAN_NET_TLS_FILES_H_
+#define RISKPLAN_NET_TLS_FILES_H_
 
 #include <string>
 
@@ -17,7 +17,7 @@
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
 
-namespace riskplan::accel {
+namespace riskplan::net {
 
 // A file given by a flag: `flag` is the flag's name without dashes, used in
 // every message ("--tls_key=/etc/riskplan/tls.key: ...").
@@ -53,6 +53,6 @@ std::string CertificateSubject(const std::string& pem);
 // the queue emptied. `if_none` when there was none.
 std::string OpenSslErrors(const char* if_none = "");
 
-}  // namespace riskplan::accel
+}  // namespace riskplan::net
 
-#endif  // RISKPLAN_ACCEL_TLS_FILES_H_
+#endif  // RISKPLAN_NET_TLS_FILES_H_

@@ -1,4 +1,4 @@
-#include "accel/net.h"
+#include "net/net.h"
 
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -20,8 +20,9 @@
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
+#include "net/tls_files.h"
 
-namespace riskplan::accel {
+namespace riskplan::net {
 namespace {
 
 absl::Status Errno(absl::string_view what) {
@@ -242,13 +243,7 @@ namespace {
 absl::Status TlsError(SSL* ssl, int rc, absl::string_view what) {
   const int e = SSL_get_error(ssl, rc);
   if (e == SSL_ERROR_ZERO_RETURN) return absl::UnavailableError("connection closed by peer");
-  std::string reason;
-  while (unsigned long code = ERR_get_error()) {
-    char buffer[256];
-    ERR_error_string_n(code, buffer, sizeof(buffer));
-    if (!reason.empty()) reason += "; ";
-    reason += buffer;
-  }
+  const std::string reason = OpenSslErrors();
   if (e == SSL_ERROR_SYSCALL && reason.empty()) {
     return errno != 0 ? Errno(what) : absl::UnavailableError("connection closed by peer");
   }
@@ -343,16 +338,4 @@ absl::Status RecvAll(const Socket& socket, void* data, size_t size, absl::Time d
   return absl::OkStatus();
 }
 
-absl::Status ReadFrame(const Socket& socket, uint32_t max_payload_bytes, absl::Time deadline,
-                       FrameHeader* header, std::string* payload) {
-  uint8_t bytes[kFrameHeaderBytes];
-  if (absl::Status s = RecvAll(socket, bytes, sizeof(bytes), deadline); !s.ok()) return s;
-  if (absl::Status s = DecodeHeader(bytes, max_payload_bytes, header); !s.ok()) return s;
-  payload->resize(header->payload_bytes);
-  if (absl::Status s = RecvAll(socket, payload->data(), payload->size(), deadline); !s.ok()) {
-    return s;
-  }
-  return CheckPayload(*header, *payload);
-}
-
-}  // namespace riskplan::accel
+}  // namespace riskplan::net

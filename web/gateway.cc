@@ -96,6 +96,35 @@ void SendJson(httplib::Response& res, std::string json, int http_status = 200) {
   res.set_content(std::move(json), "application/json");
 }
 
+// A route that is one unary RPC: the body is the request's JSON form, the
+// answer the response's.
+template <typename RpcRequest, typename RpcResponse, typename Call>
+void ForwardUnary(const httplib::Request& req, httplib::Response& res, Call call) {
+  RpcRequest request;
+  if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+  RpcResponse response;
+  const grpc::Status status = call(request, &response);
+  if (!status.ok()) return SendServerError(res, status);
+  SendJson(res, ToJson(response));
+}
+
+// The file of an export in `format` (geojson, plan or kml; checked by the
+// caller) and its content type.
+absl::StatusOr<std::string> ExportText(const std::string& format,
+                                       const geo::ExportTrajectory& trajectory,
+                                       std::string* content_type) {
+  if (format == "geojson") {
+    *content_type = "application/geo+json";
+    return geo::TrajectoryGeoJson(trajectory);
+  }
+  if (format == "plan") {
+    *content_type = "application/json";
+    return geo::QgcPlanJson(trajectory);
+  }
+  *content_type = "application/vnd.google-earth.kml+xml";
+  return geo::TrajectoryKml(trajectory);
+}
+
 // "HOST:PORT", "[V6]:PORT".
 absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& address) {
   const size_t colon = address.rfind(':');
@@ -245,231 +274,243 @@ void Gateway::Routes() {
   http_->set_mount_point("/lib/leaflet", options_.leaflet_dir);
   http_->set_mount_point("/lib/chart.js", options_.chartjs_dir);
 
-  http_->Get("/api/status", [this](const Request&, Response& res) {
-    SendJson(res, Json{{"server", options_.server.address},
-                       {"viewers", viewers_.load()},
-                       {"max_viewers", options_.max_viewers},
-                       {"running_plans", plans_.running()},
-                       {"max_running_plans", options_.plans.max_running}}
-                      .dump());
-  });
+  // Each route is a method of its own below (docs/web.md lists them): named
+  // handlers rather than lambdas here, so that each reads on its own.
+  const auto route = [this](void (Gateway::*handler)(const Request&, Response&)) {
+    return [this, handler](const Request& req, Response& res) { (this->*handler)(req, res); };
+  };
+  http_->Get("/api/status", route(&Gateway::GetStatus));
+  http_->Get("/api/maps", route(&Gateway::GetMaps));
+  http_->Get("/api/layer", route(&Gateway::GetLayer));
+  http_->Post("/api/risk_layer", route(&Gateway::PostRiskLayer));
+  http_->Post("/api/evaluate", route(&Gateway::PostEvaluate));
+  http_->Post("/api/export", route(&Gateway::PostExport));
+  http_->Post("/api/plans", route(&Gateway::PostPlan));
+  http_->Get(R"(/api/plans/([0-9a-f-]+))", route(&Gateway::GetPlan));
+  http_->Post(R"(/api/plans/([0-9a-f-]+)/cancel)", route(&Gateway::PostPlanCancel));
+  http_->Get(R"(/api/plans/([0-9a-f-]+)/events)", route(&Gateway::GetPlanEvents));
+}
 
-  http_->Get("/api/maps", [this](const Request&, Response& res) {
-    v1::ListMapsResponse maps;
-    const grpc::Status status = client_.ListMaps(&maps, options_.rpc_timeout);
-    if (!status.ok()) return SendServerError(res, status);
-    SendJson(res, ToJson(maps));
-  });
+void Gateway::GetStatus(const httplib::Request&, httplib::Response& res) {
+  SendJson(res, Json{{"server", options_.server.address},
+                     {"viewers", viewers_.load()},
+                     {"max_viewers", options_.max_viewers},
+                     {"running_plans", plans_.running()},
+                     {"max_running_plans", options_.plans.max_running}}
+                    .dump());
+}
 
-  // GET /api/layer?map=M&layer=POPULATION_DENSITY|SHELTER|TERRAIN|NO_FLY&max_side_cells=N
-  http_->Get("/api/layer", [this](const Request& req, Response& res) {
-    v1::GetMapLayerRequest request;
-    request.set_map(req.get_param_value("map"));
-    v1::MapLayer layer;
-    if (!v1::MapLayer_Parse(req.get_param_value("layer"), &layer)) {
+void Gateway::GetMaps(const httplib::Request&, httplib::Response& res) {
+  v1::ListMapsResponse maps;
+  const grpc::Status status = client_.ListMaps(&maps, options_.rpc_timeout);
+  if (!status.ok()) return SendServerError(res, status);
+  SendJson(res, ToJson(maps));
+}
+
+// GET /api/layer?map=M&layer=POPULATION_DENSITY|SHELTER|TERRAIN|NO_FLY&max_side_cells=N
+void Gateway::GetLayer(const httplib::Request& req, httplib::Response& res) {
+  v1::GetMapLayerRequest request;
+  request.set_map(req.get_param_value("map"));
+  v1::MapLayer layer;
+  if (!v1::MapLayer_Parse(req.get_param_value("layer"), &layer)) {
+    return SendError(res, 400, "INVALID_ARGUMENT",
+                     absl::StrFormat("layer has value '%s'; it must be one of "
+                                     "POPULATION_DENSITY, SHELTER, TERRAIN, NO_FLY",
+                                     req.get_param_value("layer")),
+                     "gateway");
+  }
+  request.set_layer(layer);
+  if (req.has_param("max_side_cells")) {
+    int side = 0;
+    if (!absl::SimpleAtoi(req.get_param_value("max_side_cells"), &side)) {
+      return SendError(res, 400, "INVALID_ARGUMENT", "max_side_cells must be an integer",
+                       "gateway");
+    }
+    // The server allows 4096 (16 Mi cells); as JSON for a browser that is
+    // some 200 MB on the gateway for one request.
+    if (side > kMaxLayerSideCells) {
       return SendError(res, 400, "INVALID_ARGUMENT",
-                       absl::StrFormat("layer has value '%s'; it must be one of "
-                                       "POPULATION_DENSITY, SHELTER, TERRAIN, NO_FLY",
-                                       req.get_param_value("layer")),
+                       absl::StrFormat("max_side_cells has value %d; this gateway serves "
+                                       "layers of at most %d cells a side",
+                                       side, kMaxLayerSideCells),
                        "gateway");
     }
-    request.set_layer(layer);
-    if (req.has_param("max_side_cells")) {
-      int side = 0;
-      if (!absl::SimpleAtoi(req.get_param_value("max_side_cells"), &side)) {
-        return SendError(res, 400, "INVALID_ARGUMENT", "max_side_cells must be an integer",
-                         "gateway");
-      }
-      // The server allows 4096 (16 Mi cells); as JSON for a browser that is
-      // some 200 MB on the gateway for one request.
-      if (side > kMaxLayerSideCells) {
-        return SendError(res, 400, "INVALID_ARGUMENT",
-                         absl::StrFormat("max_side_cells has value %d; this gateway serves "
-                                         "layers of at most %d cells a side",
-                                         side, kMaxLayerSideCells),
-                         "gateway");
-      }
-      request.set_max_side_cells(side);  // the server checks the rest of its range
-    }
-    v1::GetMapLayerResponse response;
-    const grpc::Status status = client_.GetMapLayer(request, &response, options_.rpc_timeout);
-    if (!status.ok()) return SendServerError(res, status);
-    SendJson(res, ToJson(response));
-  });
+    request.set_max_side_cells(side);  // the server checks the rest of its range
+  }
+  v1::GetMapLayerResponse response;
+  const grpc::Status status = client_.GetMapLayer(request, &response, options_.rpc_timeout);
+  if (!status.ok()) return SendServerError(res, status);
+  SendJson(res, ToJson(response));
+}
 
-  http_->Post("/api/risk_layer", [this](const Request& req, Response& res) {
-    v1::GetRiskLayerRequest request;
-    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
-    v1::GetRiskLayerResponse response;
-    const grpc::Status status = client_.GetRiskLayer(request, &response, options_.rpc_timeout);
-    if (!status.ok()) return SendServerError(res, status);
-    SendJson(res, ToJson(response));
-  });
+void Gateway::PostRiskLayer(const httplib::Request& req, httplib::Response& res) {
+  ForwardUnary<v1::GetRiskLayerRequest, v1::GetRiskLayerResponse>(
+      req, res, [this](const auto& request, auto* response) {
+        return client_.GetRiskLayer(request, response, options_.rpc_timeout);
+      });
+}
 
-  http_->Post("/api/evaluate", [this](const Request& req, Response& res) {
-    v1::EvaluateRiskRequest request;
-    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
-    v1::EvaluateRiskResponse response;
-    const grpc::Status status = client_.EvaluateRisk(request, &response, options_.rpc_timeout);
-    if (!status.ok()) return SendServerError(res, status);
-    SendJson(res, ToJson(response));
-  });
+void Gateway::PostEvaluate(const httplib::Request& req, httplib::Response& res) {
+  ForwardUnary<v1::EvaluateRiskRequest, v1::EvaluateRiskResponse>(
+      req, res, [this](const auto& request, auto* response) {
+        return client_.EvaluateRisk(request, response, options_.rpc_timeout);
+      });
+}
 
-  // POST /api/export?format=geojson|plan|kml, body: an EvaluateRiskRequest
-  // (the trajectory; path_spacing_m 0 means 25 m). The server samples the
-  // path in WGS84; the writers of geo/export make the file.
-  http_->Post("/api/export", [this](const Request& req, Response& res) {
-    const std::string format = req.get_param_value("format");
-    if (format != "geojson" && format != "plan" && format != "kml") {
-      return SendError(
-          res, 400, "INVALID_ARGUMENT",
-          absl::StrFormat("format has value '%s'; it must be geojson, plan or kml", format),
-          "gateway");
-    }
-    v1::EvaluateRiskRequest request;
-    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
-    if (request.path_spacing_m() == 0) request.set_path_spacing_m(25.0);
-    request.set_include_samples(false);
-    v1::EvaluateRiskResponse response;
-    const grpc::Status status = client_.EvaluateRisk(request, &response, options_.rpc_timeout);
-    if (!status.ok()) return SendServerError(res, status);
-    auto trajectory = client::ExportTrajectoryOf(response, request.map(), "riskplan-web",
-                                                 request.path_spacing_m());
-    if (!trajectory.ok()) return SendGatewayError(res, trajectory.status());
-    absl::StatusOr<std::string> text;
-    std::string content_type;
-    if (format == "geojson") {
-      text = geo::TrajectoryGeoJson(*trajectory);
-      content_type = "application/geo+json";
-    } else if (format == "plan") {
-      text = geo::QgcPlanJson(*trajectory);
-      content_type = "application/json";
-    } else {
-      text = geo::TrajectoryKml(*trajectory);
-      content_type = "application/vnd.google-earth.kml+xml";
-    }
-    if (!text.ok()) return SendGatewayError(res, text.status());
-    res.set_header("Content-Disposition", absl::StrFormat("attachment; filename=\"riskplan-%s.%s\"",
-                                                          request.map(), format));
-    res.set_content(std::move(*text), content_type);
-  });
+// POST /api/export?format=geojson|plan|kml, body: an EvaluateRiskRequest
+// (the trajectory; path_spacing_m 0 means 25 m). The server samples the
+// path in WGS84; the writers of geo/export make the file.
+void Gateway::PostExport(const httplib::Request& req, httplib::Response& res) {
+  const std::string format = req.get_param_value("format");
+  if (format != "geojson" && format != "plan" && format != "kml") {
+    return SendError(
+        res, 400, "INVALID_ARGUMENT",
+        absl::StrFormat("format has value '%s'; it must be geojson, plan or kml", format),
+        "gateway");
+  }
+  v1::EvaluateRiskRequest request;
+  if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+  if (request.path_spacing_m() == 0) request.set_path_spacing_m(25.0);
+  request.set_include_samples(false);
+  v1::EvaluateRiskResponse response;
+  const grpc::Status status = client_.EvaluateRisk(request, &response, options_.rpc_timeout);
+  if (!status.ok()) return SendServerError(res, status);
+  auto trajectory =
+      client::ExportTrajectoryOf(response, request.map(), "riskplan-web", request.path_spacing_m());
+  if (!trajectory.ok()) return SendGatewayError(res, trajectory.status());
+  std::string content_type;
+  absl::StatusOr<std::string> text = ExportText(format, *trajectory, &content_type);
+  if (!text.ok()) return SendGatewayError(res, text.status());
+  res.set_header("Content-Disposition",
+                 absl::StrFormat("attachment; filename=\"riskplan-%s.%s\"", request.map(), format));
+  res.set_content(std::move(*text), content_type);
+}
 
-  // POST /api/plans, body: a PlanRequest. Starts the plan; its events are at
-  // /api/plans/ID/events. The server's refusal of the request (a start that
-  // is not admissible, say) arrives there as the "error" event.
-  http_->Post("/api/plans", [this](const Request& req, Response& res) {
-    v1::PlanRequest request;
-    if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
-    // A final tree can hold 50 000 edges: too much for an event kept in
-    // memory and sent to every viewer.
-    request.set_include_tree(false);
-    auto session = plans_.Start(std::move(request));
-    if (!session.ok()) return SendGatewayError(res, session.status());
-    const std::string& id = (*session)->id();
-    SendJson(res, Json{{"id", id}, {"events", absl::StrCat("/api/plans/", id, "/events")}}.dump(),
-             201);
-  });
+// POST /api/plans, body: a PlanRequest. Starts the plan; its events are at
+// /api/plans/ID/events. The server's refusal of the request (a start that
+// is not admissible, say) arrives there as the "error" event.
+void Gateway::PostPlan(const httplib::Request& req, httplib::Response& res) {
+  v1::PlanRequest request;
+  if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+  // A final tree can hold 50 000 edges: too much for an event kept in
+  // memory and sent to every viewer.
+  request.set_include_tree(false);
+  auto session = plans_.Start(std::move(request));
+  if (!session.ok()) return SendGatewayError(res, session.status());
+  const std::string& id = (*session)->id();
+  SendJson(res, Json{{"id", id}, {"events", absl::StrCat("/api/plans/", id, "/events")}}.dump(),
+           201);
+}
 
-  http_->Get(R"(/api/plans/([0-9a-f-]+))", [this](const Request& req, Response& res) {
-    auto session = plans_.Find(req.matches[1]);
-    if (!session) {
-      return SendError(res, 404, "NOT_FOUND",
-                       absl::StrCat("no plan '", std::string(req.matches[1]), "' on this gateway"),
-                       "gateway");
-    }
-    const auto [first, last] = session->kept_range();
-    SendJson(res, Json{{"id", session->id()},
-                       {"state", PlanStateName(session->state())},
-                       {"last_event_id", session->last_event_id()},
-                       {"first_kept_event_id", first},
-                       {"last_kept_event_id", last}}
-                      .dump());
-  });
+std::shared_ptr<PlanSession> Gateway::FindPlan(const httplib::Request& req,
+                                               httplib::Response& res) {
+  std::shared_ptr<PlanSession> session = plans_.Find(req.matches[1]);
+  if (!session) {
+    SendError(res, 404, "NOT_FOUND",
+              absl::StrCat("no plan '", std::string(req.matches[1]), "' on this gateway"),
+              "gateway");
+  }
+  return session;
+}
 
-  http_->Post(R"(/api/plans/([0-9a-f-]+)/cancel)", [this](const Request& req, Response& res) {
-    auto session = plans_.Find(req.matches[1]);
-    if (!session) {
-      return SendError(res, 404, "NOT_FOUND",
-                       absl::StrCat("no plan '", std::string(req.matches[1]), "' on this gateway"),
-                       "gateway");
-    }
-    SendJson(res, Json{{"cancelled", session->Cancel()}}.dump());
-  });
+void Gateway::GetPlan(const httplib::Request& req, httplib::Response& res) {
+  std::shared_ptr<PlanSession> session = FindPlan(req, res);
+  if (!session) return;
+  const auto [first, last] = session->kept_range();
+  SendJson(res, Json{{"id", session->id()},
+                     {"state", PlanStateName(session->state())},
+                     {"last_event_id", session->last_event_id()},
+                     {"first_kept_event_id", first},
+                     {"last_kept_event_id", last}}
+                    .dump());
+}
 
-  // The event stream of a plan (text/event-stream). A viewer that sends
-  // Last-Event-ID (or ?last_event_id=N) gets the events after N.
-  http_->Get(R"(/api/plans/([0-9a-f-]+)/events)", [this](const Request& req, Response& res) {
-    std::shared_ptr<PlanSession> session = plans_.Find(req.matches[1]);
-    if (!session) {
-      return SendError(res, 404, "NOT_FOUND",
-                       absl::StrCat("no plan '", std::string(req.matches[1]), "' on this gateway"),
-                       "gateway");
-    }
-    std::string last = req.get_header_value("Last-Event-ID");
-    if (last.empty()) last = req.get_param_value("last_event_id");
-    const std::optional<uint64_t> after = ParseLastEventId(last);
-    if (!after) {
-      return SendError(res, 400, "INVALID_ARGUMENT",
-                       absl::StrFormat("Last-Event-ID has value '%s'; it must be an event id, a "
-                                       "decimal number",
-                                       last),
-                       "gateway");
-    }
-    // A browser reconnects on its own whenever a stream ends; 204 is how
-    // the standard tells it that there is nothing more, ever.
-    if (session->ended() && *after >= session->last_event_id()) {
-      res.status = 204;
-      return;
-    }
-    int open = viewers_.load();
-    do {
-      if (open >= options_.max_viewers) {
-        res.set_header("Retry-After", "5");
-        return SendError(res, 503, "RESOURCE_EXHAUSTED",
-                         absl::StrFormat("this gateway holds at most %d event streams at once "
-                                         "(--max_viewers) and all are open; try again when a "
-                                         "viewer has closed",
-                                         options_.max_viewers),
-                         "gateway");
-      }
-    } while (!viewers_.compare_exchange_weak(open, open + 1));
+void Gateway::PostPlanCancel(const httplib::Request& req, httplib::Response& res) {
+  std::shared_ptr<PlanSession> session = FindPlan(req, res);
+  if (!session) return;
+  SendJson(res, Json{{"cancelled", session->Cancel()}}.dump());
+}
 
-    struct Viewer {
-      std::shared_ptr<PlanSession> session;
-      uint64_t after = 0;
-      bool started = false;
-    };
-    auto viewer = std::make_shared<Viewer>(Viewer{std::move(session), *after});
-    res.set_header("Cache-Control", "no-store");
-    res.set_header("X-Accel-Buffering", "no");
-    res.set_chunked_content_provider(
-        "text/event-stream",
-        [this, viewer](size_t /*offset*/, httplib::DataSink& sink) {
-          if (!viewer->started) {
-            viewer->started = true;
-            const std::string retry = FormatSseRetry(options_.retry_ms);
-            return sink.write(retry.data(), retry.size());
-          }
-          std::vector<PlanEvent> events;
-          const bool end = viewer->session->WaitForEvents(
-              viewer->after, absl::Now() + options_.heartbeat, &events);
-          if (stopping_.load()) {
-            sink.done();
-            return true;
-          }
-          std::string out;
-          for (const PlanEvent& e : events) {
-            out += FormatSseEvent(e.id, e.type, *e.data);
-            viewer->after = e.id;
-          }
-          // Nothing new: a comment, so that a viewer who left is found out.
-          if (out.empty() && !end) out = FormatSseComment("waiting");
-          if (!out.empty() && !sink.write(out.data(), out.size())) return false;
-          if (end) sink.done();
+// The event stream of a plan (text/event-stream). A viewer that sends
+// Last-Event-ID (or ?last_event_id=N) gets the events after N.
+void Gateway::GetPlanEvents(const httplib::Request& req, httplib::Response& res) {
+  std::shared_ptr<PlanSession> session = FindPlan(req, res);
+  if (!session) return;
+  std::string last = req.get_header_value("Last-Event-ID");
+  if (last.empty()) last = req.get_param_value("last_event_id");
+  const std::optional<uint64_t> after = ParseLastEventId(last);
+  if (!after) {
+    return SendError(res, 400, "INVALID_ARGUMENT",
+                     absl::StrFormat("Last-Event-ID has value '%s'; it must be an event id, a "
+                                     "decimal number",
+                                     last),
+                     "gateway");
+  }
+  // A browser reconnects on its own whenever a stream ends; 204 is how
+  // the standard tells it that there is nothing more, ever.
+  if (session->ended() && *after >= session->last_event_id()) {
+    res.status = 204;
+    return;
+  }
+  if (!AdmitViewer(res)) return;
+  StreamEvents(std::move(session), *after, res);
+}
+
+bool Gateway::AdmitViewer(httplib::Response& res) {
+  int open = viewers_.load();
+  do {
+    if (open >= options_.max_viewers) {
+      res.set_header("Retry-After", "5");
+      SendError(res, 503, "RESOURCE_EXHAUSTED",
+                absl::StrFormat("this gateway holds at most %d event streams at once "
+                                "(--max_viewers) and all are open; try again when a "
+                                "viewer has closed",
+                                options_.max_viewers),
+                "gateway");
+      return false;
+    }
+  } while (!viewers_.compare_exchange_weak(open, open + 1));
+  return true;
+}
+
+void Gateway::StreamEvents(std::shared_ptr<PlanSession> session, uint64_t after,
+                           httplib::Response& res) {
+  struct Viewer {
+    std::shared_ptr<PlanSession> session;
+    uint64_t after = 0;
+    bool started = false;
+  };
+  auto viewer = std::make_shared<Viewer>(Viewer{std::move(session), after});
+  res.set_header("Cache-Control", "no-store");
+  res.set_header("X-Accel-Buffering", "no");
+  res.set_chunked_content_provider(
+      "text/event-stream",
+      [this, viewer](size_t /*offset*/, httplib::DataSink& sink) {
+        if (!viewer->started) {
+          viewer->started = true;
+          const std::string retry = FormatSseRetry(options_.retry_ms);
+          return sink.write(retry.data(), retry.size());
+        }
+        std::vector<PlanEvent> events;
+        const bool end = viewer->session->WaitForEvents(viewer->after,
+                                                        absl::Now() + options_.heartbeat, &events);
+        if (stopping_.load()) {
+          sink.done();
           return true;
-        },
-        [this](bool /*success*/) { viewers_.fetch_sub(1); });
-  });
+        }
+        std::string out;
+        for (const PlanEvent& e : events) {
+          out += FormatSseEvent(e.id, e.type, *e.data);
+          viewer->after = e.id;
+        }
+        // Nothing new: a comment, so that a viewer who left is found out.
+        if (out.empty() && !end) out = FormatSseComment("waiting");
+        if (!out.empty() && !sink.write(out.data(), out.size())) return false;
+        if (end) sink.done();
+        return true;
+      },
+      // The viewer admitted by AdmitViewer leaves when its stream ends.
+      [this](bool /*success*/) { viewers_.fetch_sub(1); });
 }
 
 }  // namespace riskplan::web

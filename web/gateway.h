@@ -14,6 +14,7 @@
 #define RISKPLAN_WEB_GATEWAY_H_
 
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,6 +28,8 @@
 
 namespace httplib {
 class Server;
+struct Request;
+struct Response;
 }  // namespace httplib
 
 namespace riskplan::web {
@@ -82,6 +85,25 @@ class Gateway {
 
  private:
   void Routes();
+  // The routes' handlers, one a route (docs/web.md lists the routes).
+  void GetStatus(const httplib::Request& req, httplib::Response& res);
+  void GetMaps(const httplib::Request& req, httplib::Response& res);
+  void GetLayer(const httplib::Request& req, httplib::Response& res);
+  void PostRiskLayer(const httplib::Request& req, httplib::Response& res);
+  void PostEvaluate(const httplib::Request& req, httplib::Response& res);
+  void PostExport(const httplib::Request& req, httplib::Response& res);
+  void PostPlan(const httplib::Request& req, httplib::Response& res);
+  void GetPlan(const httplib::Request& req, httplib::Response& res);
+  void PostPlanCancel(const httplib::Request& req, httplib::Response& res);
+  void GetPlanEvents(const httplib::Request& req, httplib::Response& res);
+  // The plan a /api/plans/ID/... route names; null, with the 404 sent, when
+  // this gateway has none of that id.
+  std::shared_ptr<PlanSession> FindPlan(const httplib::Request& req, httplib::Response& res);
+  // Counts one more open event stream; false, with the 503 sent, when
+  // max_viewers are open already.
+  bool AdmitViewer(httplib::Response& res);
+  // Streams `session`'s events after `after` as Server-Sent Events.
+  void StreamEvents(std::shared_ptr<PlanSession> session, uint64_t after, httplib::Response& res);
 
   const GatewayOptions options_;
   client::RiskplanClient client_;

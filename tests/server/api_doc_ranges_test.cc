@@ -198,10 +198,10 @@ TEST(ApiDocRangesTest, PlannerParameterTablesAreTheCodes) {
   CheckPlannerTables("planners.md");
 }
 
-// planner.proto documents each field of ModelParameters as
+// common.proto documents each field of ModelParameters as
 // `// [default] unit, [min, max] ...`.
 TEST(ApiDocRangesTest, TheProtoCommentsAreTheCodes) {
-  std::ifstream in(std::string(RISKPLAN_SOURCE_DIR) + "/proto/riskplan/v1/planner.proto");
+  std::ifstream in(std::string(RISKPLAN_SOURCE_DIR) + "/proto/riskplan/v1/common.proto");
   ASSERT_TRUE(in.good());
   std::stringstream text;
   text << in.rdbuf();

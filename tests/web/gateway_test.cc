@@ -9,6 +9,7 @@
 
 #include <map>
 #include <memory>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -413,6 +414,15 @@ TEST_F(GatewayTest, ServesThePageAndItsLibrariesFromDebian) {
   EXPECT_EQ(page.status, 200);
   EXPECT_THAT(page.body, HasSubstr("/lib/leaflet/leaflet.js"));
   EXPECT_EQ(Call("GET", "/app.js").status, 200);
+  // And every script of the page's own, as index.html names them.
+  const std::regex own_script(R"re(<script src="(/[a-z_]+\.js)"></script>)re");
+  int own_scripts = 0;
+  for (std::sregex_iterator it(page.body.begin(), page.body.end(), own_script), end; it != end;
+       ++it) {
+    EXPECT_EQ(Call("GET", (*it)[1].str()).status, 200) << (*it)[1].str();
+    ++own_scripts;
+  }
+  EXPECT_GE(own_scripts, 8);
   EXPECT_THAT(Call("GET", "/lib/leaflet/leaflet.js").body, HasSubstr("Leaflet"));
   EXPECT_THAT(Call("GET", "/lib/chart.js/chart.min.js").body, HasSubstr("Chart.js"));
   // No script or style from anywhere but the gateway itself.

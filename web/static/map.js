@@ -1,0 +1,168 @@
+// riskplan-web's page: the Leaflet map, its overlays (the map's layers and
+// the risk layer) and their legend.
+'use strict';
+
+// The map. Leaflet cannot change the CRS of a live map: a map of the other
+// kind gets a new L.map, with its controls and layer groups.
+
+let frame = null;
+let map = null;
+let layerControl = null;
+const overlays = rp.overlays;  // name -> Leaflet layer
+const legends = {};            // name -> HTML
+// Layer groups of the live map.
+let endpointLayers = null, trajectories = null, bestLayer = null, polylineLayer = null;
+
+function makeMap() {
+  if (map) map.remove();  // and every layer on it
+  for (const name of Object.keys(overlays)) delete overlays[name];
+  for (const name of Object.keys(legends)) delete legends[name];
+  map = L.map('map', Object.assign({ crs: frame.leafletCrs, zoomSnap: 0.25, attributionControl: false }, frame.mapOptions));
+  rp.leaflet = map;
+  rp.crs = frame.crs;
+  L.control.scale({ imperial: false, maxWidth: 160, position: 'bottomleft' }).addTo(map);
+  layerControl = L.control.layers(null, null, { collapsed: false, position: 'topright' }).addTo(map);
+  const legend = L.control({ position: 'bottomright' });
+  legend.onAdd = () => { const d = L.DomUtil.create('div', 'legend'); d.id = 'legend'; return d; };
+  legend.addTo(map);
+  endpointLayers = { start: L.layerGroup().addTo(map), goal: L.layerGroup().addTo(map) };
+  trajectories = L.layerGroup().addTo(map);   // earlier improvements, faded
+  bestLayer = L.layerGroup().addTo(map);      // the newest
+  polylineLayer = L.layerGroup().addTo(map);  // a drawn polyline
+  map.on('overlayadd overlayremove', drawLegend);
+  map.on('mousemove', (e) => { $('cursor').textContent = frame.cursorText(e.latlng); });
+  map.on('mousedown', pressEndpoint);
+  map.on('mousemove', dragEndpoint);
+  map.on('mouseup', releaseEndpoint);
+  map.on('click', addPolylinePoint);
+}
+
+function drawLegend() {
+  const parts = [];
+  for (const name of Object.keys(legends)) {
+    if (overlays[name] && map.hasLayer(overlays[name])) parts.push(legends[name]);
+  }
+  $('legend').innerHTML = parts.join('') || '<i>no layer shown</i>';
+}
+
+function scaleLegend(title, stops, ticks) {
+  return `<div class="item"><b>${title}</b><div class="bar" style="background:${cssGradient(stops)}"></div>` +
+    `<div class="ticks">${ticks.map((t) => `<span>${t}</span>`).join('')}</div></div>`;
+}
+
+function addOverlay(name, layer, shown, legendHtml) {
+  removeOverlay(name);
+  overlays[name] = layer;
+  if (legendHtml) legends[name] = legendHtml;
+  layerControl.addOverlay(layer, name);
+  if (shown) layer.addTo(map);
+  rp.layersDrawn[name] = true;
+  drawLegend();
+}
+
+function removeOverlay(name) {
+  if (!overlays[name]) return;
+  layerControl.removeLayer(overlays[name]);
+  map.removeLayer(overlays[name]);
+  delete overlays[name];
+  delete legends[name];
+}
+
+// A grid layer (GetMapLayer, GetRiskLayer) as an image at its place.
+function rasterOverlay(layer, url) {
+  return L.imageOverlay(url, frame.rect(layer.x0_m, layer.y0_m, layer.nx * layer.cell_m, layer.ny * layer.cell_m,
+    layer.bounds_wgs84), { className: 'raster', opacity: 1 });
+}
+
+async function fetchLayer(name) {
+  return api('GET', `/api/layer?map=${encodeURIComponent(rp.map.name)}&layer=${name}&max_side_cells=400`);
+}
+
+function hillshade(layer) {
+  const { nx, ny, values } = layer;
+  const d = layer.cell_m;
+  const z = (i, j) => values[Math.min(ny - 1, Math.max(0, j)) * nx + Math.min(nx - 1, Math.max(0, i))];
+  // Light from the north-west, 45 degrees up.
+  const L0 = [-0.5, 0.5, Math.SQRT1_2];
+  return gridImage(nx, ny, values, (v, i, j) => {
+    const dzdx = (z(i + 1, j) - z(i - 1, j)) / (2 * d);
+    const dzdy = (z(i, j + 1) - z(i, j - 1)) / (2 * d);
+    const n = Math.hypot(dzdx, dzdy, 1);
+    const s = Math.max(0, (-dzdx * L0[0] - dzdy * L0[1] + L0[2]) / n);
+    const g = Math.round(255 * s);
+    return [g, g, g, 255];
+  });
+}
+
+async function loadMap(info) {
+  const next = frameFor(info);
+  const remake = !frame || next.crs !== frame.crs;
+  frame = next;
+  if (remake) {
+    makeMap();
+    // A pick or a polyline under way belonged to the other frame.
+    picking = null; pressed = null; dragLine = null; drawing = null;
+    $('evaluate-polyline').disabled = true;
+    $('map').style.cursor = '';
+  }
+  rp.map = info;
+  rp.layersDrawn = {};
+  endpoints.start = endpoints.goal = null;
+  drawEndpoint('start'); drawEndpoint('goal');
+  removeOverlay('risk layer');
+  const b = frame.rect(info.x0_m, info.y0_m, info.width_m, info.height_m, info.bounds_wgs84);
+  map.setMaxBounds(b.pad(0.5));
+  map.fitBounds(b);
+  const [density, shelter, terrain, nofly] = await Promise.all(
+    ['POPULATION_DENSITY', 'SHELTER', 'TERRAIN', 'NO_FLY'].map(fetchLayer));
+
+  addOverlay('terrain (hillshade)', rasterOverlay(terrain, hillshade(terrain)), true,
+    `<div class="item"><b>terrain</b> ${info.terrain_min_m.toFixed(0)}–${info.terrain_max_m.toFixed(0)} m AMSL, lit from the north-west</div>`);
+
+  const [lo, hi] = decades(density.values);
+  addOverlay('population density', rasterOverlay(density, gridImage(density.nx, density.ny, density.values, (v) => {
+    if (!(v > 0)) return null;
+    const c = ramp(VIRIDIS, (Math.log10(v) - lo) / (hi - lo));
+    return [c[0], c[1], c[2], 140];
+  })), true, scaleLegend('population density, people per m²', VIRIDIS,
+    Array.from({ length: hi - lo + 1 }, (_, k) => `1e${lo + k}`)));
+
+  addOverlay('shelter', rasterOverlay(shelter, gridImage(shelter.nx, shelter.ny, shelter.values, (v) => {
+    const c = ramp(GREENS, v / 10);
+    return [c[0], c[1], c[2], 170];
+  })), false, scaleLegend('shelter factor', GREENS, ['0', '5', '10']));
+
+  addOverlay('no-fly zones', rasterOverlay(nofly, gridImage(nofly.nx, nofly.ny, nofly.values,
+    (v) => (v > 0 ? [220, 0, 0, 150] : null))), true,
+    '<div class="item"><span class="key" style="background:rgba(220,0,0,0.6)"></span>no-fly zone</div>');
+
+  const sites = L.layerGroup(info.landing_sites.map((s) =>
+    L.circleMarker(frame.siteAt(s), { radius: 5, color: '#064', fillColor: '#2c2', fillOpacity: 0.9, className: 'landing-site' })
+      .bindTooltip(`${s.name || 'landing site'} (${s.x.toFixed(0)}, ${s.y.toFixed(0)}) m, terrain ${s.terrain_m.toFixed(0)} m`)));
+  addOverlay('landing sites', sites, true,
+    '<div class="item"><span class="key" style="background:#2c2;border-radius:6px"></span>landing site</div>');
+}
+
+async function showRiskLayer() {
+  const info = rp.map;
+  const maxOver = $('risk-max-headings').checked;
+  // Cells kept modest: each costs one configuration risk, times the heading
+  // bins with the maximum over headings.
+  const side = maxOver ? 120 : 250;
+  const stride = Math.max(1, Math.ceil(Math.max(info.nx, info.ny) / side));
+  const layer = await api('POST', '/api/risk_layer', {
+    map: info.name, stride, height_agl_m: Number($('risk-height').value), max_over_headings: maxOver,
+  });
+  const values = layer.risk.map(Number);  // "NaN" where M is not defined
+  const [lo, hi] = decades(values);
+  const url = gridImage(layer.nx, layer.ny, values, (v) => {
+    if (!isFinite(v)) return [120, 120, 120, 90];
+    if (!(v > 0)) return null;
+    const c = ramp(HOT, (Math.log10(v) - lo) / (hi - lo));
+    return [c[0], c[1], c[2], 190];
+  });
+  addOverlay('risk layer', rasterOverlay(layer, url), true,
+    scaleLegend(`risk M at ${layer.height_agl_m} m above ground${layer.max_over_headings ? ' (max over headings)' : ''}, casualties per failure`,
+      HOT, Array.from({ length: hi - lo + 1 }, (_, k) => `1e${lo + k}`)) +
+    '<div class="item"><span class="key" style="background:rgba(120,120,120,0.5)"></span>M not defined (impact outside the map)</div>');
+}

@@ -35,6 +35,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,7 +48,6 @@
 #include "core/base/random.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
-#include "core/planners/risk_rrt_star.h"
 #include "core/planners/shared_goal_tree.h"
 
 ABSL_FLAG(int, missions, 32, "missions, from scattered starts to one depot");
@@ -184,7 +184,7 @@ void RunSeparate() {
   if (!cache.empty() && ReadSeparateCache(cache, &out)) return;
   for (const Pose& start : fleet.starts) {
     DirectRiskEvaluator evaluator;
-    RiskRrtStar planner(&evaluator);
+    std::unique_ptr<Planner> planner = *MakePlanner(PlannerAlgorithm::kRiskRrtStar, &evaluator);
     PlanOptions options;
     options.seed = absl::GetFlag(FLAGS_seed);
     const int64_t iterations = absl::GetFlag(FLAGS_separate_iterations);
@@ -192,7 +192,7 @@ void RunSeparate() {
     options.budget.max_iterations = iterations;
     CancellationToken cancel;
     const double before = ThreadCpuSeconds();
-    auto result = planner.Plan({Model(), start, fleet.depot}, options, cancel, nullptr);
+    auto result = planner->Plan({Model(), start, fleet.depot}, options, cancel, nullptr);
     Separate s;
     s.cpu_s = ThreadCpuSeconds() - before;
     s.configs = evaluator.evaluated();

@@ -451,9 +451,7 @@ absl::Status Run::Generations(PlanResult* result) {
   return absl::OkStatus();
 }
 
-}  // namespace
-
-const std::vector<PlannerParamInfo>& GeneticPlanner::ParamInfo() {
+const std::vector<PlannerParamInfo>& ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
       {"population", 32, 4, 1024, "chromosomes per generation (seed 003: 32)"},
       {"waypoints", 4, 1, 16, "transitional waypoints per chromosome (seed 003: 4)"},
@@ -474,12 +472,8 @@ const std::vector<PlannerParamInfo>& GeneticPlanner::ParamInfo() {
   return *info;
 }
 
-absl::StatusOr<PlanResult> GeneticPlanner::Plan(const PlanningProblem& problem,
-                                                const PlanOptions& options,
-                                                const CancellationToken& cancel,
-                                                const ImprovementCallback& on_improvement) {
-  return PlanSeedRun<Run>(PlannerAlgorithm::kGenetic, ParamInfo(), evaluator_, problem, options,
-                          cancel, on_improvement);
-}
+}  // namespace
+
+const AlgorithmEntry kGeneticEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kGenetic>};
 
 }  // namespace riskplan

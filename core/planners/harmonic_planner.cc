@@ -280,9 +280,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
   return result;
 }
 
-}  // namespace
-
-const std::vector<PlannerParamInfo>& HarmonicPlanner::ParamInfo() {
+const std::vector<PlannerParamInfo>& ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
       {"cell_factor", 0, 0, 64,
        "map cells per planning cell along each axis (0: the smallest keeping both sides <= 512)"},
@@ -299,12 +297,8 @@ const std::vector<PlannerParamInfo>& HarmonicPlanner::ParamInfo() {
   return *info;
 }
 
-absl::StatusOr<PlanResult> HarmonicPlanner::Plan(const PlanningProblem& problem,
-                                                 const PlanOptions& options,
-                                                 const CancellationToken& cancel,
-                                                 const ImprovementCallback& on_improvement) {
-  return PlanSeedRun<Run>(PlannerAlgorithm::kHarmonic, ParamInfo(), evaluator_, problem, options,
-                          cancel, on_improvement);
-}
+}  // namespace
+
+const AlgorithmEntry kHarmonicEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kHarmonic>};
 
 }  // namespace riskplan

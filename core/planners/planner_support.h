@@ -122,17 +122,17 @@ absl::StatusOr<PlannerParamValues> PrepareSeedPlan(PlannerAlgorithm algorithm,
                                                    const PlanningProblem& problem,
                                                    const PlanOptions& options);
 
-// A seed planner's Plan(): PrepareSeedPlan, then one `RunT` (the planner's
-// per-call state, constructed from the problem, options, parsed parameters,
-// evaluator, token and callback) executed with `evaluator`, or with a
-// DirectRiskEvaluator of its own when that is null.
-template <typename RunT>
-absl::StatusOr<PlanResult> PlanSeedRun(PlannerAlgorithm algorithm,
-                                       const std::vector<PlannerParamInfo>& info,
-                                       RiskEvaluator* evaluator, const PlanningProblem& problem,
+// A seed planner's Plan(), its AlgorithmEntry::plan: PrepareSeedPlan against
+// PlannerParams(kAlgorithm), then one `RunT` (the planner's per-call state,
+// constructed from the problem, options, parsed parameters, evaluator, token
+// and callback) executed with `evaluator`, or with a DirectRiskEvaluator of
+// its own when that is null.
+template <typename RunT, PlannerAlgorithm kAlgorithm>
+absl::StatusOr<PlanResult> PlanSeedRun(RiskEvaluator* evaluator, const PlanningProblem& problem,
                                        const PlanOptions& options, const CancellationToken& cancel,
                                        const ImprovementCallback& on_improvement) {
-  absl::StatusOr<PlannerParamValues> params = PrepareSeedPlan(algorithm, info, problem, options);
+  absl::StatusOr<PlannerParamValues> params =
+      PrepareSeedPlan(kAlgorithm, PlannerParams(kAlgorithm), problem, options);
   if (!params.ok()) return params.status();
   DirectRiskEvaluator direct;
   RunT run(problem, options, *params, evaluator != nullptr ? evaluator : &direct, cancel,

@@ -198,9 +198,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
   return result;
 }
 
-}  // namespace
-
-const std::vector<PlannerParamInfo>& RrtPlanner::ParamInfo() {
+const std::vector<PlannerParamInfo>& ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
       {"step_m", 100.0, 1.0, 5000.0, "length of every new edge (delta), m"},
       {"clearance_m", 20.0, 0.0, 1000.0,
@@ -217,12 +215,8 @@ const std::vector<PlannerParamInfo>& RrtPlanner::ParamInfo() {
   return *info;
 }
 
-absl::StatusOr<PlanResult> RrtPlanner::Plan(const PlanningProblem& problem,
-                                            const PlanOptions& options,
-                                            const CancellationToken& cancel,
-                                            const ImprovementCallback& on_improvement) {
-  return PlanSeedRun<Run>(PlannerAlgorithm::kRrt, ParamInfo(), evaluator_, problem, options, cancel,
-                          on_improvement);
-}
+}  // namespace
+
+const AlgorithmEntry kRrtEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kRrt>};
 
 }  // namespace riskplan

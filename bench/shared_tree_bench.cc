@@ -27,8 +27,6 @@
 //                              [--separate_iterations=0] [--shared_params=path_bias=0.5]
 //                              [--separate_cache=FILE] [--shared_seed=0]
 //                              [--start_area=X,Y,R]
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -43,6 +41,7 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/strings/str_split.h"
+#include "bench/planner_runs.h"
 #include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
 #include "core/base/random.h"
@@ -73,11 +72,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+using bench::ThreadCpuSeconds;
 
 const std::shared_ptr<const RiskModel>& Model() {
   static const std::shared_ptr<const RiskModel> model = [] {
@@ -264,11 +259,7 @@ void BM_SharedTree(benchmark::State& state) {
     SharedTreeOptions options;
     options.seed = absl::GetFlag(FLAGS_shared_seed) != 0 ? absl::GetFlag(FLAGS_shared_seed)
                                                          : absl::GetFlag(FLAGS_seed);
-    for (absl::string_view kv :
-         absl::StrSplit(absl::GetFlag(FLAGS_shared_params), ',', absl::SkipEmpty())) {
-      std::vector<std::string> parts = absl::StrSplit(kv, '=');
-      if (parts.size() == 2) options.params[parts[0]] = std::stod(parts[1]);
-    }
+    options.params = bench::ParsePlannerParams(absl::GetFlag(FLAGS_shared_params));
     CancellationToken cancel;
     size_t reached = 0;
     const double before = ThreadCpuSeconds();

@@ -2,7 +2,8 @@
 // its parameter table and its Plan(). One Planner class (in planner.cc) holds
 // the caller's evaluator and serves all four algorithms through these entries,
 // so that no algorithm repeats the shell of a planner class; each algorithm's
-// header declares its entry.
+// header declares its entry. The entries are constinit, so PlannerParams works
+// during static initialisation too.
 #ifndef RISKPLAN_CORE_PLANNERS_ALGORITHM_ENTRY_H_
 #define RISKPLAN_CORE_PLANNERS_ALGORITHM_ENTRY_H_
 

@@ -465,6 +465,7 @@ const std::vector<PlannerParamInfo>& ParamInfo() {
 
 }  // namespace
 
-const AlgorithmEntry kGeneticEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kGenetic>};
+constinit const AlgorithmEntry kGeneticEntry = {&ParamInfo,
+                                                &PlanSeedRun<Run, PlannerAlgorithm::kGenetic>};
 
 }  // namespace riskplan

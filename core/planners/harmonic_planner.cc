@@ -288,6 +288,7 @@ const std::vector<PlannerParamInfo>& ParamInfo() {
 
 }  // namespace
 
-const AlgorithmEntry kHarmonicEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kHarmonic>};
+constinit const AlgorithmEntry kHarmonicEntry = {&ParamInfo,
+                                                 &PlanSeedRun<Run, PlannerAlgorithm::kHarmonic>};
 
 }  // namespace riskplan

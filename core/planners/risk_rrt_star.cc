@@ -113,6 +113,6 @@ absl::StatusOr<PlanResult> Plan(RiskEvaluator* evaluator, const PlanningProblem&
 
 }  // namespace
 
-const AlgorithmEntry kRiskRrtStarEntry = {&ParamInfo, &Plan};
+constinit const AlgorithmEntry kRiskRrtStarEntry = {&ParamInfo, &Plan};
 
 }  // namespace riskplan

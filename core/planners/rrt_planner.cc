@@ -206,6 +206,6 @@ const std::vector<PlannerParamInfo>& ParamInfo() {
 
 }  // namespace
 
-const AlgorithmEntry kRrtEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kRrt>};
+constinit const AlgorithmEntry kRrtEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kRrt>};
 
 }  // namespace riskplan

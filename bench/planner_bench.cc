@@ -7,8 +7,6 @@
 // risk reached by 0.1, 0.3, 1 and 3 s (medians over seeds).
 //
 //   riskplan-bench-planner [--seeds=5] [--budget_s=3] [--scenarios=5km-a,west-east]
-#include <time.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -16,10 +14,8 @@
 #include <vector>
 
 #include "absl/flags/flag.h"
-#include "absl/strings/str_split.h"
-#include "bench/scenarios.h"
+#include "bench/planner_runs.h"
 #include "cmdline/help.h"
-#include "core/map/demo_city.h"
 #include "core/planners/planner.h"
 
 ABSL_FLAG(int, seeds, 5, "seeds per scenario");
@@ -35,12 +31,8 @@ ABSL_FLAG(bool, print_runs, false,
 namespace riskplan {
 namespace {
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using bench::Median;
+using bench::ThreadCpuSeconds;
 
 struct RunStats {
   double nodes_per_s = 0.0;
@@ -52,35 +44,16 @@ struct RunStats {
 
 constexpr double kCheckpoints[] = {0.1, 0.3, 1.0, 3.0};
 
-// CPU time of the calling thread: the planner runs on it, so nodes per CPU
-// second stay meaningful on a loaded machine, where wall-time rates do not.
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
 int Main() {
-  auto map = MakeDemoCity();
-  if (!map.ok()) {
-    std::fprintf(stderr, "%s\n", std::string(map.status().message()).c_str());
+  auto runs = bench::LoadDemoCityRuns(absl::GetFlag(FLAGS_scenarios));
+  if (!runs.ok()) {
+    std::fprintf(stderr, "%s\n", std::string(runs.status().message()).c_str());
     return 1;
   }
-  auto model = RiskModel::Create(*map, ModelParams{});
-  if (!model.ok()) return 1;
-  std::vector<bench::Scenario> scenarios = bench::DemoCityScenarios(**model);
-  const std::string wanted = absl::GetFlag(FLAGS_scenarios);
-  if (!wanted.empty()) {
-    std::vector<std::string> names = absl::StrSplit(wanted, ',');
-    std::erase_if(scenarios, [&](const bench::Scenario& s) {
-      return std::find(names.begin(), names.end(), s.name) == names.end();
-    });
-  }
-  std::map<std::string, double> params;
-  for (absl::string_view kv : absl::StrSplit(absl::GetFlag(FLAGS_params), ',', absl::SkipEmpty())) {
-    std::vector<std::string> parts = absl::StrSplit(kv, '=');
-    if (parts.size() == 2) params[parts[0]] = std::stod(parts[1]);
-  }
+  const std::shared_ptr<const RiskModel>& model = runs->model;
+  const std::vector<bench::Scenario>& scenarios = runs->scenarios;
+  const std::map<std::string, double> params =
+      bench::ParsePlannerParams(absl::GetFlag(FLAGS_params));
   const int seeds = absl::GetFlag(FLAGS_seeds);
   const double budget = absl::GetFlag(FLAGS_budget_s);
   const int64_t iterations = absl::GetFlag(FLAGS_iterations);
@@ -104,7 +77,7 @@ int Main() {
       CancellationToken cancel;
       std::vector<PlanImprovement> improvements;
       const double cpu_before = ThreadCpuSeconds();
-      auto result = (*planner)->Plan({*model, sc.start, sc.goal}, options, cancel,
+      auto result = (*planner)->Plan({model, sc.start, sc.goal}, options, cancel,
                                      [&](const PlanImprovement& i) { improvements.push_back(i); });
       if (!result.ok()) {
         std::fprintf(stderr, "%s: %s\n", sc.name, std::string(result.status().message()).c_str());

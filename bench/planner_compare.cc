@@ -19,10 +19,9 @@
 
 #include "absl/flags/flag.h"
 #include "absl/strings/str_split.h"
-#include "bench/scenarios.h"
+#include "bench/planner_runs.h"
 #include "cmdline/help.h"
 #include "core/flight/trajectory.h"
-#include "core/map/demo_city.h"
 #include "core/planners/planner.h"
 
 ABSL_FLAG(int, seeds, 3, "seeds per scenario");
@@ -36,12 +35,7 @@ ABSL_FLAG(bool, per_scenario, false, "print one line per planner and scenario");
 namespace riskplan {
 namespace {
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using bench::Median;
 
 struct Totals {
   int runs = 0;
@@ -55,26 +49,15 @@ struct Totals {
 };
 
 int Main() {
-  auto map = MakeDemoCity();
-  if (!map.ok()) {
-    std::fprintf(stderr, "%s\n", std::string(map.status().message()).c_str());
+  auto runs = bench::LoadDemoCityRuns(absl::GetFlag(FLAGS_scenarios));
+  if (!runs.ok()) {
+    std::fprintf(stderr, "%s\n", std::string(runs.status().message()).c_str());
     return 1;
   }
-  auto model = RiskModel::Create(*map, ModelParams{});
-  if (!model.ok()) return 1;
-  std::vector<bench::Scenario> scenarios = bench::DemoCityScenarios(**model);
-  const std::string wanted = absl::GetFlag(FLAGS_scenarios);
-  if (!wanted.empty()) {
-    std::vector<std::string> names = absl::StrSplit(wanted, ',');
-    std::erase_if(scenarios, [&](const bench::Scenario& s) {
-      return std::find(names.begin(), names.end(), s.name) == names.end();
-    });
-  }
-  std::map<std::string, double> params;
-  for (absl::string_view kv : absl::StrSplit(absl::GetFlag(FLAGS_params), ',', absl::SkipEmpty())) {
-    std::vector<std::string> parts = absl::StrSplit(kv, '=');
-    if (parts.size() == 2) params[parts[0]] = std::stod(parts[1]);
-  }
+  const std::shared_ptr<const RiskModel>& model = runs->model;
+  const std::vector<bench::Scenario>& scenarios = runs->scenarios;
+  const std::map<std::string, double> params =
+      bench::ParsePlannerParams(absl::GetFlag(FLAGS_params));
   const std::map<std::string, PlannerAlgorithm> by_name = {
       {"RISK_RRT_STAR", PlannerAlgorithm::kRiskRrtStar},
       {"RRT", PlannerAlgorithm::kRrt},
@@ -112,7 +95,7 @@ int Main() {
         CancellationToken cancel;
         std::vector<PlanImprovement> improvements;
         auto result =
-            (*planner)->Plan({*model, sc.start, sc.goal}, options, cancel,
+            (*planner)->Plan({model, sc.start, sc.goal}, options, cancel,
                              [&](const PlanImprovement& i) { improvements.push_back(i); });
         if (!result.ok()) {
           std::fprintf(stderr, "%s %s: %s\n", name.c_str(), sc.name,
@@ -124,8 +107,8 @@ int Main() {
         ++totals.solved;
         ++solved;
         const PlanImprovement& best = *result->best;
-        auto pieces = PiecesFromWaypoints(best.waypoints, (*model)->params());
-        auto eval = EvaluateTrajectory(**model, *pieces);
+        auto pieces = PiecesFromWaypoints(best.waypoints, model->params());
+        auto eval = EvaluateTrajectory(*model, *pieces);
         if (eval.ok() && eval->admissible && eval->risk == best.risk) ++totals.verified;
         totals.risk.push_back(best.risk);
         risks.push_back(best.risk);

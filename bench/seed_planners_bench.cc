@@ -11,14 +11,13 @@
 // - GENETIC (seed 003): time per generation and the generation of the last
 //   improvement in 1000 generations (seed 003: 85-147 generations, 25-44 ms at
 //   74 MHz), free and fixed elevation, on a long and a short demo-city route.
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "bench/planner_runs.h"
 #include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
 #include "core/base/random.h"
@@ -271,13 +270,9 @@ BENCHMARK(BM_SegmentClear)
 // ---------------------------------------------------------------------------
 // GENETIC.
 
-// Thread CPU time, s: the machine is shared, and wall time would count the
-// other processes' share.
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+// Thread CPU time (bench::ThreadCpuSeconds): the machine is shared, and wall
+// time would count the other processes' share.
+using bench::ThreadCpuSeconds;
 
 // 1000 generations on a demo-city scenario, seeds 1 to 3; reports the medians
 // of: CPU ms per generation, the generation of the last improvement (of the

@@ -27,14 +27,13 @@
 //                              [--separate_iterations=0] [--shared_params=path_bias=0.5]
 //                              [--separate_cache=FILE] [--shared_seed=0]
 //                              [--start_area=X,Y,R]
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,12 +41,12 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/strings/str_split.h"
+#include "bench/planner_runs.h"
 #include "bench/scenarios.h"
 #include "benchmark/benchmark.h"
 #include "core/base/random.h"
 #include "core/map/demo_city.h"
 #include "core/planners/planner.h"
-#include "core/planners/risk_rrt_star.h"
 #include "core/planners/shared_goal_tree.h"
 
 ABSL_FLAG(int, missions, 32, "missions, from scattered starts to one depot");
@@ -73,11 +72,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+using bench::ThreadCpuSeconds;
 
 const std::shared_ptr<const RiskModel>& Model() {
   static const std::shared_ptr<const RiskModel> model = [] {
@@ -184,7 +179,7 @@ void RunSeparate() {
   if (!cache.empty() && ReadSeparateCache(cache, &out)) return;
   for (const Pose& start : fleet.starts) {
     DirectRiskEvaluator evaluator;
-    RiskRrtStar planner(&evaluator);
+    std::unique_ptr<Planner> planner = *MakePlanner(PlannerAlgorithm::kRiskRrtStar, &evaluator);
     PlanOptions options;
     options.seed = absl::GetFlag(FLAGS_seed);
     const int64_t iterations = absl::GetFlag(FLAGS_separate_iterations);
@@ -192,7 +187,7 @@ void RunSeparate() {
     options.budget.max_iterations = iterations;
     CancellationToken cancel;
     const double before = ThreadCpuSeconds();
-    auto result = planner.Plan({Model(), start, fleet.depot}, options, cancel, nullptr);
+    auto result = planner->Plan({Model(), start, fleet.depot}, options, cancel, nullptr);
     Separate s;
     s.cpu_s = ThreadCpuSeconds() - before;
     s.configs = evaluator.evaluated();
@@ -264,11 +259,7 @@ void BM_SharedTree(benchmark::State& state) {
     SharedTreeOptions options;
     options.seed = absl::GetFlag(FLAGS_shared_seed) != 0 ? absl::GetFlag(FLAGS_shared_seed)
                                                          : absl::GetFlag(FLAGS_seed);
-    for (absl::string_view kv :
-         absl::StrSplit(absl::GetFlag(FLAGS_shared_params), ',', absl::SkipEmpty())) {
-      std::vector<std::string> parts = absl::StrSplit(kv, '=');
-      if (parts.size() == 2) options.params[parts[0]] = std::stod(parts[1]);
-    }
+    options.params = bench::ParsePlannerParams(absl::GetFlag(FLAGS_shared_params));
     CancellationToken cancel;
     size_t reached = 0;
     const double before = ThreadCpuSeconds();

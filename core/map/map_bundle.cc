@@ -1,7 +1,6 @@
+// The bundle loader: LoadMapBundle and LoadMapDirectory (the writer is
+// map_bundle_writer.cc).
 #include "core/map/map_bundle.h"
-
-#include <openssl/evp.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
@@ -9,10 +8,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <limits>
 #include <map>
-#include <set>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -20,10 +17,9 @@
 #include <vector>
 
 #include "absl/status/status.h"
-#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/string_view.h"
-#include "core/map/staged_directory.h"
+#include "core/map/map_bundle_format.h"
 #include "nlohmann/json.hpp"
 
 namespace riskplan {
@@ -31,32 +27,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
-// The writer keeps keys in the order of docs/map-bundle.md, for human readers.
-using OrderedJson = nlohmann::ordered_json;
 
-// docs/map-bundle.md is the normative description of everything below.
-constexpr char kFormatName[] = "riskplan-map-bundle";
-constexpr int64_t kFormatVersion = 1;
-constexpr char kManifestName[] = "manifest.json";
-constexpr char kByteOrder[] = "little";
-constexpr char kRowOrder[] = "south_to_north";
 // A manifest is small; refusing huge ones keeps a hostile bundle from making
 // the loader allocate without bound before any other check.
 constexpr uintmax_t kMaxManifestBytes = 64u << 20;
-
-// The four raster layers, in the order they are checked and written.
-struct LayerInfo {
-  const char* name;
-  const char* dtype;
-  const char* default_file;
-  size_t bytes_per_cell;
-};
-constexpr LayerInfo kLayers[4] = {
-    {"density", "float32", "density.f32", 4},
-    {"shelter", "float32", "shelter.f32", 4},
-    {"terrain", "float32", "terrain.f32", 4},
-    {"nofly", "uint8", "nofly.u8", 1},
-};
 
 struct LayerEntry {
   std::string file;
@@ -70,20 +44,6 @@ absl::Status Invalid(absl::string_view dir, absl::string_view message) {
 // Prefixes an error from a lower layer (RiskMap::Create) with the bundle.
 absl::Status InBundle(absl::string_view dir, const absl::Status& status) {
   return absl::Status(status.code(), absl::StrCat("map bundle '", dir, "': ", status.message()));
-}
-
-std::string Sha256Hex(const uint8_t* data, size_t size) {
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  if (EVP_Digest(data, size, digest, &length, EVP_sha256(), nullptr) != 1) return "";
-  static constexpr char kHex[] = "0123456789abcdef";
-  std::string hex;
-  hex.reserve(2 * length);
-  for (unsigned int k = 0; k < length; ++k) {
-    hex.push_back(kHex[digest[k] >> 4]);
-    hex.push_back(kHex[digest[k] & 15]);
-  }
-  return hex;
 }
 
 // Typed access to manifest fields. `path` is the dotted name used in messages,
@@ -162,7 +122,7 @@ bool IsPlainFileName(const std::string& name) {
 }
 
 absl::StatusOr<LayerEntry> ReadLayerEntry(const ManifestReader& reader, const Json& layers,
-                                          const LayerInfo& info) {
+                                          const bundle::LayerInfo& info) {
   const std::string prefix = absl::StrCat("layers.", info.name, ".");
   absl::StatusOr<const Json*> entry = reader.Field(layers, "layers.", info.name);
   if (!entry.ok()) return entry.status();
@@ -179,8 +139,9 @@ absl::StatusOr<LayerEntry> ReadLayerEntry(const ManifestReader& reader, const Js
                                 "'; expected a plain file name inside the bundle directory"));
   }
   out.file = *file;
-  for (auto [key, expected] : {std::pair{"dtype", info.dtype}, std::pair{"byte_order", kByteOrder},
-                               std::pair{"row_order", kRowOrder}}) {
+  for (auto [key, expected] :
+       {std::pair{"dtype", info.dtype}, std::pair{"byte_order", bundle::kByteOrder},
+        std::pair{"row_order", bundle::kRowOrder}}) {
     if (absl::Status s = reader.Expect(e, prefix, key, expected); !s.ok()) return s;
   }
   if (e.contains("sha256")) {
@@ -237,14 +198,16 @@ absl::Status ReadManifest(const ManifestReader& reader, const Json& manifest, Ma
     return Invalid(reader.dir(), absl::StrCat("manifest.json: top level must be an object, got ",
                                               manifest.type_name()));
   }
-  if (absl::Status s = reader.Expect(manifest, "", "format", kFormatName); !s.ok()) return s;
+  if (absl::Status s = reader.Expect(manifest, "", "format", bundle::kFormatName); !s.ok()) {
+    return s;
+  }
   absl::StatusOr<const Json*> version = reader.Field(manifest, "", "version");
   if (!version.ok()) return version.status();
   if (!(*version)->is_number_integer()) return reader.TypeError("version", "an integer", **version);
-  if (**version != kFormatVersion) {
+  if (**version != bundle::kFormatVersion) {
     return Invalid(reader.dir(),
                    absl::StrCat("manifest.json: unsupported version ", (*version)->dump(),
-                                "; this build reads version ", kFormatVersion));
+                                "; this build reads version ", bundle::kFormatVersion));
   }
 
   absl::StatusOr<std::string> name = reader.String(manifest, "", "name");
@@ -292,7 +255,7 @@ absl::Status ReadManifest(const ManifestReader& reader, const Json& manifest, Ma
   if (!layers.ok()) return layers.status();
   if (!(*layers)->is_object()) return reader.TypeError("layers", "an object", **layers);
   for (int k = 0; k < 4; ++k) {
-    absl::StatusOr<LayerEntry> entry = ReadLayerEntry(reader, **layers, kLayers[k]);
+    absl::StatusOr<LayerEntry> entry = ReadLayerEntry(reader, **layers, bundle::kLayers[k]);
     if (!entry.ok()) return entry.status();
     entries[k] = *std::move(entry);
   }
@@ -301,7 +264,8 @@ absl::Status ReadManifest(const ManifestReader& reader, const Json& manifest, Ma
 
 // Reads one raster file after checking its size against the header and its
 // checksum against the manifest.
-absl::StatusOr<std::vector<uint8_t>> ReadLayerFile(const std::string& dir, const LayerInfo& info,
+absl::StatusOr<std::vector<uint8_t>> ReadLayerFile(const std::string& dir,
+                                                   const bundle::LayerInfo& info,
                                                    const LayerEntry& entry, int64_t cells) {
   const fs::path path = fs::path(dir) / entry.file;
   std::error_code ec;
@@ -323,7 +287,7 @@ absl::StatusOr<std::vector<uint8_t>> ReadLayerFile(const std::string& dir, const
                                                "': cannot read file '", entry.file, "'"));
   }
   if (!entry.sha256.empty()) {
-    const std::string actual_sha = Sha256Hex(bytes.data(), bytes.size());
+    const std::string actual_sha = bundle::Sha256Hex(bytes.data(), bytes.size());
     if (actual_sha != entry.sha256) {
       return Invalid(dir,
                      absl::StrCat("layer '", info.name, "': file '", entry.file, "' has SHA-256 ",
@@ -333,7 +297,7 @@ absl::StatusOr<std::vector<uint8_t>> ReadLayerFile(const std::string& dir, const
   return bytes;
 }
 
-// float32 little-endian <-> float, bit for bit (NaN payloads included).
+// float32 little-endian to float, bit for bit (NaN payloads included).
 std::vector<float> DecodeFloat32(const std::vector<uint8_t>& bytes) {
   std::vector<float> values(bytes.size() / 4);
   std::memcpy(values.data(), bytes.data(), values.size() * 4);
@@ -343,54 +307,11 @@ std::vector<float> DecodeFloat32(const std::vector<uint8_t>& bytes) {
   return values;
 }
 
-std::vector<uint8_t> EncodeFloat32(const std::vector<float>& values) {
-  std::vector<uint8_t> bytes(values.size() * 4);
-  std::memcpy(bytes.data(), values.data(), bytes.size());
-  if constexpr (std::endian::native == std::endian::big) {
-    for (size_t k = 0; k < bytes.size(); k += 4) {
-      std::swap(bytes[k], bytes[k + 3]);
-      std::swap(bytes[k + 1], bytes[k + 2]);
-    }
-  }
-  return bytes;
-}
-
-// Writes `bytes` to dir/name through a temporary file in the same directory
-// and a rename, so a reader never sees a half-written file under `name`.
-absl::Status WriteFileAtomically(const fs::path& dir, const std::string& name, const char* data,
-                                 size_t size) {
-  const fs::path final_path = dir / name;
-  const fs::path temp_path = dir / absl::StrCat(".", name, ".tmp-", ::getpid());
-  std::error_code ec;
-  fs::remove(temp_path, ec);  // left by a writer that died with this pid
-  if (absl::Status s = WriteNewFileDurably(temp_path.string(), data, size, final_path.string());
-      !s.ok()) {
-    return s;
-  }
-  fs::rename(temp_path, final_path, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(temp_path, ignored);
-    return absl::UnavailableError(absl::StrCat("cannot rename '", temp_path.string(), "' to '",
-                                               final_path.string(), "': ", ec.message()));
-  }
-  return absl::OkStatus();
-}
-
-// Receives each file of a bundle being written: its name and bytes.
-using BundleFileSink =
-    std::function<absl::Status(const std::string& name, const char* data, size_t size)>;
-
-// The bundle's files, layers first and the manifest last, each into `sink`.
-using PrivateFields = std::vector<std::pair<std::string, std::string>>;
-absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink,
-                              const PrivateFields& private_fields = {});
-
 }  // namespace
 
 absl::StatusOr<std::shared_ptr<const RiskMap>> LoadMapBundle(const std::string& dir,
                                                              const ModelParams& params) {
-  const fs::path manifest_path = fs::path(dir) / kManifestName;
+  const fs::path manifest_path = fs::path(dir) / bundle::kManifestName;
   std::error_code ec;
   if (!fs::is_regular_file(manifest_path, ec)) {
     return absl::NotFoundError(absl::StrCat("map bundle '", dir, "': manifest.json not found"));
@@ -434,7 +355,8 @@ absl::StatusOr<std::shared_ptr<const RiskMap>> LoadMapBundle(const std::string& 
   const int64_t cells = static_cast<int64_t>(header.nx) * header.ny;
 
   for (int k = 0; k < 4; ++k) {
-    absl::StatusOr<std::vector<uint8_t>> bytes = ReadLayerFile(dir, kLayers[k], entries[k], cells);
+    absl::StatusOr<std::vector<uint8_t>> bytes =
+        ReadLayerFile(dir, bundle::kLayers[k], entries[k], cells);
     if (!bytes.ok()) return bytes.status();
     switch (k) {
       case 0:
@@ -457,114 +379,6 @@ absl::StatusOr<std::shared_ptr<const RiskMap>> LoadMapBundle(const std::string& 
   return map;
 }
 
-absl::Status WriteMapBundle(const RiskMap& map, const std::string& dir) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) {
-    return absl::UnavailableError(
-        absl::StrCat("cannot create map bundle directory '", dir, "': ", ec.message()));
-  }
-  return WriteBundleFiles(map, [&](const std::string& name, const char* data, size_t size) {
-    return WriteFileAtomically(dir, name, data, size);
-  });
-}
-
-absl::Status WriteMapBundleAtomically(const RiskMap& map, const std::string& dir,
-                                      ExistingDirectory existing,
-                                      const PrivateFields& private_fields) {
-  std::set<std::string> names;
-  for (const auto& [name, json] : private_fields) {
-    if (!names.insert(name).second) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("map bundle: private manifest field '", name, "' is given twice"));
-    }
-    if (!absl::StartsWith(name, "x_")) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("map bundle: private manifest field '", name, "' must start with \"x_\""));
-    }
-    if (!Json::accept(json)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("map bundle: private manifest field '", name, "' is not JSON"));
-    }
-  }
-  absl::StatusOr<std::unique_ptr<StagedDirectory>> staged =
-      StagedDirectory::Create(dir, existing, kManifestName);
-  if (!staged.ok()) {
-    return absl::Status(staged.status().code(),
-                        absl::StrCat("map bundle: ", staged.status().message()));
-  }
-  if (absl::Status s = WriteBundleFiles(
-          map,
-          [&](const std::string& name, const char* data, size_t size) {
-            return (*staged)->WriteFile(name, data, size);
-          },
-          private_fields);
-      !s.ok()) {
-    return s;
-  }
-  return (*staged)->Commit();
-}
-
-namespace {
-
-absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink,
-                              const PrivateFields& private_fields) {
-  const MapHeader& h = map.header();
-  const MapLayers& l = map.layers();
-
-  OrderedJson manifest = OrderedJson::object();
-  manifest["format"] = kFormatName;
-  manifest["version"] = kFormatVersion;
-  manifest["name"] = h.name;
-  manifest["x0"] = h.x0;
-  manifest["y0"] = h.y0;
-  manifest["res"] = h.res;
-  manifest["nx"] = h.nx;
-  manifest["ny"] = h.ny;
-  if (h.geo.has_value()) {
-    manifest["geo"] = {{"origin_lat_deg", h.geo->origin_lat_deg},
-                       {"origin_lon_deg", h.geo->origin_lon_deg},
-                       {"crs", h.geo->crs}};
-  }
-  manifest["provenance"] = h.provenance;
-  OrderedJson sites = OrderedJson::array();
-  for (const LandingSite& s : l.landing_sites) {
-    sites.push_back({{"name", s.name}, {"i", s.i}, {"j", s.j}});
-  }
-  manifest["landing_sites"] = std::move(sites);
-
-  // Layers first, manifest last: a reader racing a rewrite sees either the old
-  // manifest (whose checksums then refuse the new layers) or the new bundle.
-  OrderedJson layer_entries = OrderedJson::object();
-  for (const LayerInfo& info : kLayers) {
-    const std::string name = info.name;
-    std::vector<uint8_t> bytes = name == "density"   ? EncodeFloat32(l.density)
-                                 : name == "shelter" ? EncodeFloat32(l.shelter)
-                                 : name == "terrain" ? EncodeFloat32(l.terrain)
-                                                     : l.nofly;
-    if (absl::Status s =
-            sink(info.default_file, reinterpret_cast<const char*>(bytes.data()), bytes.size());
-        !s.ok()) {
-      return s;
-    }
-    layer_entries[name] = {{"file", info.default_file},
-                           {"dtype", info.dtype},
-                           {"byte_order", kByteOrder},
-                           {"row_order", kRowOrder},
-                           {"sha256", Sha256Hex(bytes.data(), bytes.size())}};
-  }
-  manifest["layers"] = std::move(layer_entries);
-  for (const auto& [name, json] : private_fields) {
-    manifest[name] = OrderedJson::parse(json);
-  }
-  // Invalid UTF-8 in a name or provenance is replaced rather than thrown on.
-  const std::string text =
-      manifest.dump(2, ' ', false, OrderedJson::error_handler_t::replace) + "\n";
-  return sink(kManifestName, text.data(), text.size());
-}
-
-}  // namespace
-
 absl::StatusOr<std::vector<std::shared_ptr<const RiskMap>>> LoadMapDirectory(
     const std::string& dir, const ModelParams& params) {
   std::error_code ec;
@@ -578,7 +392,8 @@ absl::StatusOr<std::vector<std::shared_ptr<const RiskMap>>> LoadMapDirectory(
     // WriteMapBundleAtomically leaves: possibly a complete copy of a bundle
     // that is also there under its own name.
     if (it->path().filename().string().starts_with('.')) continue;
-    if (it->is_directory(entry_ec) && fs::is_regular_file(it->path() / kManifestName, entry_ec)) {
+    if (it->is_directory(entry_ec) &&
+        fs::is_regular_file(it->path() / bundle::kManifestName, entry_ec)) {
       bundles.push_back(it->path());
     }
   }

@@ -70,13 +70,12 @@ struct PieceMemo {
   double risk = 0.0;     // the piece risk by the fitness's step, once has_risk
 };
 
-class Run {
+class Run : private SeedRunBase {
  public:
   Run(const PlanningProblem& problem, const PlanOptions& options, const PlannerParamValues& params,
       RiskEvaluator* evaluator, const CancellationToken& cancel,
       const ImprovementCallback& on_improvement)
-      : problem_(problem),
-        model_(*problem.model),
+      : SeedRunBase(problem, options, evaluator, cancel, on_improvement),
         population_(static_cast<size_t>(params.Get("population"))),
         waypoints_(static_cast<size_t>(params.Get("waypoints"))),
         crossover_share_(params.Get("crossover_share")),
@@ -87,10 +86,7 @@ class Run {
         risk_weight_(params.Get("risk_weight")),
         risk_step_m_(params.Get("risk_step_m")),
         clearance_m_(params.Get("clearance_m")),
-        evaluator_(evaluator),
-        limits_(options.budget, cancel),
         stop_(limits_.Stop()),
-        on_improvement_(on_improvement),
         rng_(options.seed),
         feasibility_(model_, TwoTierOptions{CollisionRule::kFlightBand,
                                             static_cast<int>(params.Get("detailed_segments"))}),
@@ -122,8 +118,6 @@ class Run {
   // piece's).
   static constexpr size_t kMaxBatch = size_t{1} << 16;
 
-  const PlanningProblem& problem_;
-  const RiskModel& model_;
   const size_t population_;
   const size_t waypoints_;
   const double crossover_share_;
@@ -132,10 +126,7 @@ class Run {
   const double risk_weight_;
   const double risk_step_m_;
   const double clearance_m_;
-  RiskEvaluator* evaluator_;
-  RunLimits limits_;
   const StopCondition stop_;  // limits_'s, polled inside a generation
-  const ImprovementCallback& on_improvement_;
   Rng rng_;
   const TwoTierFeasibility feasibility_;
   const ObstaclePointSet request_points_;
@@ -451,9 +442,7 @@ absl::Status Run::Generations(PlanResult* result) {
   return absl::OkStatus();
 }
 
-}  // namespace
-
-const std::vector<PlannerParamInfo>& GeneticPlanner::ParamInfo() {
+const std::vector<PlannerParamInfo>& ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
       {"population", 32, 4, 1024, "chromosomes per generation (seed 003: 32)"},
       {"waypoints", 4, 1, 16, "transitional waypoints per chromosome (seed 003: 4)"},
@@ -474,12 +463,9 @@ const std::vector<PlannerParamInfo>& GeneticPlanner::ParamInfo() {
   return *info;
 }
 
-absl::StatusOr<PlanResult> GeneticPlanner::Plan(const PlanningProblem& problem,
-                                                const PlanOptions& options,
-                                                const CancellationToken& cancel,
-                                                const ImprovementCallback& on_improvement) {
-  return PlanSeedRun<Run>(PlannerAlgorithm::kGenetic, ParamInfo(), evaluator_, problem, options,
-                          cancel, on_improvement);
-}
+}  // namespace
+
+constinit const AlgorithmEntry kGeneticEntry = {&ParamInfo,
+                                                &PlanSeedRun<Run, PlannerAlgorithm::kGenetic>};
 
 }  // namespace riskplan

@@ -17,14 +17,12 @@ namespace {
 constexpr double kFinestTolerance = 1e-15;
 constexpr int kAutoMaxSide = 512;
 
-class Run {
+class Run : private SeedRunBase {
  public:
   Run(const PlanningProblem& problem, const PlanOptions& options, const PlannerParamValues& params,
       RiskEvaluator* evaluator, const CancellationToken& cancel,
       const ImprovementCallback& on_improvement)
-      : problem_(problem),
-        model_(*problem.model),
-        options_(options),
+      : SeedRunBase(problem, options, evaluator, cancel, on_improvement),
         tolerance_(params.Get("tolerance")),
         clearance_m_(params.Get("clearance_m")),
         flight_altitude_m_(params.Get("flight_altitude_m")),
@@ -34,9 +32,6 @@ class Run {
         ny_((model_.map().ny() + factor_ - 1) / factor_),
         omega_(params.Get("omega") > 0.0 ? params.Get("omega")
                                          : HarmonicPotential::OptimalOmega(nx_, ny_)),
-        evaluator_(evaluator),
-        limits_(options.budget, cancel),
-        on_improvement_(on_improvement),
         potential_(nx_, ny_),
         request_points_(options.obstacle_points,
                         std::max({2.0 * clearance_m_, 4.0 * model_.map().res(), 1.0})),
@@ -66,9 +61,6 @@ class Run {
   // Realizes, evaluates and streams a descent.
   absl::Status Report(const std::vector<GridCell>& cells);
 
-  const PlanningProblem& problem_;
-  const RiskModel& model_;
-  const PlanOptions& options_;
   const double tolerance_;
   const double clearance_m_;
   const double flight_altitude_m_;
@@ -77,9 +69,6 @@ class Run {
   const int nx_;
   const int ny_;
   const double omega_;
-  RiskEvaluator* evaluator_;
-  RunLimits limits_;
-  const ImprovementCallback& on_improvement_;
   HarmonicPotential potential_;
   ObstaclePointSet request_points_;
   TrajectoryChecker checker_;
@@ -280,9 +269,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
   return result;
 }
 
-}  // namespace
-
-const std::vector<PlannerParamInfo>& HarmonicPlanner::ParamInfo() {
+const std::vector<PlannerParamInfo>& ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
       {"cell_factor", 0, 0, 64,
        "map cells per planning cell along each axis (0: the smallest keeping both sides <= 512)"},
@@ -299,12 +286,9 @@ const std::vector<PlannerParamInfo>& HarmonicPlanner::ParamInfo() {
   return *info;
 }
 
-absl::StatusOr<PlanResult> HarmonicPlanner::Plan(const PlanningProblem& problem,
-                                                 const PlanOptions& options,
-                                                 const CancellationToken& cancel,
-                                                 const ImprovementCallback& on_improvement) {
-  return PlanSeedRun<Run>(PlannerAlgorithm::kHarmonic, ParamInfo(), evaluator_, problem, options,
-                          cancel, on_improvement);
-}
+}  // namespace
+
+constinit const AlgorithmEntry kHarmonicEntry = {&ParamInfo,
+                                                 &PlanSeedRun<Run, PlannerAlgorithm::kHarmonic>};
 
 }  // namespace riskplan

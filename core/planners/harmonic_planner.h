@@ -34,27 +34,12 @@
 #ifndef RISKPLAN_CORE_PLANNERS_HARMONIC_PLANNER_H_
 #define RISKPLAN_CORE_PLANNERS_HARMONIC_PLANNER_H_
 
-#include <vector>
-
-#include "core/planners/planner.h"
+#include "core/planners/algorithm_entry.h"
 
 namespace riskplan {
 
-class HarmonicPlanner final : public Planner {
- public:
-  // `evaluator` computes risk batches (DirectRiskEvaluator when null); it must
-  // outlive the planner.
-  explicit HarmonicPlanner(RiskEvaluator* evaluator) : evaluator_(evaluator) {}
-
-  absl::StatusOr<PlanResult> Plan(const PlanningProblem& problem, const PlanOptions& options,
-                                  const CancellationToken& cancel,
-                                  const ImprovementCallback& on_improvement) override;
-
-  static const std::vector<PlannerParamInfo>& ParamInfo();
-
- private:
-  RiskEvaluator* evaluator_;
-};
+// HARMONIC for MakePlanner and PlannerParams.
+extern const AlgorithmEntry kHarmonicEntry;
 
 }  // namespace riskplan
 

@@ -41,33 +41,56 @@ std::string_view StopReasonName(StopReason reason) {
   return "UNKNOWN";
 }
 
-absl::StatusOr<std::unique_ptr<Planner>> MakePlanner(PlannerAlgorithm algorithm,
-                                                     RiskEvaluator* evaluator) {
+namespace {
+
+// The entry of `algorithm`; null for a value outside the enum.
+const AlgorithmEntry* EntryOf(PlannerAlgorithm algorithm) {
   switch (algorithm) {
     case PlannerAlgorithm::kRiskRrtStar:
-      return std::unique_ptr<Planner>(new RiskRrtStar(evaluator));
+      return &kRiskRrtStarEntry;
     case PlannerAlgorithm::kRrt:
-      return std::unique_ptr<Planner>(new RrtPlanner(evaluator));
+      return &kRrtEntry;
     case PlannerAlgorithm::kGenetic:
-      return std::unique_ptr<Planner>(new GeneticPlanner(evaluator));
+      return &kGeneticEntry;
     case PlannerAlgorithm::kHarmonic:
-      return std::unique_ptr<Planner>(new HarmonicPlanner(evaluator));
+      return &kHarmonicEntry;
   }
-  return absl::InvalidArgumentError(
-      absl::StrFormat("unknown planner algorithm %d", static_cast<int>(algorithm)));
+  return nullptr;
+}
+
+// The planner of every algorithm: the caller's evaluator, handed to the
+// algorithm's Plan() with each call.
+class AlgorithmPlanner final : public Planner {
+ public:
+  AlgorithmPlanner(const AlgorithmEntry& entry, RiskEvaluator* evaluator)
+      : entry_(entry), evaluator_(evaluator) {}
+
+  absl::StatusOr<PlanResult> Plan(const PlanningProblem& problem, const PlanOptions& options,
+                                  const CancellationToken& cancel,
+                                  const ImprovementCallback& on_improvement) override {
+    return entry_.plan(evaluator_, problem, options, cancel, on_improvement);
+  }
+
+ private:
+  const AlgorithmEntry& entry_;
+  RiskEvaluator* evaluator_;
+};
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<Planner>> MakePlanner(PlannerAlgorithm algorithm,
+                                                     RiskEvaluator* evaluator) {
+  const AlgorithmEntry* entry = EntryOf(algorithm);
+  if (entry == nullptr) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("unknown planner algorithm %d", static_cast<int>(algorithm)));
+  }
+  return std::unique_ptr<Planner>(new AlgorithmPlanner(*entry, evaluator));
 }
 
 const std::vector<PlannerParamInfo>& PlannerParams(PlannerAlgorithm algorithm) {
-  switch (algorithm) {
-    case PlannerAlgorithm::kRiskRrtStar:
-      return RiskRrtStar::ParamInfo();
-    case PlannerAlgorithm::kRrt:
-      return RrtPlanner::ParamInfo();
-    case PlannerAlgorithm::kGenetic:
-      return GeneticPlanner::ParamInfo();
-    case PlannerAlgorithm::kHarmonic:
-      return HarmonicPlanner::ParamInfo();
-  }
+  const AlgorithmEntry* entry = EntryOf(algorithm);
+  if (entry != nullptr) return entry->param_info();
   static const auto* empty = new std::vector<PlannerParamInfo>;
   return *empty;
 }

@@ -78,6 +78,30 @@ class RunLimits {
   const std::chrono::steady_clock::time_point start_;
 };
 
+// What the run of a seed planner (the RunT of PlanSeedRun) keeps of its
+// Plan() call. Each RunT derives from it and reads these as its own members,
+// so that the three do not each declare and initialise the same six; the
+// limits are thus constructed, and the run's clock started, before the
+// planner's own state.
+class SeedRunBase {
+ protected:
+  SeedRunBase(const PlanningProblem& problem, const PlanOptions& options, RiskEvaluator* evaluator,
+              const CancellationToken& cancel, const ImprovementCallback& on_improvement)
+      : problem_(problem),
+        model_(*problem.model),
+        options_(options),
+        evaluator_(evaluator),
+        limits_(options.budget, cancel),
+        on_improvement_(on_improvement) {}
+
+  const PlanningProblem& problem_;
+  const RiskModel& model_;
+  const PlanOptions& options_;
+  RiskEvaluator* evaluator_;
+  RunLimits limits_;
+  const ImprovementCallback& on_improvement_;
+};
+
 // What a planner's long loop returns when the run's StopCondition is reached
 // in the middle of an iteration: the run then ends as it would have at the
 // next check of its budget (the iteration is dropped, the best trajectory so
@@ -122,17 +146,17 @@ absl::StatusOr<PlannerParamValues> PrepareSeedPlan(PlannerAlgorithm algorithm,
                                                    const PlanningProblem& problem,
                                                    const PlanOptions& options);
 
-// A seed planner's Plan(): PrepareSeedPlan, then one `RunT` (the planner's
-// per-call state, constructed from the problem, options, parsed parameters,
-// evaluator, token and callback) executed with `evaluator`, or with a
-// DirectRiskEvaluator of its own when that is null.
-template <typename RunT>
-absl::StatusOr<PlanResult> PlanSeedRun(PlannerAlgorithm algorithm,
-                                       const std::vector<PlannerParamInfo>& info,
-                                       RiskEvaluator* evaluator, const PlanningProblem& problem,
+// A seed planner's Plan(), its AlgorithmEntry::plan: PrepareSeedPlan against
+// PlannerParams(kAlgorithm), then one `RunT` (the planner's per-call state,
+// constructed from the problem, options, parsed parameters, evaluator, token
+// and callback) executed with `evaluator`, or with a DirectRiskEvaluator of
+// its own when that is null.
+template <typename RunT, PlannerAlgorithm kAlgorithm>
+absl::StatusOr<PlanResult> PlanSeedRun(RiskEvaluator* evaluator, const PlanningProblem& problem,
                                        const PlanOptions& options, const CancellationToken& cancel,
                                        const ImprovementCallback& on_improvement) {
-  absl::StatusOr<PlannerParamValues> params = PrepareSeedPlan(algorithm, info, problem, options);
+  absl::StatusOr<PlannerParamValues> params =
+      PrepareSeedPlan(kAlgorithm, PlannerParams(kAlgorithm), problem, options);
   if (!params.ok()) return params.status();
   DirectRiskEvaluator direct;
   RunT run(problem, options, *params, evaluator != nullptr ? evaluator : &direct, cancel,

@@ -11,8 +11,8 @@ namespace riskplan {
 namespace rrt_star {
 
 absl::StatusOr<Params> Params::Parse(const std::map<std::string, double>& given) {
-  absl::StatusOr<PlannerParamValues> values =
-      PlannerParamValues::Parse("RISK_RRT_STAR", RiskRrtStar::ParamInfo(), given);
+  absl::StatusOr<PlannerParamValues> values = PlannerParamValues::Parse(
+      "RISK_RRT_STAR", PlannerParams(PlannerAlgorithm::kRiskRrtStar), given);
   if (!values.ok()) return values.status();
   // Integer parameters: the table's bounds keep them well inside int.
   auto integer = [&](const char* name) {
@@ -44,7 +44,9 @@ absl::StatusOr<Params> Params::Parse(const std::map<std::string, double>& given)
 
 }  // namespace rrt_star
 
-const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
+namespace {
+
+const std::vector<PlannerParamInfo>& ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
       {"step_m", 400.0, 10.0, 5000.0, "largest edge added by one extension (Delta_step), m"},
       {"goal_bias", 0.05, 0.0, 0.9, "share of samples that are the start configuration"},
@@ -73,10 +75,9 @@ const std::vector<PlannerParamInfo>& RiskRrtStar::ParamInfo() {
   return *info;
 }
 
-absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
-                                             const PlanOptions& options,
-                                             const CancellationToken& cancel,
-                                             const ImprovementCallback& on_improvement) {
+absl::StatusOr<PlanResult> Plan(RiskEvaluator* evaluator, const PlanningProblem& problem,
+                                const PlanOptions& options, const CancellationToken& cancel,
+                                const ImprovementCallback& on_improvement) {
   // The seed planners' checks (PrepareSeedPlan) in this planner's order:
   // it takes no obstacles, so those are refused before the budget is read.
   if (absl::Status s = CheckEndpoints(problem); !s.ok()) return s;
@@ -93,7 +94,6 @@ absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
   // Without an evaluator of the caller's: direct evaluation, or on request an
   // exact cache of kernel sites.
   std::unique_ptr<RiskEvaluator> own;
-  RiskEvaluator* evaluator = evaluator_;
   if (evaluator == nullptr) {
     own = rrt_star::OwnEvaluator(*params);
     evaluator = own.get();
@@ -110,5 +110,9 @@ absl::StatusOr<PlanResult> RiskRrtStar::Plan(const PlanningProblem& problem,
   run.Execute();
   return result;
 }
+
+}  // namespace
+
+constinit const AlgorithmEntry kRiskRrtStarEntry = {&ParamInfo, &Plan};
 
 }  // namespace riskplan

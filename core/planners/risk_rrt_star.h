@@ -34,27 +34,12 @@
 #ifndef RISKPLAN_CORE_PLANNERS_RISK_RRT_STAR_H_
 #define RISKPLAN_CORE_PLANNERS_RISK_RRT_STAR_H_
 
-#include <vector>
-
-#include "core/planners/planner.h"
+#include "core/planners/algorithm_entry.h"
 
 namespace riskplan {
 
-class RiskRrtStar final : public Planner {
- public:
-  // `evaluator` computes risk batches (DirectRiskEvaluator when null); it must
-  // outlive the planner.
-  explicit RiskRrtStar(RiskEvaluator* evaluator) : evaluator_(evaluator) {}
-
-  absl::StatusOr<PlanResult> Plan(const PlanningProblem& problem, const PlanOptions& options,
-                                  const CancellationToken& cancel,
-                                  const ImprovementCallback& on_improvement) override;
-
-  static const std::vector<PlannerParamInfo>& ParamInfo();
-
- private:
-  RiskEvaluator* evaluator_;
-};
+// RISK_RRT_STAR for MakePlanner and PlannerParams.
+extern const AlgorithmEntry kRiskRrtStarEntry;
 
 }  // namespace riskplan
 

@@ -39,7 +39,7 @@ namespace riskplan::rrt_star {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The planner parameters of RiskRrtStar::ParamInfo(), parsed and checked.
+// The planner parameters of PlannerParams(kRiskRrtStar), parsed and checked.
 struct Params {
   double step_m = 400.0;
   double goal_bias = 0.05;

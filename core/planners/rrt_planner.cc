@@ -27,23 +27,18 @@ double NearestDistance(const Point2& p, const std::vector<Point2>& points) {
   return best;
 }
 
-class Run {
+class Run : private SeedRunBase {
  public:
   Run(const PlanningProblem& problem, const PlanOptions& options, const PlannerParamValues& params,
       RiskEvaluator* evaluator, const CancellationToken& cancel,
       const ImprovementCallback& on_improvement)
-      : problem_(problem),
-        model_(*problem.model),
-        options_(options),
+      : SeedRunBase(problem, options, evaluator, cancel, on_improvement),
         step_m_(params.Get("step_m")),
         clearance_m_(params.Get("clearance_m")),
         goal_bias_(params.Get("goal_bias")),
         keep_growing_(params.Get("keep_growing") != 0.0),
         flight_altitude_m_(params.Get("flight_altitude_m")),
         max_nodes_(static_cast<size_t>(params.Get("max_nodes"))),
-        evaluator_(evaluator),
-        limits_(options.budget, cancel),
-        on_improvement_(on_improvement),
         rng_(options.seed),
         grid_(model_.map().x0(), model_.map().y0(), model_.map().width_m(), model_.map().height_m(),
               std::max(step_m_, 4.0 * model_.map().res())) {}
@@ -58,18 +53,12 @@ class Run {
   // Tries to fly the branch from the start to `vertex`, then to the goal.
   absl::Status TryConnection(int32_t vertex, bool* reported);
 
-  const PlanningProblem& problem_;
-  const RiskModel& model_;
-  const PlanOptions& options_;
   const double step_m_;
   const double clearance_m_;
   const double goal_bias_;
   const bool keep_growing_;
   const double flight_altitude_m_;
   const size_t max_nodes_;
-  RiskEvaluator* evaluator_;
-  RunLimits limits_;
-  const ImprovementCallback& on_improvement_;
   Rng rng_;
   SpatialGrid grid_;
   ObstaclePointSet map_points_;
@@ -198,9 +187,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
   return result;
 }
 
-}  // namespace
-
-const std::vector<PlannerParamInfo>& RrtPlanner::ParamInfo() {
+const std::vector<PlannerParamInfo>& ParamInfo() {
   static const auto* info = new std::vector<PlannerParamInfo>{
       {"step_m", 100.0, 1.0, 5000.0, "length of every new edge (delta), m"},
       {"clearance_m", 20.0, 0.0, 1000.0,
@@ -217,12 +204,8 @@ const std::vector<PlannerParamInfo>& RrtPlanner::ParamInfo() {
   return *info;
 }
 
-absl::StatusOr<PlanResult> RrtPlanner::Plan(const PlanningProblem& problem,
-                                            const PlanOptions& options,
-                                            const CancellationToken& cancel,
-                                            const ImprovementCallback& on_improvement) {
-  return PlanSeedRun<Run>(PlannerAlgorithm::kRrt, ParamInfo(), evaluator_, problem, options, cancel,
-                          on_improvement);
-}
+}  // namespace
+
+constinit const AlgorithmEntry kRrtEntry = {&ParamInfo, &PlanSeedRun<Run, PlannerAlgorithm::kRrt>};
 
 }  // namespace riskplan

@@ -106,7 +106,7 @@ struct SharedTreeProblem {
 // and the seed.
 struct SharedTreeOptions {
   uint64_t seed = 1;
-  // RISK_RRT_STAR's parameters by name (RiskRrtStar::ParamInfo()); max_nodes
+  // RISK_RRT_STAR's parameters by name (PlannerParams(kRiskRrtStar)); max_nodes
   // bounds the one shared tree.
   std::map<std::string, double> params;
   // Keep the final tree (edges as polylines) in the result of the mission

@@ -1,8 +1,10 @@
 // Running a planner and checking what every planner must guarantee, for the
-// tests of RRT, GENETIC and HARMONIC.
+// tests of RRT, GENETIC and HARMONIC (and RunPlan for RISK_RRT_STAR's).
 #ifndef RISKPLAN_TESTS_CORE_SEED_PLANNER_TEST_UTIL_H_
 #define RISKPLAN_TESTS_CORE_SEED_PLANNER_TEST_UTIL_H_
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
@@ -74,6 +76,30 @@ inline void ExpectSoundStream(const RiskModel& model, const Pose& start, const P
   }
   EXPECT_EQ(out.result->best->risk, out.improvements.back().risk);
   EXPECT_EQ(out.result->best->waypoints.size(), out.improvements.back().waypoints.size());
+}
+
+// On testing_maps::WallWithGap: the best trajectory crosses the wall, and
+// only through its gap.
+inline void ExpectThroughTheGap(const RiskModel& model, const Outcome& out) {
+  int in_wall = 0;
+  for (const Pose& q : testing_maps::TrajectorySamples(model, out.result->best->waypoints)) {
+    if (q.x > 950.0 && q.x < 1050.0) {
+      ++in_wall;
+      EXPECT_GT(q.y, testing_maps::kGapLowM);
+      EXPECT_LT(q.y, testing_maps::kGapHighM);
+    }
+  }
+  EXPECT_GT(in_wall, 0);
+}
+
+// On testing_maps::GoalBehindObstacle: the best trajectory goes around the
+// obstacle, at least 300 m off the straight line where it stands.
+inline void ExpectAroundTheObstacle(const RiskModel& model, const Outcome& out) {
+  double widest = 0.0;
+  for (const Pose& q : testing_maps::TrajectorySamples(model, out.result->best->waypoints)) {
+    if (q.x > 700.0 && q.x < 1300.0) widest = std::max(widest, std::abs(q.y - 1000.0));
+  }
+  EXPECT_GE(widest, 300.0);
 }
 
 // Bit-for-bit equality of two results' trajectories.

@@ -13,8 +13,10 @@ namespace {
 
 using testing_maps::kFlightZM;
 using testing_maps::TrajectorySamples;
+using testing_planner::ExpectAroundTheObstacle;
 using testing_planner::ExpectSameTrajectory;
 using testing_planner::ExpectSoundStream;
+using testing_planner::ExpectThroughTheGap;
 using testing_planner::Outcome;
 using testing_planner::RunPlan;
 
@@ -36,15 +38,7 @@ TEST(GeneticPlannerTest, WallWithOneGapIsCrossedThroughTheGap) {
     SCOPED_TRACE(seed);
     const Outcome out = RunPlan(kGenetic, m.model, m.start, m.goal, kGenerations, seed);
     ExpectSoundStream(*m.model, m.start, m.goal, out, /*risk_ordered=*/false);
-    int in_wall = 0;
-    for (const Pose& q : TrajectorySamples(*m.model, out.result->best->waypoints)) {
-      if (q.x > 950.0 && q.x < 1050.0) {
-        ++in_wall;
-        EXPECT_GT(q.y, testing_maps::kGapLowM);
-        EXPECT_LT(q.y, testing_maps::kGapHighM);
-      }
-    }
-    EXPECT_GT(in_wall, 0);
+    ExpectThroughTheGap(*m.model, out);
   }
 }
 
@@ -52,11 +46,7 @@ TEST(GeneticPlannerTest, GoalBehindAnObstacleIsReachedAroundIt) {
   const auto m = testing_maps::GoalBehindObstacle();
   const Outcome out = RunPlan(kGenetic, m.model, m.start, m.goal, kGenerations, 3);
   ExpectSoundStream(*m.model, m.start, m.goal, out, /*risk_ordered=*/false);
-  double widest = 0.0;
-  for (const Pose& q : TrajectorySamples(*m.model, out.result->best->waypoints)) {
-    if (q.x > 700.0 && q.x < 1300.0) widest = std::max(widest, std::abs(q.y - 1000.0));
-  }
-  EXPECT_GE(widest, 300.0);
+  ExpectAroundTheObstacle(*m.model, out);
 }
 
 // A dense block on the straight line and sparse ground around it: with its

@@ -13,8 +13,10 @@ namespace {
 
 using testing_maps::kFlightZM;
 using testing_maps::TrajectorySamples;
+using testing_planner::ExpectAroundTheObstacle;
 using testing_planner::ExpectSameTrajectory;
 using testing_planner::ExpectSoundStream;
+using testing_planner::ExpectThroughTheGap;
 using testing_planner::Outcome;
 using testing_planner::RunPlan;
 
@@ -115,15 +117,7 @@ TEST(HarmonicPlannerTest, WallWithOneGapIsCrossedThroughTheGap) {
     const Outcome out =
         RunPlan(kHarmonic, m.model, m.start, m.goal, 100000, 1, {{"cell_factor", factor}});
     ExpectSoundStream(*m.model, m.start, m.goal, out);
-    int in_wall = 0;
-    for (const Pose& q : TrajectorySamples(*m.model, out.result->best->waypoints)) {
-      if (q.x > 950.0 && q.x < 1050.0) {
-        ++in_wall;
-        EXPECT_GT(q.y, testing_maps::kGapLowM);
-        EXPECT_LT(q.y, testing_maps::kGapHighM);
-      }
-    }
-    EXPECT_GT(in_wall, 0);
+    ExpectThroughTheGap(*m.model, out);
   }
 }
 
@@ -131,11 +125,7 @@ TEST(HarmonicPlannerTest, GoalBehindAnObstacleIsReachedAroundIt) {
   const auto m = testing_maps::GoalBehindObstacle();
   const Outcome out = RunPlan(kHarmonic, m.model, m.start, m.goal, 100000, 1);
   ExpectSoundStream(*m.model, m.start, m.goal, out);
-  double widest = 0.0;
-  for (const Pose& q : TrajectorySamples(*m.model, out.result->best->waypoints)) {
-    if (q.x > 700.0 && q.x < 1300.0) widest = std::max(widest, std::abs(q.y - 1000.0));
-  }
-  EXPECT_GE(widest, 300.0);
+  ExpectAroundTheObstacle(*m.model, out);
 }
 
 // A wall with two gaps; the potential converges and the trajectory takes the

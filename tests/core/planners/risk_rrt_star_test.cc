@@ -7,6 +7,7 @@
 #include "gtest/gtest.h"
 #include "tests/core/obstacle_test_maps.h"
 #include "tests/core/planner_test_util.h"
+#include "tests/core/seed_planner_test_util.h"
 #include "tests/sweep.h"
 
 namespace riskplan {
@@ -14,31 +15,17 @@ namespace {
 
 using testing_planner::DemoCityModel;
 using testing_planner::FlyablePose;
+using testing_planner::Outcome;
 using testing_planner::ReEvaluate;
 using testing_planner::Scenario;
 
 constexpr int64_t kIterations = 2500;
 
-struct Outcome {
-  absl::StatusOr<PlanResult> result;
-  std::vector<PlanImprovement> improvements;
-};
-
 Outcome RunPlanner(const std::shared_ptr<const RiskModel>& model, const Pose& start,
                    const Pose& goal, int64_t iterations, uint64_t seed,
                    std::map<std::string, double> params = {}) {
-  Outcome out;
-  auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar);
-  EXPECT_TRUE(planner.ok());
-  PlanOptions options;
-  options.budget.max_time_s = 0.0;
-  options.budget.max_iterations = iterations;
-  options.seed = seed;
-  options.params = std::move(params);
-  CancellationToken cancel;
-  out.result = (*planner)->Plan({model, start, goal}, options, cancel,
-                                [&](const PlanImprovement& i) { out.improvements.push_back(i); });
-  return out;
+  return testing_planner::RunPlan(PlannerAlgorithm::kRiskRrtStar, model, start, goal, iterations,
+                                  seed, std::move(params));
 }
 
 class RiskRrtStarScenarioTest : public testing_planner::DemoCityPlannerTest {};

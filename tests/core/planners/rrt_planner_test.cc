@@ -16,8 +16,10 @@ namespace {
 
 using testing_maps::kFlightZM;
 using testing_maps::TrajectorySamples;
+using testing_planner::ExpectAroundTheObstacle;
 using testing_planner::ExpectSameTrajectory;
 using testing_planner::ExpectSoundStream;
+using testing_planner::ExpectThroughTheGap;
 using testing_planner::Outcome;
 using testing_planner::RunPlan;
 
@@ -45,15 +47,7 @@ TEST(RrtPlannerTest, WallWithOneGapIsCrossedThroughTheGap) {
     SCOPED_TRACE(seed);
     const Outcome out = RunPlan(kRrt, m.model, m.start, m.goal, 20000, seed);
     ExpectSoundStream(*m.model, m.start, m.goal, out);
-    int in_wall = 0;
-    for (const Pose& q : TrajectorySamples(*m.model, out.result->best->waypoints)) {
-      if (q.x > 950.0 && q.x < 1050.0) {
-        ++in_wall;
-        EXPECT_GT(q.y, testing_maps::kGapLowM);
-        EXPECT_LT(q.y, testing_maps::kGapHighM);
-      }
-    }
-    EXPECT_GT(in_wall, 0);
+    ExpectThroughTheGap(*m.model, out);
   }
 }
 
@@ -61,11 +55,7 @@ TEST(RrtPlannerTest, GoalBehindAnObstacleIsReachedAroundIt) {
   const auto m = testing_maps::GoalBehindObstacle();
   const Outcome out = RunPlan(kRrt, m.model, m.start, m.goal, 20000, 4);
   ExpectSoundStream(*m.model, m.start, m.goal, out);
-  double widest = 0.0;
-  for (const Pose& q : TrajectorySamples(*m.model, out.result->best->waypoints)) {
-    if (q.x > 700.0 && q.x < 1300.0) widest = std::max(widest, std::abs(q.y - 1000.0));
-  }
-  EXPECT_GE(widest, 300.0);
+  ExpectAroundTheObstacle(*m.model, out);
   EXPECT_GT(out.result->best->length_m, 1.1 * Distance2D(m.start, m.goal));
 }
 

@@ -134,6 +134,17 @@ TEST(EdgeSampleBoundTest, EveryPlannerRefusesAPlanBeyondIt) {
   }
 }
 
+// Plans the first demo-city scenario with `algorithm`, without a callback.
+absl::StatusOr<PlanResult> PlanFirstScenario(PlannerAlgorithm algorithm, const PlanOptions& options,
+                                             const CancellationToken& cancel) {
+  const auto model = DemoCityModel();
+  const Scenario sc = DemoCityScenarios(*model).front();
+  auto planner = MakePlanner(algorithm);
+  EXPECT_TRUE(planner.ok());
+  if (!planner.ok()) return planner.status();
+  return (*planner)->Plan({model, sc.start, sc.goal}, options, cancel, nullptr);
+}
+
 // A time budget that has already ended when the run starts stops it at the
 // first poll inside its first step: RISK_RRT_STAR adds no node (its guide's
 // first risk batch is not evaluated), GENETIC evaluates no chromosome. Without
@@ -141,16 +152,12 @@ TEST(EdgeSampleBoundTest, EveryPlannerRefusesAPlanBeyondIt) {
 // generation) before looking at the clock. Deterministic: the deadline has
 // passed whatever the machine's speed.
 TEST(RunStopTest, AnEndedBudgetStopsTheRunInsideItsFirstStep) {
-  const auto model = DemoCityModel();
-  const Scenario sc = DemoCityScenarios(*model).front();
   for (PlannerAlgorithm algorithm : {PlannerAlgorithm::kRiskRrtStar, PlannerAlgorithm::kGenetic}) {
     SCOPED_TRACE(PlannerAlgorithmName(algorithm));
-    auto planner = MakePlanner(algorithm);
-    ASSERT_TRUE(planner.ok());
     PlanOptions options;
     options.budget.max_time_s = 1e-9;
     CancellationToken cancel;
-    auto result = (*planner)->Plan({model, sc.start, sc.goal}, options, cancel, nullptr);
+    auto result = PlanFirstScenario(algorithm, options, cancel);
     ASSERT_TRUE(result.ok()) << result.status();
     EXPECT_EQ(result->reason, StopReason::kNoSolution);
     EXPECT_FALSE(result->best.has_value());
@@ -162,18 +169,14 @@ TEST(RunStopTest, AnEndedBudgetStopsTheRunInsideItsFirstStep) {
 
 // The same for a token cancelled before the run: the end reason is CANCELLED.
 TEST(RunStopTest, ACancelledTokenStopsTheRunInsideItsFirstStep) {
-  const auto model = DemoCityModel();
-  const Scenario sc = DemoCityScenarios(*model).front();
   for (PlannerAlgorithm algorithm : {PlannerAlgorithm::kRiskRrtStar, PlannerAlgorithm::kGenetic}) {
     SCOPED_TRACE(PlannerAlgorithmName(algorithm));
-    auto planner = MakePlanner(algorithm);
-    ASSERT_TRUE(planner.ok());
     PlanOptions options;
     options.budget.max_iterations = 1000;
     options.budget.max_time_s = 0.0;
     CancellationToken cancel;
     cancel.Cancel();
-    auto result = (*planner)->Plan({model, sc.start, sc.goal}, options, cancel, nullptr);
+    auto result = PlanFirstScenario(algorithm, options, cancel);
     ASSERT_TRUE(result.ok()) << result.status();
     EXPECT_EQ(result->reason, StopReason::kCancelled);
     EXPECT_EQ(result->tree_size, algorithm == PlannerAlgorithm::kRiskRrtStar ? 2 : 0);

@@ -130,6 +130,66 @@ void Guarded(Call* call, const char* what, const std::string& map, Body body) {
   }
 }
 
+// The length of a trajectory's pieces, once each has a finite one and the
+// sum of their samples passed CheckSampleCount. `waypoints`: the pieces came
+// from EvaluateSpec.waypoints (else from its polyline), for the messages.
+absl::StatusOr<double> CheckedLength(const std::vector<TrajectoryPiece>& pieces, bool waypoints,
+                                     double sample_step_m, bool include_samples,
+                                     const RequestLimits& limits) {
+  int64_t samples = 0;
+  double length_m = 0.0;
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    const TrajectoryPiece& piece = pieces[i];
+    // Finite coordinates far apart overflow the geometry: such a piece has
+    // no length to report, let alone samples.
+    if (!std::isfinite(piece.Length())) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: the piece from point %d to point %d has length %g m; the points are too far apart "
+          "to be flown",
+          waypoints ? "waypoints.poses" : "polyline.points", i, i + 1, piece.Length()));
+    }
+    // Saturates at kMaxPartCount, so no sum of counts can wrap past the limit.
+    samples += std::min(PartCount(piece.Length(), sample_step_m), kMaxPartCount - samples);
+    length_m += piece.Length();
+  }
+  if (absl::Status s = CheckSampleCount(samples, length_m, sample_step_m, include_samples, limits);
+      !s.ok()) {
+    return s;
+  }
+  return length_m;
+}
+
+// EvaluateRiskResponse.path: the pieces sampled every spec.path_spacing_m,
+// with each pose's configuration risk through `evaluator` (the one that
+// evaluated the trajectory), in batches of kEvaluationBatch so that `stop`
+// is polled between them.
+absl::Status AddPath(const RiskModel& model, const std::vector<TrajectoryPiece>& pieces,
+                     double length_m, const EvaluateSpec& spec, const RequestLimits& limits,
+                     RiskEvaluator& evaluator, const StopCondition& stop,
+                     v1::EvaluateRiskResponse* response) {
+  // Counted before it is sampled: the path's poses, their risks and their
+  // WGS84 forms are all bounded by --max_response_samples.
+  if (absl::Status s = CheckPathCount(length_m, spec.path_spacing_m, limits); !s.ok()) return s;
+  const std::vector<PathPose> path =
+      SamplePath(pieces, spec.path_spacing_m, static_cast<size_t>(limits.max_response_samples));
+  std::vector<Pose> poses;
+  poses.reserve(path.size());
+  for (const PathPose& p : path) poses.push_back(p.pose);
+  std::vector<ConfigurationRisk> risks(poses.size());
+  for (size_t begin = 0; begin < poses.size(); begin += kEvaluationBatch) {
+    if (stop.Reached()) return absl::CancelledError("the evaluation was stopped");
+    const size_t n = std::min(kEvaluationBatch, poses.size() - begin);
+    if (absl::Status s =
+            evaluator.EvaluateBatch(model, std::span<const Pose>(poses).subspan(begin, n),
+                                    std::span<ConfigurationRisk>(risks).subspan(begin, n));
+        !s.ok()) {
+      return s;
+    }
+  }
+  PathToProto(path, risks, *spec.map, spec.frame.get(), response);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 // On the evaluation pool: building a model and evaluating a long trajectory
@@ -146,35 +206,18 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
       spec.polyline.empty() ? PiecesFromWaypoints(spec.waypoints, params, limits.max_waypoints)
                             : PiecesFromPolyline(spec.polyline, limits.max_waypoints);
   if (!pieces.ok()) return pieces.status();
-  int64_t samples = 0;
-  double length_m = 0.0;
-  for (size_t i = 0; i < pieces->size(); ++i) {
-    const TrajectoryPiece& piece = (*pieces)[i];
-    // Finite coordinates far apart overflow the geometry: such a piece has
-    // no length to report, let alone samples.
-    if (!std::isfinite(piece.Length())) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s: the piece from point %d to point %d has length %g m; the points are too far apart "
-          "to be flown",
-          spec.polyline.empty() ? "waypoints.poses" : "polyline.points", i, i + 1, piece.Length()));
-    }
-    // Saturates at kMaxPartCount, so no sum of counts can wrap past the limit.
-    samples += std::min(PartCount(piece.Length(), params.sample_step_m), kMaxPartCount - samples);
-    length_m += piece.Length();
-  }
-  if (absl::Status s =
-          CheckSampleCount(samples, length_m, params.sample_step_m, spec.include_samples, limits);
-      !s.ok()) {
-    return s;
-  }
+  absl::StatusOr<double> length_m = CheckedLength(
+      *pieces, spec.polyline.empty(), params.sample_step_m, spec.include_samples, limits);
+  if (!length_m.ok()) return length_m.status();
   // Without an engine: accel's exact kernel on this thread (RiskModel::Evaluate bit for bit).
   // With one, a batch stops waiting for boards once `stop` is reached (its
   // remaining chunks are computed here, RiskEngine::Evaluate).
-  std::unique_ptr<RiskEvaluator> evaluator =
+  std::unique_ptr<RiskEvaluator> engine_evaluator =
       engine != nullptr ? engine->NewEvaluator(stop) : nullptr;
+  RiskEvaluator* evaluator =
+      engine_evaluator != nullptr ? engine_evaluator.get() : &accel::ThreadKernelEvaluator();
   absl::StatusOr<TrajectoryEvaluation> evaluation = EvaluateTrajectory(
-      **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples},
-      evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator(), stop);
+      **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples}, evaluator, stop);
   if (!evaluation.ok()) return evaluation.status();
   // Every reported number is finite, or the request is refused: the
   // parameter ranges are meant to guarantee it, and this says so if not.
@@ -193,30 +236,7 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
                        response->mutable_two_tier());
   }
   if (spec.path_spacing_m > 0.0) {
-    // Counted before it is sampled: the path's poses, their risks and their
-    // WGS84 forms are all bounded by --max_response_samples.
-    if (absl::Status s = CheckPathCount(length_m, spec.path_spacing_m, limits); !s.ok()) return s;
-    const std::vector<PathPose> path =
-        SamplePath(*pieces, spec.path_spacing_m, static_cast<size_t>(limits.max_response_samples));
-    std::vector<Pose> poses;
-    poses.reserve(path.size());
-    for (const PathPose& p : path) poses.push_back(p.pose);
-    // The path's configuration risks through the same evaluator, in batches
-    // of kEvaluationBatch so that the stop is polled between them.
-    std::vector<ConfigurationRisk> risks(poses.size());
-    RiskEvaluator* risk_evaluator =
-        evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator();
-    for (size_t begin = 0; begin < poses.size(); begin += kEvaluationBatch) {
-      if (stop.Reached()) return absl::CancelledError("the evaluation was stopped");
-      const size_t n = std::min(kEvaluationBatch, poses.size() - begin);
-      if (absl::Status s =
-              risk_evaluator->EvaluateBatch(**model, std::span<const Pose>(poses).subspan(begin, n),
-                                            std::span<ConfigurationRisk>(risks).subspan(begin, n));
-          !s.ok()) {
-        return s;
-      }
-    }
-    PathToProto(path, risks, *spec.map, spec.frame.get(), response);
+    return AddPath(**model, *pieces, *length_m, spec, limits, *evaluator, stop, response);
   }
   return absl::OkStatus();
 }

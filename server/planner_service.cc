@@ -17,8 +17,8 @@
 #include "server/api/message_codec.h"
 #include "server/api/proto_convert.h"
 #include "server/api/risk_layer_request.h"
-#include "server/observability/rpc_log.h"
 #include "server/api/status_util.h"
+#include "server/observability/rpc_log.h"
 
 namespace riskplan::server {
 namespace {
@@ -130,6 +130,66 @@ void Guarded(Call* call, const char* what, const std::string& map, Body body) {
   }
 }
 
+// The length of a trajectory's pieces, once each has a finite one and the
+// sum of their samples passed CheckSampleCount. `waypoints`: the pieces came
+// from EvaluateSpec.waypoints (else from its polyline), for the messages.
+absl::StatusOr<double> CheckedLength(const std::vector<TrajectoryPiece>& pieces, bool waypoints,
+                                     double sample_step_m, bool include_samples,
+                                     const RequestLimits& limits) {
+  int64_t samples = 0;
+  double length_m = 0.0;
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    const TrajectoryPiece& piece = pieces[i];
+    // Finite coordinates far apart overflow the geometry: such a piece has
+    // no length to report, let alone samples.
+    if (!std::isfinite(piece.Length())) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: the piece from point %d to point %d has length %g m; the points are too far apart "
+          "to be flown",
+          waypoints ? "waypoints.poses" : "polyline.points", i, i + 1, piece.Length()));
+    }
+    // Saturates at kMaxPartCount, so no sum of counts can wrap past the limit.
+    samples += std::min(PartCount(piece.Length(), sample_step_m), kMaxPartCount - samples);
+    length_m += piece.Length();
+  }
+  if (absl::Status s = CheckSampleCount(samples, length_m, sample_step_m, include_samples, limits);
+      !s.ok()) {
+    return s;
+  }
+  return length_m;
+}
+
+// EvaluateRiskResponse.path: the pieces sampled every spec.path_spacing_m,
+// with each pose's configuration risk through `evaluator` (the one that
+// evaluated the trajectory), in batches of kEvaluationBatch so that `stop`
+// is polled between them.
+absl::Status AddPath(const RiskModel& model, const std::vector<TrajectoryPiece>& pieces,
+                     double length_m, const EvaluateSpec& spec, const RequestLimits& limits,
+                     RiskEvaluator& evaluator, const StopCondition& stop,
+                     v1::EvaluateRiskResponse* response) {
+  // Counted before it is sampled: the path's poses, their risks and their
+  // WGS84 forms are all bounded by --max_response_samples.
+  if (absl::Status s = CheckPathCount(length_m, spec.path_spacing_m, limits); !s.ok()) return s;
+  const std::vector<PathPose> path =
+      SamplePath(pieces, spec.path_spacing_m, static_cast<size_t>(limits.max_response_samples));
+  std::vector<Pose> poses;
+  poses.reserve(path.size());
+  for (const PathPose& p : path) poses.push_back(p.pose);
+  std::vector<ConfigurationRisk> risks(poses.size());
+  for (size_t begin = 0; begin < poses.size(); begin += kEvaluationBatch) {
+    if (stop.Reached()) return absl::CancelledError("the evaluation was stopped");
+    const size_t n = std::min(kEvaluationBatch, poses.size() - begin);
+    if (absl::Status s =
+            evaluator.EvaluateBatch(model, std::span<const Pose>(poses).subspan(begin, n),
+                                    std::span<ConfigurationRisk>(risks).subspan(begin, n));
+        !s.ok()) {
+      return s;
+    }
+  }
+  PathToProto(path, risks, *spec.map, spec.frame.get(), response);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 // On the evaluation pool: building a model and evaluating a long trajectory
@@ -146,35 +206,18 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
       spec.polyline.empty() ? PiecesFromWaypoints(spec.waypoints, params, limits.max_waypoints)
                             : PiecesFromPolyline(spec.polyline, limits.max_waypoints);
   if (!pieces.ok()) return pieces.status();
-  int64_t samples = 0;
-  double length_m = 0.0;
-  for (size_t i = 0; i < pieces->size(); ++i) {
-    const TrajectoryPiece& piece = (*pieces)[i];
-    // Finite coordinates far apart overflow the geometry: such a piece has
-    // no length to report, let alone samples.
-    if (!std::isfinite(piece.Length())) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s: the piece from point %d to point %d has length %g m; the points are too far apart "
-          "to be flown",
-          spec.polyline.empty() ? "waypoints.poses" : "polyline.points", i, i + 1, piece.Length()));
-    }
-    // Saturates at kMaxPartCount, so no sum of counts can wrap past the limit.
-    samples += std::min(PartCount(piece.Length(), params.sample_step_m), kMaxPartCount - samples);
-    length_m += piece.Length();
-  }
-  if (absl::Status s =
-          CheckSampleCount(samples, length_m, params.sample_step_m, spec.include_samples, limits);
-      !s.ok()) {
-    return s;
-  }
+  absl::StatusOr<double> length_m = CheckedLength(
+      *pieces, spec.polyline.empty(), params.sample_step_m, spec.include_samples, limits);
+  if (!length_m.ok()) return length_m.status();
   // Without an engine: accel's exact kernel on this thread (RiskModel::Evaluate bit for bit).
   // With one, a batch stops waiting for boards once `stop` is reached (its
   // remaining chunks are computed here, RiskEngine::Evaluate).
-  std::unique_ptr<RiskEvaluator> evaluator =
+  std::unique_ptr<RiskEvaluator> engine_evaluator =
       engine != nullptr ? engine->NewEvaluator(stop) : nullptr;
+  RiskEvaluator* evaluator =
+      engine_evaluator != nullptr ? engine_evaluator.get() : &accel::ThreadKernelEvaluator();
   absl::StatusOr<TrajectoryEvaluation> evaluation = EvaluateTrajectory(
-      **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples},
-      evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator(), stop);
+      **model, *pieces, EvaluationOptions{.keep_samples = spec.include_samples}, evaluator, stop);
   if (!evaluation.ok()) return evaluation.status();
   // Every reported number is finite, or the request is refused: the
   // parameter ranges are meant to guarantee it, and this says so if not.
@@ -193,30 +236,7 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
                        response->mutable_two_tier());
   }
   if (spec.path_spacing_m > 0.0) {
-    // Counted before it is sampled: the path's poses, their risks and their
-    // WGS84 forms are all bounded by --max_response_samples.
-    if (absl::Status s = CheckPathCount(length_m, spec.path_spacing_m, limits); !s.ok()) return s;
-    const std::vector<PathPose> path =
-        SamplePath(*pieces, spec.path_spacing_m, static_cast<size_t>(limits.max_response_samples));
-    std::vector<Pose> poses;
-    poses.reserve(path.size());
-    for (const PathPose& p : path) poses.push_back(p.pose);
-    // The path's configuration risks through the same evaluator, in batches
-    // of kEvaluationBatch so that the stop is polled between them.
-    std::vector<ConfigurationRisk> risks(poses.size());
-    RiskEvaluator* risk_evaluator =
-        evaluator != nullptr ? evaluator.get() : &accel::ThreadKernelEvaluator();
-    for (size_t begin = 0; begin < poses.size(); begin += kEvaluationBatch) {
-      if (stop.Reached()) return absl::CancelledError("the evaluation was stopped");
-      const size_t n = std::min(kEvaluationBatch, poses.size() - begin);
-      if (absl::Status s =
-              risk_evaluator->EvaluateBatch(**model, std::span<const Pose>(poses).subspan(begin, n),
-                                            std::span<ConfigurationRisk>(risks).subspan(begin, n));
-          !s.ok()) {
-        return s;
-      }
-    }
-    PathToProto(path, risks, *spec.map, spec.frame.get(), response);
+    return AddPath(**model, *pieces, *length_m, spec, limits, *evaluator, stop, response);
   }
   return absl::OkStatus();
 }
@@ -399,179 +419,161 @@ grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanFleet(
   return call.get();
 }
 
-grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerContext* ctx,
-                                                       const grpc::ByteBuffer* raw_request,
-                                                       grpc::ByteBuffer* raw_response) {
-  auto* call = new UnaryCall<v1::EvaluateRiskResponse>("EvaluateRisk", ctx, &metrics_, &open_calls_,
-                                                       raw_response);
-  Guarded(call, "EvaluateRisk", "", [&] {
-    if (!Authorize(*authorizer_, ctx, "EvaluateRisk", call)) return;
+template <typename Request, typename Response, typename Serve>
+grpc::ServerUnaryReactor* PlannerService::ServeUnary(const char* method,
+                                                     grpc::CallbackServerContext* ctx,
+                                                     const grpc::ByteBuffer* raw_request,
+                                                     grpc::ByteBuffer* raw_response, Serve serve) {
+  auto* call = new UnaryCall<Response>(method, ctx, &metrics_, &open_calls_, raw_response);
+  Guarded(call, method, "", [&] {
+    // The caller's token and role first: an unauthorised caller learns
+    // nothing of the server's state, not even that it drains.
+    if (!Authorize(*authorizer_, ctx, method, call)) return;
     if (draining()) {
       call->Complete(kDraining);
       return;
     }
-    v1::EvaluateRiskRequest request;
+    Request request;
     if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
       call->Complete(ToGrpcStatus(s));
       return;
     }
-    absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(request, maps_, options_.limits);
-    if (!spec.ok()) {
-      call->Complete(ToGrpcStatus(spec.status()), request.map());
-      return;
-    }
-    // `call` (and its response) stay valid until the call is finished, and
-    // `this` until every queued task has run (the pools are destroyed first).
-    const std::string map = request.map();
-    const bool queued = eval_pool_.TrySubmit([this, call, spec = *std::move(spec)] {
-      Guarded(call, "EvaluateRisk", spec.map->name(), [&] {
-        const StopCondition stop(&call->cancelled(), &stop_evaluations_);
-        absl::Status status = RunEvaluation(models_, *checkers_, options_.engine, options_.limits,
-                                            spec, stop, call->response());
-        // Stopped: by the drain (the client may still be there to be told),
-        // or by the client itself (who no longer listens).
-        if (absl::IsCancelled(status) && stop_evaluations_.IsCancelled()) {
-          call->Complete(kDraining, spec.map->name());
-          return;
-        }
-        call->Complete(ToGrpcStatus(status), spec.map->name());
-      });
-    });
-    if (!queued) {
-      call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                  absl::StrFormat("riskplan-server has %d evaluations waiting "
-                                                  "(--max_queued_evals); retry later",
-                                                  options_.max_queued_evals)),
-                     map);
-    }
+    serve(request, call);
   });
   return call;
+}
+
+template <typename Call, typename Work>
+bool PlannerService::QueueEvaluation(Call* call, const char* method, std::string map, Work work) {
+  // `call` (and its response) stay valid until the call is finished, and
+  // `this` until every queued task has run (the pools are destroyed first).
+  return eval_pool_.TrySubmit([this, call, method, map = std::move(map), work = std::move(work)] {
+    Guarded(call, method, map, [&] {
+      const StopCondition stop(&call->cancelled(), &stop_evaluations_);
+      absl::Status status = work(stop, call->response());
+      // Stopped: by the drain (the client may still be there to be told),
+      // or by the client itself (who no longer listens).
+      if (absl::IsCancelled(status) && stop_evaluations_.IsCancelled()) {
+        call->Complete(kDraining, map);
+        return;
+      }
+      call->Complete(ToGrpcStatus(status), map);
+    });
+  });
+}
+
+template <typename Call, typename Spec, typename Work>
+void PlannerService::QueueValidated(Call* call, const char* method, const std::string& request_map,
+                                    absl::StatusOr<Spec> spec, Work work) {
+  if (!spec.ok()) {
+    call->Complete(ToGrpcStatus(spec.status()), request_map);
+    return;
+  }
+  std::string map = spec->map->name();
+  const bool queued = QueueEvaluation(
+      call, method, std::move(map),
+      [spec = *std::move(spec), work = std::move(work)](const StopCondition& stop, auto* response) {
+        return work(spec, stop, response);
+      });
+  if (!queued) call->Complete(EvaluationsWaiting(), request_map);
+}
+
+grpc::Status PlannerService::EvaluationsWaiting() const {
+  return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                      absl::StrFormat("riskplan-server has %d evaluations waiting "
+                                      "(--max_queued_evals); retry later",
+                                      options_.max_queued_evals));
+}
+
+grpc::ServerUnaryReactor* PlannerService::EvaluateRisk(grpc::CallbackServerContext* ctx,
+                                                       const grpc::ByteBuffer* raw_request,
+                                                       grpc::ByteBuffer* raw_response) {
+  return ServeUnary<v1::EvaluateRiskRequest, v1::EvaluateRiskResponse>(
+      "EvaluateRisk", ctx, raw_request, raw_response,
+      [this](const v1::EvaluateRiskRequest& request, auto* call) {
+        QueueValidated(call, "EvaluateRisk", request.map(),
+                       ValidateEvaluateRequest(request, maps_, options_.limits),
+                       [this](const EvaluateSpec& spec, const StopCondition& stop,
+                              v1::EvaluateRiskResponse* response) {
+                         return RunEvaluation(models_, *checkers_, options_.engine, options_.limits,
+                                              spec, stop, response);
+                       });
+      });
 }
 
 grpc::ServerUnaryReactor* PlannerService::ListMaps(grpc::CallbackServerContext* ctx,
                                                    const grpc::ByteBuffer* raw_request,
                                                    grpc::ByteBuffer* raw_response) {
-  auto* call =
-      new UnaryCall<v1::ListMapsResponse>("ListMaps", ctx, &metrics_, &open_calls_, raw_response);
-  Guarded(call, "ListMaps", "", [&] {
-    if (!Authorize(*authorizer_, ctx, "ListMaps", call)) return;
-    if (draining()) {
-      call->Complete(kDraining);
-      return;
-    }
-    v1::ListMapsRequest request;
-    if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
-      call->Complete(ToGrpcStatus(s));
-      return;
-    }
-    *call->response() = map_list_;
-    call->Complete(grpc::Status::OK);
-  });
-  return call;
+  return ServeUnary<v1::ListMapsRequest, v1::ListMapsResponse>(
+      "ListMaps", ctx, raw_request, raw_response, [this](const v1::ListMapsRequest&, auto* call) {
+        *call->response() = map_list_;
+        call->Complete(grpc::Status::OK);
+      });
 }
 
 grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContext* ctx,
                                                       const grpc::ByteBuffer* raw_request,
                                                       grpc::ByteBuffer* raw_response) {
-  auto* call = new UnaryCall<v1::GetMapLayerResponse>("GetMapLayer", ctx, &metrics_, &open_calls_,
-                                                      raw_response);
-  Guarded(call, "GetMapLayer", "", [&] {
-    if (!Authorize(*authorizer_, ctx, "GetMapLayer", call)) return;
-    if (draining()) {
-      call->Complete(kDraining);
-      return;
-    }
-    v1::GetMapLayerRequest request;
-    if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
-      call->Complete(ToGrpcStatus(s));
-      return;
-    }
-    absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(maps_, request.map());
-    if (!map.ok()) {
-      call->Complete(ToGrpcStatus(map.status()), request.map());
-      return;
-    }
-    const v1::MapLayer layer = request.layer();
-    if (layer != v1::POPULATION_DENSITY && layer != v1::SHELTER && layer != v1::TERRAIN &&
-        layer != v1::NO_FLY) {
-      call->Complete(
-          grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                       absl::StrFormat("layer has value %d; it must be POPULATION_DENSITY (1), "
-                                       "SHELTER (2), TERRAIN (3) or NO_FLY (4)",
-                                       static_cast<int>(layer))),
-          request.map());
-      return;
-    }
-    // Bounded so that the response stays at most 4096 x 4096 floats (64 MiB,
-    // the server's send limit); 512 by default, enough for a picture.
-    int max_side = request.max_side_cells();
-    if (max_side == 0) max_side = 512;
-    if (max_side < 1 || max_side > 4096) {
-      call->Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                                  absl::StrFormat("max_side_cells has value %d; it must be in "
-                                                  "[1, 4096] (0: 512)",
-                                                  request.max_side_cells())),
-                     request.map());
-      return;
-    }
-    const bool queued = eval_pool_.TrySubmit([call, map = *map, layer, max_side] {
-      Guarded(call, "GetMapLayer", map->name(), [&] {
-        *call->response() = DownsampleLayer(*map, layer, max_side);
-        call->Complete(grpc::Status::OK, map->name());
+  return ServeUnary<v1::GetMapLayerRequest, v1::GetMapLayerResponse>(
+      "GetMapLayer", ctx, raw_request, raw_response,
+      [this](const v1::GetMapLayerRequest& request, auto* call) {
+        absl::StatusOr<std::shared_ptr<const RiskMap>> map = FindMap(maps_, request.map());
+        if (!map.ok()) {
+          call->Complete(ToGrpcStatus(map.status()), request.map());
+          return;
+        }
+        const v1::MapLayer layer = request.layer();
+        if (layer != v1::POPULATION_DENSITY && layer != v1::SHELTER && layer != v1::TERRAIN &&
+            layer != v1::NO_FLY) {
+          call->Complete(
+              grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                           absl::StrFormat("layer has value %d; it must be POPULATION_DENSITY (1), "
+                                           "SHELTER (2), TERRAIN (3) or NO_FLY (4)",
+                                           static_cast<int>(layer))),
+              request.map());
+          return;
+        }
+        // Bounded so that the response stays at most 4096 x 4096 floats (64
+        // MiB, the server's send limit); 512 by default, enough for a picture.
+        int max_side = request.max_side_cells();
+        if (max_side == 0) max_side = 512;
+        if (max_side < 1 || max_side > 4096) {
+          call->Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                      absl::StrFormat("max_side_cells has value %d; it must be in "
+                                                      "[1, 4096] (0: 512)",
+                                                      request.max_side_cells())),
+                         request.map());
+          return;
+        }
+        // Downsampling is not stopped (it reads the layer once, quickly).
+        const bool queued = QueueEvaluation(
+            call, "GetMapLayer", (*map)->name(),
+            [map = *map, layer, max_side](const StopCondition&, v1::GetMapLayerResponse* response) {
+              *response = DownsampleLayer(*map, layer, max_side);
+              return absl::OkStatus();
+            });
+        if (!queued) {
+          call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                      "riskplan-server's evaluation queue is full; retry later"),
+                         request.map());
+        }
       });
-    });
-    if (!queued) {
-      call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                  "riskplan-server's evaluation queue is full; retry later"),
-                     request.map());
-    }
-  });
-  return call;
 }
 
 grpc::ServerUnaryReactor* PlannerService::GetRiskLayer(grpc::CallbackServerContext* ctx,
                                                        const grpc::ByteBuffer* raw_request,
                                                        grpc::ByteBuffer* raw_response) {
-  auto* call = new UnaryCall<v1::GetRiskLayerResponse>("GetRiskLayer", ctx, &metrics_, &open_calls_,
-                                                       raw_response);
-  Guarded(call, "GetRiskLayer", "", [&] {
-    if (!Authorize(*authorizer_, ctx, "GetRiskLayer", call)) return;
-    if (draining()) {
-      call->Complete(kDraining);
-      return;
-    }
-    v1::GetRiskLayerRequest request;
-    if (absl::Status s = ParseRequest(*raw_request, &request); !s.ok()) {
-      call->Complete(ToGrpcStatus(s));
-      return;
-    }
-    // Every refusal, the layer's size above all, comes before the queue.
-    absl::StatusOr<RiskLayerSpec> spec = ValidateRiskLayerRequest(request, maps_, options_.limits);
-    if (!spec.ok()) {
-      call->Complete(ToGrpcStatus(spec.status()), request.map());
-      return;
-    }
-    const std::string map = request.map();
-    const bool queued = eval_pool_.TrySubmit([this, call, spec = *std::move(spec)] {
-      Guarded(call, "GetRiskLayer", spec.map->name(), [&] {
-        const StopCondition stop(&call->cancelled(), &stop_evaluations_);
-        absl::Status status = ComputeLayer(models_, spec, stop, call->response());
-        if (absl::IsCancelled(status) && stop_evaluations_.IsCancelled()) {
-          call->Complete(kDraining, spec.map->name());
-          return;
-        }
-        call->Complete(ToGrpcStatus(status), spec.map->name());
+  return ServeUnary<v1::GetRiskLayerRequest, v1::GetRiskLayerResponse>(
+      "GetRiskLayer", ctx, raw_request, raw_response,
+      [this](const v1::GetRiskLayerRequest& request, auto* call) {
+        // Every refusal, the layer's size above all, comes before the queue.
+        QueueValidated(call, "GetRiskLayer", request.map(),
+                       ValidateRiskLayerRequest(request, maps_, options_.limits),
+                       [this](const RiskLayerSpec& spec, const StopCondition& stop,
+                              v1::GetRiskLayerResponse* response) {
+                         return ComputeLayer(models_, spec, stop, response);
+                       });
       });
-    });
-    if (!queued) {
-      call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                  absl::StrFormat("riskplan-server has %d evaluations waiting "
-                                                  "(--max_queued_evals); retry later",
-                                                  options_.max_queued_evals)),
-                     map);
-    }
-  });
-  return call;
 }
 
 grpc::ServerUnaryReactor* PlannerService::Ping(grpc::CallbackServerContext* ctx,
@@ -579,14 +581,9 @@ grpc::ServerUnaryReactor* PlannerService::Ping(grpc::CallbackServerContext* ctx,
                                                grpc::ByteBuffer* raw_response) {
   // Answered inline: there is nothing to compute, and a Ping that queued
   // behind evaluations would say nothing about the server's liveness.
-  auto* call = new UnaryCall<v1::PingResponse>("Ping", ctx, &metrics_, &open_calls_, raw_response);
-  Guarded(call, "Ping", "", [&] {
-    if (!Authorize(*authorizer_, ctx, "Ping", call)) return;
-    v1::PingRequest request;
-    absl::Status parsed = ParseRequest(*raw_request, &request);
-    call->Complete(draining() ? kDraining : ToGrpcStatus(parsed));
-  });
-  return call;
+  return ServeUnary<v1::PingRequest, v1::PingResponse>(
+      "Ping", ctx, raw_request, raw_response,
+      [](const v1::PingRequest&, auto* call) { call->Complete(grpc::Status::OK); });
 }
 
 }  // namespace riskplan::server

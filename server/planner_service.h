@@ -14,7 +14,9 @@
 #include <atomic>
 #include <cstddef>
 #include <memory>
+#include <string>
 
+#include "absl/status/statusor.h"
 #include "accel/risk_engine.h"
 #include "core/base/cancellation.h"
 #include "grpcpp/grpcpp.h"
@@ -130,6 +132,30 @@ class PlannerService final : public RawPlannerService {
   const GoalTreeCache* goal_trees() const { return goal_trees_.get(); }
 
  private:
+  // What the unary handlers share, in the order every one takes it (the
+  // codes and messages the same for all): a reactor for `method`, the
+  // caller's token and role, the drain, the request's parsing; then
+  // serve(request, call) validates and answers or queues. Defined in
+  // planner_service.cc, the only user.
+  template <typename Request, typename Response, typename Serve>
+  grpc::ServerUnaryReactor* ServeUnary(const char* method, grpc::CallbackServerContext* ctx,
+                                       const grpc::ByteBuffer* raw_request,
+                                       grpc::ByteBuffer* raw_response, Serve serve);
+  // Queues work(stop, call->response()) on the evaluation pool, `stop`
+  // being the call's cancellation or StopEvaluations; the call ends with
+  // work's status, or UNAVAILABLE when the drain stopped it, logged with
+  // `map`. False when the queue is full (the call is not ended then).
+  template <typename Call, typename Work>
+  bool QueueEvaluation(Call* call, const char* method, std::string map, Work work);
+  // A validated request's work, work(spec, stop, response), through
+  // QueueEvaluation; `spec`'s error ends the call at once, and a full queue
+  // with EvaluationsWaiting, each logged with `request_map`.
+  template <typename Call, typename Spec, typename Work>
+  void QueueValidated(Call* call, const char* method, const std::string& request_map,
+                      absl::StatusOr<Spec> spec, Work work);
+  // RESOURCE_EXHAUSTED: --max_queued_evals evaluations are waiting.
+  grpc::Status EvaluationsWaiting() const;
+
   const MapRegistry& maps_;
   RiskModelCache& models_;
   ServerMetrics& metrics_;

@@ -45,19 +45,314 @@ absl::StatusOr<Pose> PlanEndpoint(const MapRegistry& registry, const RiskMap& ma
   return (*pose)[0];
 }
 
+// The start and the goal, from whichever frame the request gives each in.
+absl::Status PlanEndpoints(const v1::PlanRequest& request, const MapRegistry& registry,
+                           PlanSpec* spec) {
+  absl::StatusOr<Pose> start =
+      PlanEndpoint(registry, *spec->map, request.has_start(), request.start(),
+                   request.has_start_wgs84(), request.start_wgs84(), "start");
+  if (!start.ok()) return start.status();
+  absl::StatusOr<Pose> goal = PlanEndpoint(registry, *spec->map, request.has_goal(), request.goal(),
+                                           request.has_goal_wgs84(), request.goal_wgs84(), "goal");
+  if (!goal.ok()) return goal.status();
+  spec->start = *start;
+  spec->goal = *goal;
+  return absl::OkStatus();
+}
+
+// The time and iteration budget, capped: every plan ends in bounded wall
+// time, whatever its iteration budget.
+absl::Status PlanBudget(const v1::PlanRequest& request, const RequestLimits& limits,
+                        PlanOptions* options) {
+  const int64_t time_ms = request.budget().time_ms();
+  const int64_t iterations = request.budget().iterations();
+  if (time_ms < 0 || time_ms > limits.max_plan_time_ms) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("budget.time_ms has value %d; it must be in [0, %d] (0: no time limit)",
+                        time_ms, limits.max_plan_time_ms));
+  }
+  if (iterations < 0 || iterations > limits.max_iterations) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "budget.iterations has value %d; it must be in [0, %d] (0: no iteration limit)", iterations,
+        limits.max_iterations));
+  }
+  int64_t effective_ms = time_ms;
+  if (time_ms == 0)
+    effective_ms = iterations == 0 ? limits.default_plan_time_ms : limits.max_plan_time_ms;
+  options->budget.max_time_s = static_cast<double>(effective_ms) / 1000.0;
+  options->budget.max_iterations = iterations;
+  return absl::OkStatus();
+}
+
+// The model and planner parameters, and the work they ask for (the impact
+// table's bytes, the samples of one edge), bounded before the plan is queued.
+// Needs the start and goal (PlanEndpoints).
+absl::Status PlanParams(const v1::PlanRequest& request, const RequestLimits& limits,
+                        PlanSpec* spec) {
+  absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
+  if (!params.ok()) return params.status();
+  spec->params = *params;
+  if (absl::Status s = CheckModelWork(spec->params, limits); !s.ok()) return s;
+
+  if (absl::Status s = CheckPlannerParams(spec->algorithm, request.planner_params()); !s.ok()) {
+    return s;
+  }
+  spec->options.params.insert(request.planner_params().begin(), request.planner_params().end());
+  // The planner checks the same bound again (CheckEdgeSamples); here it
+  // refuses the request before it is queued.
+  spec->options.max_edge_samples = limits.max_edge_samples;
+  if (absl::Status s =
+          CheckEdgeSampleBound(spec->algorithm, *spec->map, spec->params, spec->start, spec->goal,
+                               spec->options.params, limits.max_edge_samples, "--max_edge_samples");
+      !s.ok()) {
+    return InField("model_params", s);
+  }
+  return absl::OkStatus();
+}
+
+// How often the stream may send an update, and the step of its display path.
+absl::Status PlanUpdates(const v1::PlanRequest& request, const RequestLimits& limits,
+                         PlanSpec* spec) {
+  const int64_t interval_ms = request.min_update_interval_ms();
+  if (interval_ms < 0 || interval_ms > limits.max_update_interval_ms) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("min_update_interval_ms has value %d; it must be in [0, %d]", interval_ms,
+                        limits.max_update_interval_ms));
+  }
+  spec->min_update_interval = absl::Milliseconds(interval_ms);
+
+  const double step = request.display_step_m();
+  if (step != 0.0 && !(std::isfinite(step) && step >= 1.0 && step <= 1000.0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "display_step_m has value %g; it must be finite and in [1, 1000] (0: 25 m)", step));
+  }
+  spec->display_step_m = step == 0.0 ? 25.0 : step;
+  return absl::OkStatus();
+}
+
+// The numbers of obstacle points and dynamic obstacle areas, checked before
+// any is read, so that the loops after it (and the planners) only ever see a
+// bounded number of points and areas.
+absl::Status CheckObstacleCounts(const v1::PlanRequest& request, const RequestLimits& limits) {
+  if (static_cast<size_t>(request.obstacle_points_size()) +
+          static_cast<size_t>(request.obstacle_points_wgs84_size()) >
+      limits.max_obstacle_points) {
+    if (request.obstacle_points_wgs84_size() == 0) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("obstacle_points has %d points; the limit is %d",
+                          request.obstacle_points_size(), limits.max_obstacle_points));
+    }
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "obstacle_points has %d points and obstacle_points_wgs84 %d; the limit is %d together",
+        request.obstacle_points_size(), request.obstacle_points_wgs84_size(),
+        limits.max_obstacle_points));
+  }
+  if (static_cast<size_t>(request.dynamic_obstacles_size()) > kMaxDynamicObstacles) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("dynamic_obstacles has %d areas; the limit is %d",
+                        request.dynamic_obstacles_size(), kMaxDynamicObstacles));
+  }
+  return absl::OkStatus();
+}
+
+// obstacle_points_wgs84 into the map's local frame, appended to `points`.
+absl::Status Wgs84ObstaclePoints(const v1::PlanRequest& request, const MapRegistry& registry,
+                                 const RiskMap& map, std::vector<Point2>* points) {
+  absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+      FrameForField(registry, map, "obstacle_points_wgs84", "obstacle_points");
+  if (!frame.ok()) return frame.status();
+  std::vector<geo::LatLon> given;
+  given.reserve(request.obstacle_points_wgs84_size());
+  for (int i = 0; i < request.obstacle_points_wgs84_size(); ++i) {
+    const v1::GeoPoint2& p = request.obstacle_points_wgs84(i);
+    if (absl::Status s =
+            CheckLatLon(p.lat_deg(), p.lon_deg(), absl::StrFormat("obstacle_points_wgs84[%d]", i));
+        !s.ok()) {
+      return s;
+    }
+    given.push_back({p.lat_deg(), p.lon_deg()});
+  }
+  absl::StatusOr<std::vector<geo::LocalXY>> local =
+      PointsFromWgs84(**frame, given, "obstacle_points_wgs84");
+  if (!local.ok()) return local.status();
+  for (const geo::LocalXY& p : *local) points->push_back(Point2{p.x, p.y});
+  return absl::OkStatus();
+}
+
+// dynamic_obstacles, each a finite, non-empty rectangle from an iteration
+// >= 0, appended to `obstacles`.
+absl::Status DynamicObstaclesFromProto(const v1::PlanRequest& request,
+                                       std::vector<DynamicObstacle>* obstacles) {
+  for (int i = 0; i < request.dynamic_obstacles_size(); ++i) {
+    const v1::DynamicObstacle& o = request.dynamic_obstacles(i);
+    const std::string field = absl::StrFormat("dynamic_obstacles[%d]", i);
+    for (auto [name, value] : {std::pair{"x0_m", o.x0_m()},
+                               {"y0_m", o.y0_m()},
+                               {"x1_m", o.x1_m()},
+                               {"y1_m", o.y1_m()}}) {
+      if (absl::Status s = CheckFinite(value, field + "." + name); !s.ok()) return s;
+    }
+    if (o.at_iteration() < 0 || !(o.x0_m() < o.x1_m()) || !(o.y0_m() < o.y1_m())) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s is at_iteration %d, [%g, %g] x [%g, %g]; it needs at_iteration >= 0, x0_m < "
+          "x1_m and y0_m < y1_m",
+          field, o.at_iteration(), o.x0_m(), o.x1_m(), o.y0_m(), o.y1_m()));
+    }
+    obstacles->push_back(DynamicObstacle{o.at_iteration(), o.x0_m(), o.y0_m(), o.x1_m(), o.y1_m()});
+  }
+  return absl::OkStatus();
+}
+
+// The obstacle points (local, then WGS84) and the dynamic obstacles.
+absl::Status PlanObstacles(const v1::PlanRequest& request, const MapRegistry& registry,
+                           const RequestLimits& limits, PlanSpec* spec) {
+  if (absl::Status s = CheckObstacleCounts(request, limits); !s.ok()) return s;
+  for (int i = 0; i < request.obstacle_points_size(); ++i) {
+    const v1::Point2& p = request.obstacle_points(i);
+    const std::string field = absl::StrFormat("obstacle_points[%d]", i);
+    if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
+    if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
+    spec->options.obstacle_points.push_back(Point2{p.x(), p.y()});
+  }
+  if (request.obstacle_points_wgs84_size() > 0) {
+    if (absl::Status s =
+            Wgs84ObstaclePoints(request, registry, *spec->map, &spec->options.obstacle_points);
+        !s.ok()) {
+      return s;
+    }
+  }
+  if (absl::Status s = DynamicObstaclesFromProto(request, &spec->options.dynamic_obstacles);
+      !s.ok()) {
+    return s;
+  }
+  // A planner that cannot honour a reported hazard refuses it rather than
+  // dropping it silently.
+  return CheckRequestObstacles(spec->algorithm, spec->options);
+}
+
+// The number of points of an EvaluateRisk trajectory, `count` `noun`s in
+// `field`: 2 to limits.max_waypoints.
+absl::Status CheckPointCount(int count, const char* field, const char* noun,
+                             const RequestLimits& limits) {
+  if (count < 2 || static_cast<size_t>(count) > limits.max_waypoints) {
+    return absl::InvalidArgumentError(absl::StrFormat("%s has %d %s; it must have 2 to %d", field,
+                                                      count, noun, limits.max_waypoints));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status LocalWaypoints(const v1::EvaluateRiskRequest& request, const RequestLimits& limits,
+                            EvaluateSpec* spec) {
+  const auto& poses = request.waypoints().poses();
+  if (absl::Status s = CheckPointCount(poses.size(), "waypoints.poses", "poses", limits); !s.ok()) {
+    return s;
+  }
+  spec->waypoints.reserve(poses.size());
+  for (int i = 0; i < poses.size(); ++i) {
+    absl::StatusOr<Pose> pose = PoseFromProto(poses[i], absl::StrFormat("waypoints.poses[%d]", i));
+    if (!pose.ok()) return pose.status();
+    spec->waypoints.push_back(*pose);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status LocalPolyline(const v1::EvaluateRiskRequest& request, const RequestLimits& limits,
+                           EvaluateSpec* spec) {
+  const auto& points = request.polyline().points();
+  if (absl::Status s = CheckPointCount(points.size(), "polyline.points", "points", limits);
+      !s.ok()) {
+    return s;
+  }
+  spec->polyline.reserve(points.size());
+  for (int i = 0; i < points.size(); ++i) {
+    const v1::Point3& p = points[i];
+    const std::string field = absl::StrFormat("polyline.points[%d]", i);
+    if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
+    if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
+    if (absl::Status s = CheckFinite(p.z(), field + ".z"); !s.ok()) return s;
+    spec->polyline.push_back(Point3{p.x(), p.y(), p.z()});
+  }
+  return absl::OkStatus();
+}
+
+absl::Status Wgs84Waypoints(const v1::EvaluateRiskRequest& request, const MapRegistry& registry,
+                            const RequestLimits& limits, EvaluateSpec* spec) {
+  const auto& poses = request.waypoints_wgs84().poses();
+  if (absl::Status s = CheckPointCount(poses.size(), "waypoints_wgs84.poses", "poses", limits);
+      !s.ok()) {
+    return s;
+  }
+  absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+      FrameForField(registry, *spec->map, "waypoints_wgs84", "waypoints");
+  if (!frame.ok()) return frame.status();
+  std::vector<geo::GeoPose> given;
+  given.reserve(poses.size());
+  for (int i = 0; i < poses.size(); ++i) {
+    absl::StatusOr<geo::GeoPose> pose =
+        GeoPoseFromProto(poses[i], absl::StrFormat("waypoints_wgs84.poses[%d]", i));
+    if (!pose.ok()) return pose.status();
+    given.push_back(*pose);
+  }
+  absl::StatusOr<std::vector<Pose>> local =
+      PosesFromWgs84(**frame, given, "waypoints_wgs84.poses", /*single=*/false);
+  if (!local.ok()) return local.status();
+  spec->waypoints = *std::move(local);
+  return absl::OkStatus();
+}
+
+absl::Status Wgs84Polyline(const v1::EvaluateRiskRequest& request, const MapRegistry& registry,
+                           const RequestLimits& limits, EvaluateSpec* spec) {
+  const auto& points = request.polyline_wgs84().points();
+  if (absl::Status s = CheckPointCount(points.size(), "polyline_wgs84.points", "points", limits);
+      !s.ok()) {
+    return s;
+  }
+  absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
+      FrameForField(registry, *spec->map, "polyline_wgs84", "polyline");
+  if (!frame.ok()) return frame.status();
+  std::vector<geo::LatLon> given;
+  given.reserve(points.size());
+  for (int i = 0; i < points.size(); ++i) {
+    const v1::GeoPoint3& p = points[i];
+    const std::string field = absl::StrFormat("polyline_wgs84.points[%d]", i);
+    if (absl::Status s = CheckLatLon(p.lat_deg(), p.lon_deg(), field); !s.ok()) return s;
+    if (absl::Status s = CheckFinite(p.alt_m(), field + ".alt_m"); !s.ok()) return s;
+    given.push_back({p.lat_deg(), p.lon_deg()});
+  }
+  absl::StatusOr<std::vector<geo::LocalXY>> local =
+      PointsFromWgs84(**frame, given, "polyline_wgs84.points");
+  if (!local.ok()) return local.status();
+  spec->polyline.reserve(points.size());
+  for (int i = 0; i < points.size(); ++i) {
+    spec->polyline.push_back(Point3{(*local)[i].x, (*local)[i].y, points[i].alt_m()});
+  }
+  return absl::OkStatus();
+}
+
+// The trajectory of an EvaluateRiskRequest, in whichever of its four forms
+// it comes, into spec->waypoints or spec->polyline. Point counts are checked
+// before any point is read or copied, so a huge request costs no more than
+// its parsing (which --max_request_bytes bounds).
+absl::Status TrajectoryFromProto(const v1::EvaluateRiskRequest& request,
+                                 const MapRegistry& registry, const RequestLimits& limits,
+                                 EvaluateSpec* spec) {
+  switch (request.trajectory_case()) {
+    case v1::EvaluateRiskRequest::kWaypoints:
+      return LocalWaypoints(request, limits, spec);
+    case v1::EvaluateRiskRequest::kPolyline:
+      return LocalPolyline(request, limits, spec);
+    case v1::EvaluateRiskRequest::kWaypointsWgs84:
+      return Wgs84Waypoints(request, registry, limits, spec);
+    case v1::EvaluateRiskRequest::kPolylineWgs84:
+      return Wgs84Polyline(request, registry, limits, spec);
+    default:
+      return absl::InvalidArgumentError(
+          "trajectory is required: set waypoints (poses) or polyline (points), or on a "
+          "geo-referenced map waypoints_wgs84 or polyline_wgs84");
+  }
+}
+
 }  // namespace
-
-absl::Status CheckFinite(double value, std::string_view field) {
-  if (std::isfinite(value)) return absl::OkStatus();
-  return absl::InvalidArgumentError(
-      absl::StrFormat("%s has value %g; it must be finite", std::string(field), value));
-}
-
-absl::Status InField(std::string_view field, const absl::Status& status) {
-  if (status.ok()) return status;
-  return absl::Status(status.code(),
-                      absl::StrFormat("%s: %s", std::string(field), status.message()));
-}
 
 // By reflection: every field of ModelParameters is named after a ModelParam,
 // so a parameter added to both needs no code here. Only fields the request
@@ -191,139 +486,15 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   spec.map = *std::move(map);
 
   spec.frame = registry.Frame(spec.map->name());
-  absl::StatusOr<Pose> start =
-      PlanEndpoint(registry, *spec.map, request.has_start(), request.start(),
-                   request.has_start_wgs84(), request.start_wgs84(), "start");
-  if (!start.ok()) return start.status();
-  absl::StatusOr<Pose> goal = PlanEndpoint(registry, *spec.map, request.has_goal(), request.goal(),
-                                           request.has_goal_wgs84(), request.goal_wgs84(), "goal");
-  if (!goal.ok()) return goal.status();
-  spec.start = *start;
-  spec.goal = *goal;
-
-  const int64_t time_ms = request.budget().time_ms();
-  const int64_t iterations = request.budget().iterations();
-  if (time_ms < 0 || time_ms > limits.max_plan_time_ms) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("budget.time_ms has value %d; it must be in [0, %d] (0: no time limit)",
-                        time_ms, limits.max_plan_time_ms));
-  }
-  if (iterations < 0 || iterations > limits.max_iterations) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "budget.iterations has value %d; it must be in [0, %d] (0: no iteration limit)", iterations,
-        limits.max_iterations));
-  }
-  // Every plan ends in bounded wall time, whatever its iteration budget.
-  int64_t effective_ms = time_ms;
-  if (time_ms == 0)
-    effective_ms = iterations == 0 ? limits.default_plan_time_ms : limits.max_plan_time_ms;
-  spec.options.budget.max_time_s = static_cast<double>(effective_ms) / 1000.0;
-  spec.options.budget.max_iterations = iterations;
+  // The steps in this order, each field checked once: a client is told of
+  // the first bad field in the request's order, whatever else is wrong.
+  if (absl::Status s = PlanEndpoints(request, registry, &spec); !s.ok()) return s;
+  if (absl::Status s = PlanBudget(request, limits, &spec.options); !s.ok()) return s;
   spec.options.seed = request.seed();
   spec.options.record_tree = request.include_tree();
-
-  absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
-  if (!params.ok()) return params.status();
-  spec.params = *params;
-  if (absl::Status s = CheckModelWork(spec.params, limits); !s.ok()) return s;
-
-  if (absl::Status s = CheckPlannerParams(spec.algorithm, request.planner_params()); !s.ok()) {
-    return s;
-  }
-  spec.options.params.insert(request.planner_params().begin(), request.planner_params().end());
-  // The planner checks the same bound again (CheckEdgeSamples); here it
-  // refuses the request before it is queued.
-  spec.options.max_edge_samples = limits.max_edge_samples;
-  if (absl::Status s =
-          CheckEdgeSampleBound(spec.algorithm, *spec.map, spec.params, spec.start, spec.goal,
-                               spec.options.params, limits.max_edge_samples, "--max_edge_samples");
-      !s.ok()) {
-    return InField("model_params", s);
-  }
-
-  const int64_t interval_ms = request.min_update_interval_ms();
-  if (interval_ms < 0 || interval_ms > limits.max_update_interval_ms) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("min_update_interval_ms has value %d; it must be in [0, %d]", interval_ms,
-                        limits.max_update_interval_ms));
-  }
-  spec.min_update_interval = absl::Milliseconds(interval_ms);
-
-  const double step = request.display_step_m();
-  if (step != 0.0 && !(std::isfinite(step) && step >= 1.0 && step <= 1000.0)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "display_step_m has value %g; it must be finite and in [1, 1000] (0: 25 m)", step));
-  }
-  spec.display_step_m = step == 0.0 ? 25.0 : step;
-
-  // Counts first, so that the loops below (and the planners) only ever see
-  // a bounded number of points and areas.
-  if (static_cast<size_t>(request.obstacle_points_size()) +
-          static_cast<size_t>(request.obstacle_points_wgs84_size()) >
-      limits.max_obstacle_points) {
-    if (request.obstacle_points_wgs84_size() == 0) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("obstacle_points has %d points; the limit is %d",
-                          request.obstacle_points_size(), limits.max_obstacle_points));
-    }
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "obstacle_points has %d points and obstacle_points_wgs84 %d; the limit is %d together",
-        request.obstacle_points_size(), request.obstacle_points_wgs84_size(),
-        limits.max_obstacle_points));
-  }
-  if (static_cast<size_t>(request.dynamic_obstacles_size()) > kMaxDynamicObstacles) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("dynamic_obstacles has %d areas; the limit is %d",
-                        request.dynamic_obstacles_size(), kMaxDynamicObstacles));
-  }
-  for (int i = 0; i < request.obstacle_points_size(); ++i) {
-    const v1::Point2& p = request.obstacle_points(i);
-    const std::string field = absl::StrFormat("obstacle_points[%d]", i);
-    if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
-    if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
-    spec.options.obstacle_points.push_back(Point2{p.x(), p.y()});
-  }
-  if (request.obstacle_points_wgs84_size() > 0) {
-    absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
-        FrameForField(registry, *spec.map, "obstacle_points_wgs84", "obstacle_points");
-    if (!frame.ok()) return frame.status();
-    std::vector<geo::LatLon> points;
-    points.reserve(request.obstacle_points_wgs84_size());
-    for (int i = 0; i < request.obstacle_points_wgs84_size(); ++i) {
-      const v1::GeoPoint2& p = request.obstacle_points_wgs84(i);
-      if (absl::Status s = CheckLatLon(p.lat_deg(), p.lon_deg(),
-                                       absl::StrFormat("obstacle_points_wgs84[%d]", i));
-          !s.ok()) {
-        return s;
-      }
-      points.push_back({p.lat_deg(), p.lon_deg()});
-    }
-    absl::StatusOr<std::vector<geo::LocalXY>> local =
-        PointsFromWgs84(**frame, points, "obstacle_points_wgs84");
-    if (!local.ok()) return local.status();
-    for (const geo::LocalXY& p : *local) spec.options.obstacle_points.push_back(Point2{p.x, p.y});
-  }
-  for (int i = 0; i < request.dynamic_obstacles_size(); ++i) {
-    const v1::DynamicObstacle& o = request.dynamic_obstacles(i);
-    const std::string field = absl::StrFormat("dynamic_obstacles[%d]", i);
-    for (auto [name, value] : {std::pair{"x0_m", o.x0_m()},
-                               {"y0_m", o.y0_m()},
-                               {"x1_m", o.x1_m()},
-                               {"y1_m", o.y1_m()}}) {
-      if (absl::Status s = CheckFinite(value, field + "." + name); !s.ok()) return s;
-    }
-    if (o.at_iteration() < 0 || !(o.x0_m() < o.x1_m()) || !(o.y0_m() < o.y1_m())) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s is at_iteration %d, [%g, %g] x [%g, %g]; it needs at_iteration >= 0, x0_m < "
-          "x1_m and y0_m < y1_m",
-          field, o.at_iteration(), o.x0_m(), o.x1_m(), o.y0_m(), o.y1_m()));
-    }
-    spec.options.dynamic_obstacles.push_back(
-        DynamicObstacle{o.at_iteration(), o.x0_m(), o.y0_m(), o.x1_m(), o.y1_m()});
-  }
-  // A planner that cannot honour a reported hazard refuses it rather than
-  // dropping it silently.
-  if (absl::Status s = CheckRequestObstacles(spec.algorithm, spec.options); !s.ok()) return s;
+  if (absl::Status s = PlanParams(request, limits, &spec); !s.ok()) return s;
+  if (absl::Status s = PlanUpdates(request, limits, &spec); !s.ok()) return s;
+  if (absl::Status s = PlanObstacles(request, registry, limits, &spec); !s.ok()) return s;
   return spec;
 }
 
@@ -365,100 +536,7 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   if (!map.ok()) return map.status();
   spec.map = *std::move(map);
 
-  // Point counts are checked before any point is read or copied, so a huge
-  // request costs no more than its parsing (which --max_request_bytes bounds).
-  switch (request.trajectory_case()) {
-    case v1::EvaluateRiskRequest::kWaypoints: {
-      const auto& poses = request.waypoints().poses();
-      if (poses.size() < 2 || static_cast<size_t>(poses.size()) > limits.max_waypoints) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("waypoints.poses has %d poses; it must have 2 to %d", poses.size(),
-                            limits.max_waypoints));
-      }
-      spec.waypoints.reserve(poses.size());
-      for (int i = 0; i < poses.size(); ++i) {
-        absl::StatusOr<Pose> pose =
-            PoseFromProto(poses[i], absl::StrFormat("waypoints.poses[%d]", i));
-        if (!pose.ok()) return pose.status();
-        spec.waypoints.push_back(*pose);
-      }
-      break;
-    }
-    case v1::EvaluateRiskRequest::kPolyline: {
-      const auto& points = request.polyline().points();
-      if (points.size() < 2 || static_cast<size_t>(points.size()) > limits.max_waypoints) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("polyline.points has %d points; it must have 2 to %d", points.size(),
-                            limits.max_waypoints));
-      }
-      spec.polyline.reserve(points.size());
-      for (int i = 0; i < points.size(); ++i) {
-        const v1::Point3& p = points[i];
-        const std::string field = absl::StrFormat("polyline.points[%d]", i);
-        if (absl::Status s = CheckFinite(p.x(), field + ".x"); !s.ok()) return s;
-        if (absl::Status s = CheckFinite(p.y(), field + ".y"); !s.ok()) return s;
-        if (absl::Status s = CheckFinite(p.z(), field + ".z"); !s.ok()) return s;
-        spec.polyline.push_back(Point3{p.x(), p.y(), p.z()});
-      }
-      break;
-    }
-    case v1::EvaluateRiskRequest::kWaypointsWgs84: {
-      const auto& poses = request.waypoints_wgs84().poses();
-      if (poses.size() < 2 || static_cast<size_t>(poses.size()) > limits.max_waypoints) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("waypoints_wgs84.poses has %d poses; it must have 2 to %d",
-                            poses.size(), limits.max_waypoints));
-      }
-      absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
-          FrameForField(registry, *spec.map, "waypoints_wgs84", "waypoints");
-      if (!frame.ok()) return frame.status();
-      std::vector<geo::GeoPose> given;
-      given.reserve(poses.size());
-      for (int i = 0; i < poses.size(); ++i) {
-        absl::StatusOr<geo::GeoPose> pose =
-            GeoPoseFromProto(poses[i], absl::StrFormat("waypoints_wgs84.poses[%d]", i));
-        if (!pose.ok()) return pose.status();
-        given.push_back(*pose);
-      }
-      absl::StatusOr<std::vector<Pose>> local =
-          PosesFromWgs84(**frame, given, "waypoints_wgs84.poses", /*single=*/false);
-      if (!local.ok()) return local.status();
-      spec.waypoints = *std::move(local);
-      break;
-    }
-    case v1::EvaluateRiskRequest::kPolylineWgs84: {
-      const auto& points = request.polyline_wgs84().points();
-      if (points.size() < 2 || static_cast<size_t>(points.size()) > limits.max_waypoints) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("polyline_wgs84.points has %d points; it must have 2 to %d",
-                            points.size(), limits.max_waypoints));
-      }
-      absl::StatusOr<std::shared_ptr<const geo::GeoFrame>> frame =
-          FrameForField(registry, *spec.map, "polyline_wgs84", "polyline");
-      if (!frame.ok()) return frame.status();
-      std::vector<geo::LatLon> given;
-      given.reserve(points.size());
-      for (int i = 0; i < points.size(); ++i) {
-        const v1::GeoPoint3& p = points[i];
-        const std::string field = absl::StrFormat("polyline_wgs84.points[%d]", i);
-        if (absl::Status s = CheckLatLon(p.lat_deg(), p.lon_deg(), field); !s.ok()) return s;
-        if (absl::Status s = CheckFinite(p.alt_m(), field + ".alt_m"); !s.ok()) return s;
-        given.push_back({p.lat_deg(), p.lon_deg()});
-      }
-      absl::StatusOr<std::vector<geo::LocalXY>> local =
-          PointsFromWgs84(**frame, given, "polyline_wgs84.points");
-      if (!local.ok()) return local.status();
-      spec.polyline.reserve(points.size());
-      for (int i = 0; i < points.size(); ++i) {
-        spec.polyline.push_back(Point3{(*local)[i].x, (*local)[i].y, points[i].alt_m()});
-      }
-      break;
-    }
-    default:
-      return absl::InvalidArgumentError(
-          "trajectory is required: set waypoints (poses) or polyline (points), or on a "
-          "geo-referenced map waypoints_wgs84 or polyline_wgs84");
-  }
+  if (absl::Status s = TrajectoryFromProto(request, registry, limits, &spec); !s.ok()) return s;
   spec.frame = registry.Frame(spec.map->name());
 
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());

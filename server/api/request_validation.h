@@ -30,6 +30,7 @@
 #include "core/risk/impact_table.h"
 #include "geo/geo_frame.h"
 #include "riskplan/v1/planner.pb.h"
+#include "server/api/field_checks.h"  // CheckFinite, InField: part of this header's API
 #include "server/models/map_registry.h"
 
 namespace riskplan::server {
@@ -55,14 +56,6 @@ struct RequestLimits {
 // The bounds of building a model for a request: --max_table_bytes, and
 // `stop` (the server's drain).
 ModelBuildLimits BuildLimits(const RequestLimits& limits, StopCondition stop = {});
-
-// INVALID_ARGUMENT "FIELD has value V; it must be finite" unless `value` is
-// finite.
-absl::Status CheckFinite(double value, std::string_view field);
-
-// `status` with its message prefixed by the request field it concerns,
-// "FIELD: MESSAGE" (OK stays OK).
-absl::Status InField(std::string_view field, const absl::Status& status);
 
 // Converts the overrides onto the defaults and validates the result
 // (ValidateModelParams); errors name "model_params.<field>".

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "absl/strings/str_format.h"
-#include "server/api/request_validation.h"
+#include "server/api/field_checks.h"
 
 namespace riskplan::server {
 namespace {

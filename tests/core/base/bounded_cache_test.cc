@@ -42,7 +42,8 @@ void ExpectStats(const Cache& cache, uint64_t hits, uint64_t misses, uint64_t ev
 TEST(BoundedCacheTest, BuildsOnceThenHits) {
   Cache cache({});
   std::atomic<int> builds = 0;
-  absl::StatusOr<std::shared_ptr<const std::string>> a = cache.GetOrBuild(1, Builder(&builds, "a", 10));
+  absl::StatusOr<std::shared_ptr<const std::string>> a =
+      cache.GetOrBuild(1, Builder(&builds, "a", 10));
   ASSERT_TRUE(a.ok());
   absl::StatusOr<std::shared_ptr<const std::string>> again =
       cache.GetOrBuild(1, Builder(&builds, "other", 10));
@@ -61,8 +62,8 @@ TEST(BoundedCacheTest, ByteBudgetEvictsLeastRecentlyUsedFirst) {
   ASSERT_TRUE(cache.Put(1, Value("1", 10).value, 10, Never));
   ASSERT_TRUE(cache.Put(2, Value("2", 10).value, 10, Never));
   ASSERT_TRUE(cache.Put(3, Value("3", 10).value, 10, Never));
-  EXPECT_EQ(cache.stats().bytes, 30u);  // at the bound: nothing evicted
-  ASSERT_NE(cache.Find(1), nullptr);    // 2 is now the least recently used
+  EXPECT_EQ(cache.stats().bytes, 30u);                         // at the bound: nothing evicted
+  ASSERT_NE(cache.Find(1), nullptr);                           // 2 is now the least recently used
   ASSERT_TRUE(cache.Put(4, Value("4", 15).value, 15, Never));  // 2 and 3 go
   EXPECT_EQ(cache.Find(2), nullptr);
   EXPECT_EQ(cache.Find(3), nullptr);

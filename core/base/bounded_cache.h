@@ -118,6 +118,9 @@ class BoundedCache {
     absl::StatusOr<std::shared_ptr<const V>> result;
   };
   struct Entry;
+  // Ordered rather than hashed: the keys (strings, pairs, tuples of
+  // pointers) then need only operator<, and the caches hold a few dozen
+  // entries at most.
   using Map = std::map<K, Entry, Compare>;
   struct Entry {
     std::shared_ptr<Pending> pending;  // set while building, then null
@@ -132,6 +135,10 @@ class BoundedCache {
   static bool Stale(const Entry& e) { return e.owned && e.owner.expired(); }
 
   std::shared_ptr<const V> Lookup(const K& key, bool count_miss);
+  // The entry of `key`, cached or being built, or end(). A stale entry is
+  // dropped (its value to `dropped`) and not returned.
+  typename Map::iterator FindLocked(const K& key, Dropped* dropped)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   // Unlinks a cached entry; its value goes to `dropped`.
   void EraseLocked(typename Map::iterator it, Dropped* dropped) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   // Drops the stale entries, then the least recently used ones until `bytes`
@@ -153,11 +160,7 @@ template <typename K, typename V, typename C>
 std::shared_ptr<const V> BoundedCache<K, V, C>::Lookup(const K& key, bool count_miss) {
   Dropped dropped;  // released after the lock (declared before it)
   absl::MutexLock lock(&mu_);
-  auto it = entries_.find(key);
-  if (it != entries_.end() && it->second.pending == nullptr && Stale(it->second)) {
-    EraseLocked(it, &dropped);
-    it = entries_.end();
-  }
+  auto it = FindLocked(key, &dropped);
   if (it == entries_.end() || it->second.pending != nullptr) {
     if (count_miss) ++stats_.misses;
     return nullptr;
@@ -175,11 +178,7 @@ absl::StatusOr<std::shared_ptr<const V>> BoundedCache<K, V, C>::GetOrBuild(
   std::shared_ptr<Pending> pending;
   {
     absl::MutexLock lock(&mu_);
-    auto it = entries_.find(key);
-    if (it != entries_.end() && it->second.pending == nullptr && Stale(it->second)) {
-      EraseLocked(it, &dropped);
-      it = entries_.end();
-    }
+    auto it = FindLocked(key, &dropped);
     if (it != entries_.end()) {
       ++stats_.hits;
       if (it->second.pending == nullptr) {
@@ -237,6 +236,15 @@ bool BoundedCache<K, V, C>::Put(const K& key, std::shared_ptr<const V> value, si
   MakeRoomLocked(bytes, &dropped);
   LinkLocked(entries_.try_emplace(key).first, std::move(value), bytes);
   return true;
+}
+
+template <typename K, typename V, typename C>
+typename BoundedCache<K, V, C>::Map::iterator BoundedCache<K, V, C>::FindLocked(const K& key,
+                                                                                Dropped* dropped) {
+  auto it = entries_.find(key);
+  if (it == entries_.end() || it->second.pending != nullptr || !Stale(it->second)) return it;
+  EraseLocked(it, dropped);
+  return entries_.end();
 }
 
 template <typename K, typename V, typename C>

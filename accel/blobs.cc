@@ -158,57 +158,34 @@ absl::StatusOr<QuantizedKernelTable> QuantizeKernelsBlob(absl::string_view blob,
   return table;
 }
 
+bool BlobCache::RefusedLocked(const std::shared_ptr<const void>& owner) const {
+  for (const std::weak_ptr<const void>& refused : refused_) {
+    if (refused.lock() == owner) return true;
+  }
+  return false;
+}
+
 std::shared_ptr<const Blob> BlobCache::Get(const std::shared_ptr<const void>& owner,
-                                           const std::function<Blob()>& build) {
-  // True with *hit set (null for a refused owner) when `owner` is known.
-  const auto find = [&](std::shared_ptr<const Blob>* hit) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-    for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-      if (it->key == owner.get() && it->owner.lock() == owner) {
-        entries_.splice(entries_.begin(), entries_, it);
-        *hit = it->blob;
-        return true;
-      }
-    }
-    for (const Entry& e : refused_) {
-      if (e.key == owner.get() && e.owner.lock() == owner) {
-        *hit = nullptr;
-        return true;
-      }
-    }
-    return false;
-  };
-  std::shared_ptr<const Blob> hit;
+                                           absl::FunctionRef<Blob()> build) {
   {
-    absl::MutexLock lock(&mu_);
-    if (find(&hit)) return hit;
+    absl::MutexLock lock(&refused_mu_);
+    if (RefusedLocked(owner)) return nullptr;
   }
-  absl::MutexLock build_lock(&build_mu_);
-  {
-    absl::MutexLock lock(&mu_);
-    if (find(&hit)) return hit;
-  }
-  auto blob = std::make_shared<const Blob>(build());
-  absl::MutexLock lock(&mu_);
-  for (auto it = entries_.begin(); it != entries_.end();) {
-    if (it->owner.expired()) {
-      bytes_ -= it->blob->bytes.size();
-      it = entries_.erase(it);
-    } else {
-      ++it;
-    }
-  }
-  refused_.remove_if([](const Entry& e) { return e.owner.expired(); });
-  if (blob->bytes.size() > budget_bytes_) {
-    refused_.push_back(Entry{owner.get(), owner, nullptr});
-    return nullptr;
-  }
-  while (!entries_.empty() && bytes_ + blob->bytes.size() > budget_bytes_) {
-    bytes_ -= entries_.back().blob->bytes.size();
-    entries_.pop_back();
-  }
-  entries_.push_front(Entry{owner.get(), owner, blob});
-  bytes_ += blob->bytes.size();
-  return blob;
+  // The build cannot fail, so neither can this.
+  std::shared_ptr<const Blob> blob = *cache_.GetOrBuild(
+      owner.get(),
+      [&]() -> absl::StatusOr<BoundedCache<const void*, Blob>::Built> {
+        auto built = std::make_shared<const Blob>(build());
+        return BoundedCache<const void*, Blob>::Built{built, built->bytes.size()};
+      },
+      owner);
+  if (blob->bytes.size() <= budget_bytes()) return blob;
+  // Larger than the whole budget: the cache did not keep it. Remembered, so
+  // that later calls return null at once instead of building it again.
+  absl::MutexLock lock(&refused_mu_);
+  refused_.remove_if([](const std::weak_ptr<const void>& refused) { return refused.expired(); });
+  if (!RefusedLocked(owner)) refused_.push_back(owner);  // two callers raced
+  return nullptr;
 }
 
 std::shared_ptr<const Blob> BlobCache::MapBlob(const std::shared_ptr<const RiskMap>& map) {
@@ -231,11 +208,6 @@ std::shared_ptr<const Blob> BlobCache::KernelsBlob(
     blob.hash = Sha256(blob.bytes);
     return blob;
   });
-}
-
-size_t BlobCache::MemoryBytes() const {
-  absl::MutexLock lock(&mu_);
-  return bytes_;
 }
 
 }  // namespace riskplan::accel

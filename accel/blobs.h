@@ -11,23 +11,25 @@
 // Layers are row-major with row 0 the southernmost, as in RiskMap.
 //
 // BlobCache builds the blobs of the maps and tables in use once and shares
-// them between FPGA workers (thread-safe, bounded by bytes).
+// them between FPGA workers (thread-safe, bounded by bytes: a BoundedCache
+// keyed by the map or table, core/base/bounded_cache.h).
 #ifndef RISKPLAN_ACCEL_BLOBS_H_
 #define RISKPLAN_ACCEL_BLOBS_H_
 
 #include <cstdint>
-#include <functional>
 #include <list>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "absl/base/thread_annotations.h"
+#include "absl/functional/function_ref.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "absl/synchronization/mutex.h"
 #include "accel/fixed_point.h"
 #include "accel/shim_protocol.h"
+#include "core/base/bounded_cache.h"
 #include "core/map/risk_map.h"
 #include "core/risk/impact_table.h"
 
@@ -77,7 +79,7 @@ struct Blob {
 
 class BlobCache {
  public:
-  explicit BlobCache(size_t budget_bytes) : budget_bytes_(budget_bytes) {}
+  explicit BlobCache(size_t budget_bytes) : cache_({.max_bytes = budget_bytes}) {}
 
   // The blob of `map` / `table`, built on first use (tens of milliseconds
   // for demo-city). Never keeps the map or table alive. Entries beyond the
@@ -88,25 +90,25 @@ class BlobCache {
   std::shared_ptr<const Blob> MapBlob(const std::shared_ptr<const RiskMap>& map);
   std::shared_ptr<const Blob> KernelsBlob(const std::shared_ptr<const ImpactTable>& table);
 
-  size_t MemoryBytes() const;
-  size_t budget_bytes() const { return budget_bytes_; }
+  size_t MemoryBytes() const { return cache_.stats().bytes; }
+  size_t budget_bytes() const { return cache_.limits().max_bytes; }
 
  private:
-  struct Entry {
-    const void* key;
-    std::weak_ptr<const void> owner;
-    std::shared_ptr<const Blob> blob;
-  };
   std::shared_ptr<const Blob> Get(const std::shared_ptr<const void>& owner,
-                                  const std::function<Blob()>& build);
+                                  absl::FunctionRef<Blob()> build);
+  // Whether `owner`'s blob was found larger than the whole budget.
+  bool RefusedLocked(const std::shared_ptr<const void>& owner) const
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(refused_mu_);
 
-  const size_t budget_bytes_;
-  absl::Mutex build_mu_ ABSL_ACQUIRED_BEFORE(mu_);
-  mutable absl::Mutex mu_;
-  std::list<Entry> entries_ ABSL_GUARDED_BY(mu_);
-  // Owners whose blob exceeded the whole budget (blob left null).
-  std::list<Entry> refused_ ABSL_GUARDED_BY(mu_);
-  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
+  // Keyed by the map's or table's address, with it as the entry's owner: the
+  // entry goes stale when it is freed, so a new one at the same address is
+  // never taken for it.
+  BoundedCache<const void*, Blob> cache_;
+  // Owners whose blob exceeded the whole budget. Kept here rather than in
+  // the cache: they hold no bytes and are never evicted, only forgotten with
+  // their owner.
+  mutable absl::Mutex refused_mu_;
+  std::list<std::weak_ptr<const void>> refused_ ABSL_GUARDED_BY(refused_mu_);
 };
 
 }  // namespace riskplan::accel

@@ -68,53 +68,11 @@ std::shared_ptr<const KernelWeights> KernelWeights::Build(const ImpactTable& tab
   return weights;
 }
 
-std::shared_ptr<const KernelWeights> KernelWeightsCache::Find(
-    const std::shared_ptr<const ImpactTable>& table, WeightFormat format) {
-  for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-    if (it->key == table.get() && it->format == format && it->owner.lock() == table) {
-      entries_.splice(entries_.begin(), entries_, it);
-      return it->weights;
-    }
-  }
-  return nullptr;
-}
-
 std::shared_ptr<const KernelWeights> KernelWeightsCache::Get(
     const std::shared_ptr<const ImpactTable>& table, WeightFormat format) {
-  if (table == nullptr || KernelWeights::BytesFor(*table, format) > budget_bytes_) return nullptr;
-  {
-    absl::MutexLock lock(&mu_);
-    if (auto hit = Find(table, format)) return hit;
-  }
-  absl::MutexLock build_lock(&build_mu_);
-  {
-    absl::MutexLock lock(&mu_);
-    if (auto hit = Find(table, format)) return hit;
-  }
-  std::shared_ptr<const KernelWeights> built = KernelWeights::Build(*table, format);
-  if (built == nullptr) return nullptr;
-  absl::MutexLock lock(&mu_);
-  // Drop the copies of freed tables first, then the least recently used.
-  for (auto it = entries_.begin(); it != entries_.end();) {
-    if (it->owner.expired()) {
-      bytes_ -= it->weights->MemoryBytes();
-      it = entries_.erase(it);
-    } else {
-      ++it;
-    }
-  }
-  while (!entries_.empty() && bytes_ + built->MemoryBytes() > budget_bytes_) {
-    bytes_ -= entries_.back().weights->MemoryBytes();
-    entries_.pop_back();
-  }
-  entries_.push_front(Entry{table.get(), format, table, built});
-  bytes_ += built->MemoryBytes();
-  return built;
-}
-
-size_t KernelWeightsCache::MemoryBytes() const {
-  absl::MutexLock lock(&mu_);
-  return bytes_;
+  if (table == nullptr || KernelWeights::BytesFor(*table, format) > budget_bytes()) return nullptr;
+  return GetOrBuildOwned<Key, KernelWeights>(cache_, Key{table.get(), format}, table,
+                                             [&] { return KernelWeights::Build(*table, format); });
 }
 
 }  // namespace riskplan::accel

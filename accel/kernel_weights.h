@@ -12,20 +12,20 @@
 // The copy lives on 2 MiB pages (HugePageBuffer), like PreparedMap.
 //
 // KernelWeightsCache holds the copies of the tables in use, bounded by a byte
-// budget, least recently used dropped first. Thread-safe; a KernelWeights is
+// budget, least recently used dropped first (a BoundedCache keyed by table and
+// format, core/base/bounded_cache.h). Thread-safe; a KernelWeights is
 // immutable once built and shared read-only between threads.
 #ifndef RISKPLAN_ACCEL_KERNEL_WEIGHTS_H_
 #define RISKPLAN_ACCEL_KERNEL_WEIGHTS_H_
 
 #include <cstddef>
 #include <cstdint>
-#include <list>
 #include <memory>
+#include <utility>
 #include <vector>
 
-#include "absl/base/thread_annotations.h"
-#include "absl/synchronization/mutex.h"
 #include "accel/prepared_map.h"
+#include "core/base/bounded_cache.h"
 #include "core/base/check.h"
 #include "core/risk/impact_table.h"
 
@@ -75,34 +75,24 @@ class KernelWeightsCache {
  public:
   // Holds at most `budget_bytes` of copies (0: none; Get() returns null and
   // kernels read the table's own weights, or convert nothing and fall back).
-  explicit KernelWeightsCache(size_t budget_bytes) : budget_bytes_(budget_bytes) {}
+  explicit KernelWeightsCache(size_t budget_bytes) : cache_({.max_bytes = budget_bytes}) {}
 
   // The copy of `table` in `format`, built on first use by the calling thread
-  // (about 10 ms for the default table; other callers wait). Null when it
-  // alone exceeds the budget or memory is short. A dropped copy stays valid
-  // for holders of its shared_ptr. Never keeps `table` itself alive.
+  // (about 10 ms for the default table; other callers for the same table and
+  // format wait for it). Null when it alone exceeds the budget or memory is
+  // short. A dropped copy stays valid for holders of its shared_ptr. Never
+  // keeps `table` itself alive.
   std::shared_ptr<const KernelWeights> Get(const std::shared_ptr<const ImpactTable>& table,
                                            WeightFormat format);
 
-  size_t MemoryBytes() const;
-  size_t budget_bytes() const { return budget_bytes_; }
+  size_t MemoryBytes() const { return cache_.stats().bytes; }
+  size_t budget_bytes() const { return cache_.limits().max_bytes; }
 
  private:
-  struct Entry {
-    const ImpactTable* key;
-    WeightFormat format;
-    std::weak_ptr<const ImpactTable> owner;
-    std::shared_ptr<const KernelWeights> weights;
-  };
-
-  std::shared_ptr<const KernelWeights> Find(const std::shared_ptr<const ImpactTable>& table,
-                                            WeightFormat format) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-
-  const size_t budget_bytes_;
-  absl::Mutex build_mu_ ABSL_ACQUIRED_BEFORE(mu_);
-  mutable absl::Mutex mu_;
-  std::list<Entry> entries_ ABSL_GUARDED_BY(mu_);  // most recently used first
-  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
+  // Keyed by the table's address and the format, with the table as the
+  // entry's owner (see PreparedMapCache).
+  using Key = std::pair<const ImpactTable*, WeightFormat>;
+  BoundedCache<Key, KernelWeights> cache_;
 };
 
 }  // namespace riskplan::accel

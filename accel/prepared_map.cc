@@ -67,53 +67,11 @@ std::shared_ptr<const PreparedMap> PreparedMap::Build(const RiskMap& map) {
   return prepared;
 }
 
-std::shared_ptr<const PreparedMap> PreparedMapCache::Find(
-    const std::shared_ptr<const RiskMap>& map) {
-  for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-    if (it->key == map.get() && it->owner.lock() == map) {
-      entries_.splice(entries_.begin(), entries_, it);
-      return it->prepared;
-    }
-  }
-  return nullptr;
-}
-
 std::shared_ptr<const PreparedMap> PreparedMapCache::Get(
     const std::shared_ptr<const RiskMap>& map) {
-  if (map == nullptr || PreparedMap::BytesFor(*map) > budget_bytes_) return nullptr;
-  {
-    absl::MutexLock lock(&mu_);
-    if (auto hit = Find(map)) return hit;
-  }
-  absl::MutexLock build_lock(&build_mu_);
-  {
-    absl::MutexLock lock(&mu_);
-    if (auto hit = Find(map)) return hit;
-  }
-  std::shared_ptr<const PreparedMap> built = PreparedMap::Build(*map);
-  if (built == nullptr) return nullptr;
-  absl::MutexLock lock(&mu_);
-  // Drop the entries of freed maps first, then the least recently used.
-  for (auto it = entries_.begin(); it != entries_.end();) {
-    if (it->owner.expired()) {
-      bytes_ -= it->prepared->MemoryBytes();
-      it = entries_.erase(it);
-    } else {
-      ++it;
-    }
-  }
-  while (!entries_.empty() && bytes_ + built->MemoryBytes() > budget_bytes_) {
-    bytes_ -= entries_.back().prepared->MemoryBytes();
-    entries_.pop_back();
-  }
-  entries_.push_front(Entry{map.get(), map, built});
-  bytes_ += built->MemoryBytes();
-  return built;
-}
-
-size_t PreparedMapCache::MemoryBytes() const {
-  absl::MutexLock lock(&mu_);
-  return bytes_;
+  if (map == nullptr || PreparedMap::BytesFor(*map) > budget_bytes()) return nullptr;
+  return GetOrBuildOwned<const RiskMap*, PreparedMap>(cache_, map.get(), map,
+                                                      [&] { return PreparedMap::Build(*map); });
 }
 
 }  // namespace riskplan::accel

@@ -10,18 +10,18 @@
 // traffic, and measured slower on both access patterns.)
 //
 // PreparedMapCache holds the prepared maps of the maps in use, bounded by a
-// byte budget. It is thread-safe; a PreparedMap is immutable once built and is
-// shared read-only between threads.
+// byte budget (a BoundedCache keyed by the map, core/base/bounded_cache.h). It
+// is thread-safe; a PreparedMap is immutable once built and is shared
+// read-only between threads.
 #ifndef RISKPLAN_ACCEL_PREPARED_MAP_H_
 #define RISKPLAN_ACCEL_PREPARED_MAP_H_
 
 #include <cstddef>
 #include <cstdint>
-#include <list>
 #include <memory>
 
-#include "absl/base/thread_annotations.h"
-#include "absl/synchronization/mutex.h"
+#include "absl/functional/function_ref.h"
+#include "core/base/bounded_cache.h"
 #include "core/map/risk_map.h"
 
 namespace riskplan::accel {
@@ -75,7 +75,7 @@ class PreparedMapCache {
  public:
   // Holds at most `budget_bytes` of prepared maps (0: none; then Get() always
   // returns null and kernels read the map's own layers).
-  explicit PreparedMapCache(size_t budget_bytes) : budget_bytes_(budget_bytes) {}
+  explicit PreparedMapCache(size_t budget_bytes) : cache_({.max_bytes = budget_bytes}) {}
 
   // The prepared form of `map`, built on first use by the calling thread
   // (about 10 ms for demo-city; other callers for the same map wait). Null
@@ -84,27 +84,34 @@ class PreparedMapCache {
   // for holders of its shared_ptr. Never keeps `map` itself alive.
   std::shared_ptr<const PreparedMap> Get(const std::shared_ptr<const RiskMap>& map);
 
-  size_t MemoryBytes() const;
-  size_t budget_bytes() const { return budget_bytes_; }
+  size_t MemoryBytes() const { return cache_.stats().bytes; }
+  size_t budget_bytes() const { return cache_.limits().max_bytes; }
 
  private:
-  struct Entry {
-    const RiskMap* key;
-    // Not owning; also tells a freed map from a new one at the same address.
-    std::weak_ptr<const RiskMap> owner;
-    std::shared_ptr<const PreparedMap> prepared;
-  };
-
-  std::shared_ptr<const PreparedMap> Find(const std::shared_ptr<const RiskMap>& map)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-
-  const size_t budget_bytes_;
-  // Serialises builds so that a map is never built twice at once.
-  absl::Mutex build_mu_ ABSL_ACQUIRED_BEFORE(mu_);
-  mutable absl::Mutex mu_;
-  std::list<Entry> entries_ ABSL_GUARDED_BY(mu_);  // most recently used first
-  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
+  // Keyed by the map's address, with the map as the entry's owner: the entry
+  // goes stale when the map is freed, so a new map at the same address is
+  // never taken for it.
+  BoundedCache<const RiskMap*, PreparedMap> cache_;
 };
+
+// The accelerator caches' common step: the value of `key` in `cache`, built
+// by `build` on a miss and charged its MemoryBytes(), with `owner` as the
+// entry's owner. Null when `build` returns null (memory short): that is not
+// cached, and the callers that waited for it get null too.
+template <typename K, typename V>
+std::shared_ptr<const V> GetOrBuildOwned(BoundedCache<K, V>& cache, const K& key,
+                                         const std::shared_ptr<const void>& owner,
+                                         absl::FunctionRef<std::shared_ptr<const V>()> build) {
+  absl::StatusOr<std::shared_ptr<const V>> value = cache.GetOrBuild(
+      key,
+      [&]() -> absl::StatusOr<typename BoundedCache<K, V>::Built> {
+        std::shared_ptr<const V> built = build();
+        if (built == nullptr) return absl::ResourceExhaustedError("memory short");
+        return typename BoundedCache<K, V>::Built{built, built->MemoryBytes()};
+      },
+      owner);
+  return value.ok() ? *value : nullptr;
+}
 
 }  // namespace riskplan::accel
 

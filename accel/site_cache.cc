@@ -4,19 +4,9 @@
 #include <bit>
 
 #include "core/base/check.h"
+#include "core/base/hash_mix.h"
 
 namespace riskplan::accel {
-namespace {
-
-uint64_t Mix(uint64_t key) {
-  key ^= key >> 31;
-  key *= 0x7fb5d329728ea185ULL;
-  key ^= key >> 27;
-  key *= 0x81dadef4bc2dd44dULL;
-  return key ^ (key >> 33);
-}
-
-}  // namespace
 
 SiteCache::SiteCache(size_t budget_bytes, uint32_t max_tags)
     : max_tags_(std::min(max_tags, kMaxTag)) {
@@ -68,7 +58,7 @@ uint64_t SiteCache::KeyOf(const Session& session, const KernelSite& s) {
          (uint64_t(s.heading_bin) << 32) | (uint64_t(i) << 16) | uint64_t(j);
 }
 
-SiteCache::Slot& SiteCache::SlotOf(uint64_t key) const { return slots_[Mix(key) & mask_]; }
+SiteCache::Slot& SiteCache::SlotOf(uint64_t key) const { return slots_[Mix64(key) & mask_]; }
 
 void SiteCache::Prefetch(uint64_t key) const {
   if (key != 0) __builtin_prefetch(&SlotOf(key));

@@ -1,6 +1,7 @@
 #include "core/risk/risk_evaluator.h"
 
 #include "core/base/check.h"
+#include "core/base/hash_mix.h"
 
 namespace riskplan {
 namespace {
@@ -21,14 +22,6 @@ bool PackSite(const KernelSite& s, uint64_t* key) {
          (static_cast<uint64_t>(s.heading_bin) << 36) | (static_cast<uint64_t>(i) << 18) |
          static_cast<uint64_t>(j);
   return true;
-}
-
-uint64_t Mix(uint64_t key) {
-  key ^= key >> 31;
-  key *= 0x7fb5d329728ea185ULL;
-  key ^= key >> 27;
-  key *= 0x81dadef4bc2dd44dULL;
-  return key ^ (key >> 33);
 }
 
 }  // namespace
@@ -53,7 +46,7 @@ absl::Status CachingRiskEvaluator::EvaluateBatch(const RiskModel& model,
     uint64_t key = 0;
     Entry* entry = nullptr;
     if (PackSite(site, &key)) {
-      entry = &entries_[Mix(key) & mask_];
+      entry = &entries_[Mix64(key) & mask_];
       if (entry->key == key) {
         ++hits_;
         ConfigurationRisk& r = out[n];

@@ -20,41 +20,22 @@ std::shared_ptr<const SharedFeasibility> FeasibilityCache::Get(
   RISKPLAN_DCHECK(model != nullptr);
   RISKPLAN_DCHECK(CheckTwoTierOptions(options).ok());
   const Key key = KeyOf(model.get(), options);
-  {
-    // A list searched linearly: it holds at most `capacity_` entries (8 by
-    // default), and splice moves a hit to the front without reallocating.
-    absl::MutexLock lock(&mu_);
-    for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-      if (it->first != key) continue;
-      entries_.splice(entries_.begin(), entries_, it);
-      ++stats_.hits;
-      return entries_.front().second;
-    }
-  }
-  // Built without the lock (20 to 40 ms): hits on other checkers must not
-  // wait for it. Two misses on one key may both build; see below.
-  auto built = std::make_shared<const SharedFeasibility>(std::move(model), options);
-  absl::MutexLock lock(&mu_);
-  ++stats_.builds;
-  for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-    // Built meanwhile by another request: its copy is the cached one, and
-    // this one is dropped, so that every later request shares one checker.
-    if (it->first == key) return it->second;
-  }
-  entries_.emplace_front(key, built);
-  while (entries_.size() > capacity_) {
-    entries_.pop_back();
-    ++stats_.evictions;
-  }
-  return built;
+  // Built without the lock (20 to 40 ms): hits on other checkers do not wait
+  // for it. The build cannot fail, so neither can this.
+  return *cache_.GetOrBuild(
+      key, [&]() -> absl::StatusOr<BoundedCache<Key, SharedFeasibility>::Built> {
+        auto built = std::make_shared<const SharedFeasibility>(std::move(model), options);
+        return BoundedCache<Key, SharedFeasibility>::Built{built, built->checker.MemoryBytes()};
+      });
 }
 
 FeasibilityCache::Stats FeasibilityCache::stats() const {
-  absl::MutexLock lock(&mu_);
-  Stats stats = stats_;
-  stats.cached = entries_.size();
-  for (const auto& [key, entry] : entries_) stats.bytes += entry->checker.MemoryBytes();
-  return stats;
+  const CacheStats s = cache_.stats();
+  return Stats{.hits = s.hits,
+               .builds = s.misses,
+               .evictions = s.evictions,
+               .cached = s.entries,
+               .bytes = s.bytes};
 }
 
 }  // namespace riskplan::server

@@ -9,21 +9,20 @@
 // never used after its model is freed (the entries may keep at most
 // `capacity` models that RiskModelCache has already evicted).
 //
-// Thread-safe. Two requests that miss on the same key at once may both build
-// the checker (the first one stored wins); the lock is never held while
-// building.
+// A BoundedCache (core/base/bounded_cache.h) bounded by the entry count.
+// Thread-safe. Two requests that miss on the same key at once build the
+// checker once: the second waits for the first's build (and counts a hit).
+// The lock is never held while building.
 #ifndef RISKPLAN_SERVER_MODELS_FEASIBILITY_CACHE_H_
 #define RISKPLAN_SERVER_MODELS_FEASIBILITY_CACHE_H_
 
 #include <cstddef>
 #include <cstdint>
-#include <list>
 #include <memory>
 #include <tuple>
 #include <utility>
 
-#include "absl/base/thread_annotations.h"
-#include "absl/synchronization/mutex.h"
+#include "core/base/bounded_cache.h"
 #include "core/risk/risk_model.h"
 #include "core/planners/two_tier_feasibility.h"
 
@@ -41,7 +40,8 @@ struct SharedFeasibility {
 class FeasibilityCache {
  public:
   // `capacity` >= 1 checkers are kept (0 is taken as 1).
-  explicit FeasibilityCache(size_t capacity) : capacity_(capacity == 0 ? 1 : capacity) {}
+  explicit FeasibilityCache(size_t capacity)
+      : cache_({.max_entries = capacity == 0 ? 1 : capacity}) {}
 
   // The checker of `model` with `options`. Builds it on the calling thread
   // when it is not cached: call this from a worker pool, never from a gRPC
@@ -57,17 +57,13 @@ class FeasibilityCache {
     size_t bytes = 0;  // layers of the cached checkers
   };
   Stats stats() const;
-  size_t capacity() const { return capacity_; }
+  size_t capacity() const { return cache_.limits().max_entries; }
 
  private:
   using Key = std::tuple<const RiskModel*, int, int, int, int>;
   static Key KeyOf(const RiskModel* model, const TwoTierOptions& options);
 
-  const size_t capacity_;
-  mutable absl::Mutex mu_;
-  // Front: most recently used.
-  std::list<std::pair<Key, std::shared_ptr<const SharedFeasibility>>> entries_ ABSL_GUARDED_BY(mu_);
-  Stats stats_ ABSL_GUARDED_BY(mu_);
+  BoundedCache<Key, SharedFeasibility> cache_;  // each entry charged its layers
 };
 
 }  // namespace riskplan::server

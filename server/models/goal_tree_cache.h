@@ -14,7 +14,8 @@
 // goal pose, every model parameter and planner parameter (bit for bit), and
 // the seed.
 //
-// Bounded by an estimate of bytes (TreeBytes), least recently used first out.
+// Bounded by an estimate of bytes (TreeBytes), least recently used first out
+// (a BoundedCache keyed by GoalTreeKey::Encode(), core/base/bounded_cache.h).
 // Trees are immutable and shared (shared_ptr<const GoalTree>): a request that
 // hits reads one while another request inserts or evicts, and the planner
 // copies it before growing its own (SharedTreeOptions::initial_tree).
@@ -25,14 +26,11 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <list>
 #include <map>
 #include <memory>
 #include <string>
-#include <vector>
 
-#include "absl/base/thread_annotations.h"
-#include "absl/synchronization/mutex.h"
+#include "core/base/bounded_cache.h"
 #include "core/base/geometry.h"
 #include "core/base/model_params.h"
 #include "core/planners/shared_goal_tree.h"
@@ -57,7 +55,7 @@ struct GoalTreeKey {
 class GoalTreeCache {
  public:
   // REQUIRES: max_bytes > 0 (a server without the cache has none).
-  explicit GoalTreeCache(size_t max_bytes) : max_bytes_(max_bytes) {}
+  explicit GoalTreeCache(size_t max_bytes) : cache_({.max_bytes = max_bytes}) {}
 
   // The tree for `key`, made the most recently used, or null (a miss).
   // Counts a hit or a miss.
@@ -78,33 +76,16 @@ class GoalTreeCache {
   // long as the plan.
   static size_t TreeBytes(const GoalTree& tree, size_t key_bytes);
 
-  struct Stats {
-    uint64_t hits = 0;
-    uint64_t misses = 0;
-    uint64_t evictions = 0;
-    size_t entries = 0;
-    size_t bytes = 0;
-  };
-  Stats stats() const;
-  size_t max_bytes() const { return max_bytes_; }
+  // Hits and misses of Find(), trees evicted to stay within the bound, and
+  // the trees cached with their TreeBytes.
+  using Stats = CacheStats;
+  Stats stats() const { return cache_.stats(); }
+  size_t max_bytes() const { return cache_.limits().max_bytes; }
 
  private:
-  struct Entry {
-    std::shared_ptr<const GoalTree> tree;
-    size_t bytes = 0;
-    std::list<std::string>::iterator lru;  // its place in lru_
-  };
-
-  // Evicts least recently used trees until the total is within max_bytes;
-  // their trees go to `dropped`, to be freed after the lock is released.
-  void EvictLocked(std::vector<std::shared_ptr<const GoalTree>>* dropped)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-
-  const size_t max_bytes_;
-  mutable absl::Mutex mu_;
-  std::map<std::string, Entry> entries_ ABSL_GUARDED_BY(mu_);
-  std::list<std::string> lru_ ABSL_GUARDED_BY(mu_);  // front: most recently used
-  Stats stats_ ABSL_GUARDED_BY(mu_);
+  // Trees replaced or evicted are freed outside its lock: freeing a large
+  // tree's nodes need not hold up other requests.
+  BoundedCache<std::string, GoalTree> cache_;
 };
 
 }  // namespace riskplan::server

@@ -8,19 +8,18 @@
 // after the cache evicts it.
 //
 // Thread-safe. Concurrent requests for the same missing model wait for one
-// build instead of building it twice.
+// build instead of building it twice (the overridden models are a
+// BoundedCache bounded by their count, core/base/bounded_cache.h).
 #ifndef RISKPLAN_SERVER_MODELS_MODEL_CACHE_H_
 #define RISKPLAN_SERVER_MODELS_MODEL_CACHE_H_
 
 #include <cstdint>
-#include <list>
 #include <map>
 #include <memory>
 #include <string>
 
-#include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
-#include "absl/synchronization/mutex.h"
+#include "core/base/bounded_cache.h"
 #include "core/base/cancellation.h"
 #include "core/base/model_params.h"
 #include "core/map/risk_map.h"
@@ -75,29 +74,27 @@ class RiskModelCache {
   static std::string Fingerprint(const ModelParams& params);
 
  private:
-  struct Entry;
-
   RiskModelCache(const MapRegistry& registry, size_t max_overridden, const ModelBuildLimits& limits)
-      : registry_(registry), max_overridden_(max_overridden), limits_(limits) {
+      : registry_(registry), limits_(limits), overridden_({.max_entries = max_overridden}) {
     limits_.stop = StopCondition(&stop_builds_);
   }
 
-  void TouchLocked(const std::string& key) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-  void EvictLocked() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Builds the model for `params` (not the defaults) on this thread.
+  absl::StatusOr<BoundedCache<std::string, RiskModel>::Built> Build(const RiskMap& map,
+                                                                    const ModelParams& params);
 
   const MapRegistry& registry_;
-  const size_t max_overridden_;
   CancellationToken stop_builds_;
   ModelBuildLimits limits_;  // stops on stop_builds_
   // Immutable after Create().
   std::map<std::string, std::shared_ptr<const RiskModel>, std::less<>> defaults_;
   std::string default_fingerprint_;
 
-  mutable absl::Mutex mu_;
-  // Keyed by map name + Fingerprint(params).
-  std::map<std::string, std::shared_ptr<Entry>> entries_ ABSL_GUARDED_BY(mu_);
-  std::list<std::string> lru_ ABSL_GUARDED_BY(mu_);  // front: most recently used, built only
-  Stats stats_ ABSL_GUARDED_BY(mu_);
+  // The overridden models, keyed by map name + Fingerprint(params); each
+  // charged what it holds that the default model does not share. The
+  // defaults are not in it: they are never evicted, and kept where a lookup
+  // takes no lock.
+  BoundedCache<std::string, RiskModel> overridden_;
 };
 
 }  // namespace riskplan::server

@@ -33,7 +33,7 @@ def main(source):
     if failures:
         return failures
 
-    with open(f"{source}/server/metrics.cc") as f:
+    with open(f"{source}/server/observability/metrics.cc") as f:
         exported = set(re.findall(r'\.Name\("([a-z_]+)"\)', f.read()))
 
     hpa = by_kind["HorizontalPodAutoscaler"]["spec"]

@@ -245,93 +245,139 @@ bool Unplanned(const v1::FleetUpdate& u) {
 
 }  // namespace
 
+namespace {
+
+// What the caller of PlanFleet has seen, by mission index in the request,
+// across the calls that re-submit unfinished missions: every mission's
+// updates pass on with one stream of sequence numbers, each mission gets one
+// final, and a re-submitted mission's improvements pass on only when they
+// beat what the caller already has.
+class FleetProgress {
+ public:
+  FleetProgress(int missions, const FleetUpdateCallback& on_update)
+      : on_update_(on_update),
+        ended_(missions, false),
+        mission_sequence_(missions, 0),
+        best_risk_(missions, std::numeric_limits<double>::infinity()),
+        held_(missions),
+        sent_(missions) {
+    std::iota(sent_.begin(), sent_.end(), 0);
+  }
+
+  // The missions of the current call, by their index in the request.
+  const std::vector<int>& sent() const { return sent_; }
+  bool stopped() const { return stopped_; }
+
+  // One message of call `attempt`; false once the caller stops the stream.
+  bool Accept(const v1::FleetUpdate& in, int attempt, int max_resubmits) {
+    const int k = in.mission_index();
+    // Not a mission of this call: a server's error, passed on as it came.
+    if (k < 0 || k >= static_cast<int>(sent_.size())) {
+      if (!on_update_(in)) stopped_ = true;
+      return !stopped_;
+    }
+    const int i = sent_[k];
+    if (ended_[i]) return true;  // a second final: not passed on
+    v1::FleetUpdate u = in;
+    u.set_mission_index(i);
+    // Held back only while a re-submission may follow; otherwise it is
+    // the mission's final, passed on in its place in the stream.
+    if (Unplanned(u) && attempt < max_resubmits) {
+      held_[i] = std::move(u);
+      return true;
+    }
+    if (u.error_code() == 0 && !u.update().final() && u.update().has_trajectory()) {
+      // An improvement: a re-submitted mission starts over, and its first
+      // trajectories may be worse than what the caller already has.
+      const double risk = u.update().trajectory().risk();
+      if (attempt > 0 && !(risk < best_risk_[i])) return true;
+      best_risk_[i] = std::min(best_risk_[i], risk);
+    }
+    return PassOn(std::move(u), attempt);
+  }
+
+  // The missions of the current call without a final yet.
+  std::vector<int> Unfinished() const {
+    std::vector<int> unfinished;
+    for (int i : sent_) {
+      if (!ended_[i]) unfinished.push_back(i);
+    }
+    return unfinished;
+  }
+
+  // Each of `unfinished`'s held Unplanned finals, passed on: a mission the
+  // drain of an earlier replica ended unplanned still gets that final. False
+  // when the caller stops the stream.
+  bool PassHeld(const std::vector<int>& unfinished, int attempt) {
+    for (int i : unfinished) {
+      if (held_[i].has_value() && !PassOn(*std::move(held_[i]), attempt)) return false;
+    }
+    return true;
+  }
+
+  // The next call sends `unfinished` only.
+  void Resubmit(std::vector<int> unfinished) { sent_ = std::move(unfinished); }
+
+ private:
+  bool PassOn(v1::FleetUpdate u, int attempt) {
+    const int i = u.mission_index();
+    const bool final = u.error_code() != 0 || u.update().final();
+    if (final) {
+      ended_[i] = true;
+      ++missions_ended_;
+    }
+    u.set_sequence(++sequence_);
+    u.set_missions_ended(missions_ended_);
+    if (u.has_update()) {
+      if (attempt > 0) u.mutable_update()->set_sequence(mission_sequence_[i] + 1);
+      mission_sequence_[i] = u.update().sequence();
+    }
+    if (!on_update_(u)) stopped_ = true;
+    return !stopped_;
+  }
+
+  const FleetUpdateCallback& on_update_;
+  std::vector<bool> ended_;
+  std::vector<uint64_t> mission_sequence_;
+  std::vector<double> best_risk_;
+  // The latest Unplanned final of each mission, passed on if the mission
+  // gets no other.
+  std::vector<std::optional<v1::FleetUpdate>> held_;
+  std::vector<int> sent_;
+  uint64_t sequence_ = 0;
+  int missions_ended_ = 0;
+  bool stopped_ = false;
+};
+
+}  // namespace
+
 grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
                                        const FleetUpdateCallback& on_update,
                                        absl::Duration timeout,
                                        const FleetResubmitOptions& resubmit) {
   const absl::Time deadline =
       timeout == absl::InfiniteDuration() ? absl::InfiniteFuture() : absl::Now() + timeout;
-  const int n = request.missions_size();
-  // What the caller has seen, by index in `request`.
-  std::vector<bool> ended(n, false);
-  std::vector<uint64_t> mission_sequence(n, 0);
-  std::vector<double> best_risk(n, std::numeric_limits<double>::infinity());
-  uint64_t sequence = 0;
-  int missions_ended = 0;
-  // The missions of this call, by their index in `request`.
-  std::vector<int> sent(n);
-  std::iota(sent.begin(), sent.end(), 0);
+  FleetProgress progress(request.missions_size(), on_update);
   v1::FleetRequest call_request = request;
-  // The latest Unplanned final of each mission, passed on if the mission
-  // gets no other.
-  std::vector<std::optional<v1::FleetUpdate>> held(n);
   for (int attempt = 0;; ++attempt) {
-    bool stopped = false;
-    const auto pass_on = [&](v1::FleetUpdate u) {
-      const int i = u.mission_index();
-      const bool final = u.error_code() != 0 || u.update().final();
-      if (final) {
-        ended[i] = true;
-        ++missions_ended;
-      }
-      u.set_sequence(++sequence);
-      u.set_missions_ended(missions_ended);
-      if (u.has_update()) {
-        if (attempt > 0) u.mutable_update()->set_sequence(mission_sequence[i] + 1);
-        mission_sequence[i] = u.update().sequence();
-      }
-      if (!on_update(u)) stopped = true;
-      return !stopped;
-    };
     grpc::ClientContext context;
     if (deadline != absl::InfiniteFuture()) context.set_deadline(absl::ToChronoTime(deadline));
     std::unique_ptr<grpc::ClientReader<v1::FleetUpdate>> reader =
         stub_->PlanFleet(&context, call_request);
     const grpc::Status status = ReadUntilStopped(context, *reader, [&](const v1::FleetUpdate& in) {
-      const int k = in.mission_index();
-      // Not a mission of this call: a server's error, passed on as it came.
-      if (k < 0 || k >= static_cast<int>(sent.size())) {
-        if (!on_update(in)) stopped = true;
-        return !stopped;
-      }
-      const int i = sent[k];
-      if (ended[i]) return true;  // a second final: not passed on
-      v1::FleetUpdate u = in;
-      u.set_mission_index(i);
-      // Held back only while a re-submission may follow; otherwise it is
-      // the mission's final, passed on in its place in the stream.
-      if (Unplanned(u) && attempt < resubmit.max_resubmits) {
-        held[i] = std::move(u);
-        return true;
-      }
-      if (u.error_code() == 0 && !u.update().final()) {
-        // An improvement: a re-submitted mission starts over, and its first
-        // trajectories may be worse than what the caller already has.
-        if (u.update().has_trajectory()) {
-          const double risk = u.update().trajectory().risk();
-          if (attempt > 0 && !(risk < best_risk[i])) return true;
-          best_risk[i] = std::min(best_risk[i], risk);
-        }
-      }
-      return pass_on(std::move(u));
+      return progress.Accept(in, attempt, resubmit.max_resubmits);
     });
-    if (stopped) return status;
-    std::vector<int> unfinished;
-    for (int i : sent) {
-      if (!ended[i]) unfinished.push_back(i);
-    }
+    if (progress.stopped()) return status;
+    std::vector<int> unfinished = progress.Unfinished();
     const absl::Duration wait = resubmit.backoff * (1 << std::min(attempt, 16));
     const bool resubmit_now =
         !unfinished.empty() && attempt < resubmit.max_resubmits &&
         (status.ok() || status.error_code() == grpc::StatusCode::UNAVAILABLE) &&
         absl::Now() + wait < deadline;
     if (!resubmit_now) {
-      // Also after a failed re-submission: a mission the drain of an earlier
-      // replica ended unplanned still gets that final.
-      for (int i : unfinished) {
-        if (held[i].has_value() && !pass_on(*std::move(held[i]))) {
-          return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the update callback");
-        }
+      // Also after a failed re-submission.
+      if (!progress.PassHeld(unfinished, attempt)) {
+        return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the update callback");
       }
       return status;
     }
@@ -343,7 +389,7 @@ grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
     absl::SleepFor(wait);
     call_request.clear_missions();
     for (int i : unfinished) *call_request.add_missions() = request.missions(i);
-    sent = std::move(unfinished);
+    progress.Resubmit(std::move(unfinished));
   }
 }
 

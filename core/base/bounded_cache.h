@@ -15,7 +15,9 @@
 //   value or its error. A failed build is not cached (the next call builds
 //   again: a failure may be transient, like a stopped build or short memory)
 //   but is reported to every caller that waited for it, so that one build
-//   costs one attempt however many callers asked.
+//   costs one attempt however many callers asked. A build that throws is a failed
+//   build too: its waiters get an error, and the exception goes on to the
+//   caller that built.
 // - A value larger than the whole bound (or any value when max_entries is 0)
 //   is returned but not kept, and evicts nothing.
 // - Owned entries: an entry may name an owner (the object its value was
@@ -146,6 +148,8 @@ class BoundedCache {
   bool MakeRoomLocked(size_t bytes, Dropped* dropped) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   void LinkLocked(typename Map::iterator it, std::shared_ptr<const V> value, size_t bytes)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Ends a build that threw: its waiters get an error, and its entry goes.
+  void Abandon(const K& key, Pending& pending) ABSL_LOCKS_EXCLUDED(mu_);
 
   const Limits limits_;
   mutable absl::Mutex mu_;
@@ -199,7 +203,16 @@ absl::StatusOr<std::shared_ptr<const V>> BoundedCache<K, V, C>::GetOrBuild(
     entry.owner = owner;
   }
 
-  absl::StatusOr<Built> built = build();
+  absl::StatusOr<Built> built = absl::UnknownError("not built");
+  try {
+    built = build();
+  } catch (...) {
+    // The waiters must not wait for ever, nor the key stay pending: they get
+    // an error and the entry goes, and the exception goes on to this caller
+    // (the server turns bad_alloc into RESOURCE_EXHAUSTED).
+    Abandon(key, *pending);
+    throw;
+  }
 
   absl::MutexLock lock(&mu_);
   auto it = entries_.find(key);  // still there: only its build removes it
@@ -218,6 +231,17 @@ absl::StatusOr<std::shared_ptr<const V>> BoundedCache<K, V, C>::GetOrBuild(
   }
   built_.SignalAll();
   return pending->result;
+}
+
+template <typename K, typename V, typename C>
+void BoundedCache<K, V, C>::Abandon(const K& key, Pending& pending) {
+  absl::MutexLock lock(&mu_);
+  pending.done = true;
+  pending.result = absl::InternalError(
+      "building this cache entry failed with an exception (the caller that built it got it); "
+      "try again");
+  entries_.erase(key);  // still there: only its build removes it
+  built_.SignalAll();
 }
 
 template <typename K, typename V, typename C>

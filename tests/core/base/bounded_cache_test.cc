@@ -1,7 +1,9 @@
 #include "core/base/bounded_cache.h"
 
 #include <atomic>
+#include <chrono>
 #include <memory>
+#include <new>
 #include <string>
 #include <thread>
 #include <vector>
@@ -175,6 +177,44 @@ TEST(BoundedCacheTest, FailedBuildReachesEveryWaiterAndIsNotCached) {
   const int before = builds;
   EXPECT_TRUE(cache.GetOrBuild(7, Builder(&builds, "ok", 1)).ok());
   EXPECT_EQ(builds, before + 1);
+}
+
+// A build that throws: the exception reaches its caller, every waiter gets
+// an error instead of waiting for ever, and the next call builds again.
+TEST(BoundedCacheTest, BuildThatThrowsReleasesItsWaiters) {
+  Cache cache({});
+  absl::Notification building;
+  absl::Notification throw_now;
+  std::thread builder([&] {
+    EXPECT_THROW(cache.GetOrBuild(7,
+                                  [&]() -> absl::StatusOr<Cache::Built> {
+                                    building.Notify();
+                                    throw_now.WaitForNotification();
+                                    throw std::bad_alloc();
+                                  }),
+                 std::bad_alloc);
+  });
+  building.WaitForNotification();
+  absl::StatusOr<std::shared_ptr<const std::string>> waited;
+  std::thread waiter([&] {
+    waited = cache.GetOrBuild(7, []() -> absl::StatusOr<Cache::Built> {
+      return absl::UnknownError("a waiter that came after the throw would build; see below");
+    });
+  });
+  // Give the waiter time to reach the cache: if it comes late it builds
+  // itself, and gets its own error, which the assertions below allow for.
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  throw_now.Notify();
+  builder.join();
+  waiter.join();
+  EXPECT_FALSE(waited.ok());
+  EXPECT_EQ(cache.stats().entries, 0u);
+  std::atomic<int> builds = 0;
+  absl::StatusOr<std::shared_ptr<const std::string>> again =
+      cache.GetOrBuild(7, Builder(&builds, "ok", 1));
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(**again, "ok");
+  EXPECT_EQ(builds, 1);
 }
 
 TEST(BoundedCacheTest, EntriesOfAFreedOwnerAreStale) {

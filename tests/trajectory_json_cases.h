@@ -1,6 +1,7 @@
 // The shared table of trajectory JSON cases, tests/data/trajectory_json_cases.json:
-// one rule, two implementations (core/flight/trajectory_io.h for riskplan-tool,
-// client/trajectory_text.h for the CLI), both tested against this one table by
+// one rule, parsed once (formats/trajectory_json.h), behind two adapters
+// (core/flight/trajectory_io.h for riskplan-tool, client/trajectory_text.h for
+// the CLI), both tested against this one table by
 // tests/core/flight/trajectory_io_test.cc and tests/client/trajectory_text_test.cc.
 #ifndef RISKPLAN_TESTS_TRAJECTORY_JSON_CASES_H_
 #define RISKPLAN_TESTS_TRAJECTORY_JSON_CASES_H_

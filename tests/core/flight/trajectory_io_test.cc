@@ -1,7 +1,7 @@
 // riskplan-tool's trajectory JSON reader against the shared table of cases,
 // tests/data/trajectory_json_cases.json, which the CLI client's reader
-// (tests/client/trajectory_text_test.cc) is tested against too: one rule,
-// two implementations, one table.
+// (tests/client/trajectory_text_test.cc) is tested against too: one rule
+// (formats/trajectory_json.h), two adapters, one table.
 #include "core/flight/trajectory_io.h"
 
 #include <unistd.h>

@@ -315,85 +315,96 @@ int Info() {
   return 0;
 }
 
-int RiskLayerCommand() {
-  const std::string out = absl::GetFlag(FLAGS_out);
-  if (out.empty()) return Fail(absl::InvalidArgumentError("risk-layer: --out=PREFIX is required"));
-  auto params = ParamsFromFlag();
-  if (!params.ok()) return Fail(params.status());
+// risk-layer's options from --agl_m, --threads, --stride and --heading_deg
+// (its text is passed in: the outputs describe it too).
+absl::StatusOr<RiskLayerOptions> RiskLayerOptionsFromFlags(const std::string& heading) {
   RiskLayerOptions options;
   options.height_agl_m = absl::GetFlag(FLAGS_agl_m);
   options.threads = absl::GetFlag(FLAGS_threads);
   options.stride = absl::GetFlag(FLAGS_stride);
-  const std::string heading = absl::GetFlag(FLAGS_heading_deg);
   double degrees = 0.0;
   if (heading == "max") {
     options.heading_rad = std::nan("");
   } else if (absl::SimpleAtod(heading, &degrees) && std::isfinite(degrees)) {
     options.heading_rad = NormalizeHeading(degrees * kPi / 180.0);
   } else {
-    return Fail(absl::InvalidArgumentError(absl::StrFormat(
-        "risk-layer: --heading_deg='%s' is neither a number of degrees nor 'max'", heading)));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "risk-layer: --heading_deg='%s' is neither a number of degrees nor 'max'", heading));
   }
-  auto map = LoadMap(*params);
-  if (!map.ok()) return Fail(map.status());
-  auto model = RiskModel::Create(*map, *params);
-  if (!model.ok()) return Fail(model.status());
-  // The .prj is checked before the long computation, so a bad geo-reference
-  // costs nothing.
-  const std::optional<GeoReference>& geo = (*map)->header().geo;
+  return options;
+}
+
+// Where a risk layer sits on the Earth: the .prj's WKT and the GeoTIFF's
+// frame, both empty when the map has no geo-reference.
+struct LayerPlacement {
   std::string wkt;
   std::optional<geo::GeoFrame> frame;
-  if (geo.has_value()) {
-    auto text = LocalAzimuthalEquidistantWkt(*geo, (*map)->name(), (*map)->x0(), (*map)->y0());
-    if (!text.ok()) return Fail(text.status());
-    wkt = *std::move(text);
-    auto f = geo::FrameOfMap((*map)->header());
-    if (!f.ok()) return Fail(f.status());
-    frame = *std::move(f);
-  }
-  const absl::Time start = absl::Now();
-  auto layer = ComputeRiskLayer(**model, options);
-  if (!layer.ok()) return Fail(layer.status());
-  const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
-  if (absl::Status s = WriteHeatMapPng(*layer, out + ".png"); !s.ok()) return Fail(s);
-  if (absl::Status s = WriteAsciiGrid(*layer, out + ".asc"); !s.ok()) return Fail(s);
+};
+
+absl::StatusOr<LayerPlacement> PlacementOf(const RiskMap& map) {
+  LayerPlacement placement;
+  const std::optional<GeoReference>& geo = map.header().geo;
+  if (!geo.has_value()) return placement;
+  auto text = LocalAzimuthalEquidistantWkt(*geo, map.name(), map.x0(), map.y0());
+  if (!text.ok()) return text.status();
+  placement.wkt = *std::move(text);
+  auto frame = geo::FrameOfMap(map.header());
+  if (!frame.ok()) return frame.status();
+  placement.frame = *std::move(frame);
+  return placement;
+}
+
+// Writes PREFIX.png, .asc, .tif and, with a geo-reference, .prj. Returns
+// whether a stale .prj was removed.
+absl::StatusOr<bool> WriteLayerFiles(const RiskLayer& layer, const RiskMap& map,
+                                     const LayerPlacement& placement,
+                                     const RiskLayerOptions& options, const std::string& heading,
+                                     const std::string& out) {
+  if (absl::Status s = WriteHeatMapPng(layer, out + ".png"); !s.ok()) return s;
+  if (absl::Status s = WriteAsciiGrid(layer, out + ".asc"); !s.ok()) return s;
   if (absl::Status s = geo::WriteRiskLayerGeoTiff(
-          *layer, frame.has_value() ? &*frame : nullptr,
-          {(*map)->name(), options.height_agl_m,
+          layer, placement.frame.has_value() ? &*placement.frame : nullptr,
+          {map.name(), options.height_agl_m,
            heading == "max" ? "max over heading bins"
                             : heading + " deg counter-clockwise from east"},
           out + ".tif");
       !s.ok()) {
-    return Fail(s);
+    return s;
   }
   const std::string prj = out + ".prj";
-  bool removed_stale_prj = false;
-  if (geo.has_value()) {
-    if (absl::Status s = WriteTextFile(wkt, prj); !s.ok()) return Fail(s);
-  } else {
-    // A .prj left by an earlier run would place this .asc wrongly in a GIS.
-    removed_stale_prj = std::remove(prj.c_str()) == 0;
+  if (map.header().geo.has_value()) {
+    if (absl::Status s = WriteTextFile(placement.wkt, prj); !s.ok()) return s;
+    return false;
   }
-  const int64_t cells = static_cast<int64_t>(layer->nx) * layer->ny;
+  // A .prj left by an earlier run would place this .asc wrongly in a GIS.
+  return std::remove(prj.c_str()) == 0;
+}
+
+void PrintLayerReport(const RiskLayer& layer, const RiskMap& map, const RiskLayerOptions& options,
+                      const std::string& heading, const std::string& out, double seconds,
+                      bool removed_stale_prj) {
+  const std::optional<GeoReference>& geo = map.header().geo;
+  const std::string prj = out + ".prj";
+  const int64_t cells = static_cast<int64_t>(layer.nx) * layer.ny;
   std::printf("risk layer of %s: %d x %d cells of %g m at %.0f m AGL, heading %s\n",
-              (*map)->name().c_str(), layer->nx, layer->ny, layer->res_m, options.height_agl_m,
+              map.name().c_str(), layer.nx, layer.ny, layer.res_m, options.height_agl_m,
               heading == "max" ? "max over bins" : (heading + " deg").c_str());
-  if (layer->nx * options.stride != (*map)->nx() || layer->ny * options.stride != (*map)->ny()) {
+  if (layer.nx * options.stride != map.nx() || layer.ny * options.stride != map.ny()) {
     std::printf("stride %d leaves out the last %d column(s) and %d row(s) of the map\n",
-                options.stride, (*map)->nx() - layer->nx * options.stride,
-                (*map)->ny() - layer->ny * options.stride);
+                options.stride, map.nx() - layer.nx * options.stride,
+                map.ny() - layer.ny * options.stride);
   }
   std::printf(
       "computed %lld configuration risks in %.3f s on %d thread(s): %.0f cells/s, "
       "%.0f risks/s per thread\n",
-      static_cast<long long>(layer->evaluations), seconds, options.threads, cells / seconds,
-      layer->evaluations / seconds / options.threads);
+      static_cast<long long>(layer.evaluations), seconds, options.threads, cells / seconds,
+      layer.evaluations / seconds / options.threads);
   if (geo.has_value()) {
     std::printf(
         "wrote %s.png, %s.asc and %s (azimuthal equidistant on WGS84 centred at "
         "%.9g, %.9g deg = map point (%g, %g) m; map crs '%s')\n",
         out.c_str(), out.c_str(), prj.c_str(), geo->origin_lat_deg, geo->origin_lon_deg,
-        (*map)->x0(), (*map)->y0(), geo->crs.c_str());
+        map.x0(), map.y0(), geo->crs.c_str());
   } else {
     std::printf(
         "wrote %s.png and %s.asc; no .prj: the map has no geo-reference, so the grid is "
@@ -403,6 +414,31 @@ int RiskLayerCommand() {
   }
   std::printf("wrote %s.tif (Cloud-Optimized GeoTIFF, Float64, NODATA NaN%s)\n", out.c_str(),
               geo.has_value() ? ", CRS the map's local frame" : ", no CRS");
+}
+
+int RiskLayerCommand() {
+  const std::string out = absl::GetFlag(FLAGS_out);
+  if (out.empty()) return Fail(absl::InvalidArgumentError("risk-layer: --out=PREFIX is required"));
+  auto params = ParamsFromFlag();
+  if (!params.ok()) return Fail(params.status());
+  const std::string heading = absl::GetFlag(FLAGS_heading_deg);
+  auto options = RiskLayerOptionsFromFlags(heading);
+  if (!options.ok()) return Fail(options.status());
+  auto map = LoadMap(*params);
+  if (!map.ok()) return Fail(map.status());
+  auto model = RiskModel::Create(*map, *params);
+  if (!model.ok()) return Fail(model.status());
+  // The .prj is checked before the long computation, so a bad geo-reference
+  // costs nothing.
+  auto placement = PlacementOf(**map);
+  if (!placement.ok()) return Fail(placement.status());
+  const absl::Time start = absl::Now();
+  auto layer = ComputeRiskLayer(**model, *options);
+  if (!layer.ok()) return Fail(layer.status());
+  const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  auto removed_stale_prj = WriteLayerFiles(*layer, **map, *placement, *options, heading, out);
+  if (!removed_stale_prj.ok()) return Fail(removed_stale_prj.status());
+  PrintLayerReport(*layer, **map, *options, heading, out, seconds, *removed_stale_prj);
   return 0;
 }
 

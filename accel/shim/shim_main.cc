@@ -23,6 +23,7 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -193,40 +194,45 @@ absl::StatusOr<std::shared_ptr<net::TlsContext>> ListenerTls() {
   return net::TlsContext::ForListener(files);
 }
 
-int Main() {
-  // Block the stop signals before any thread starts (threads inherit the
-  // mask, so none of them takes the signal), and wait for them here.
+// Blocks the stop signals in the calling thread, before any thread starts
+// (threads inherit the mask, so none of them takes the signal); Main waits
+// for them.
+sigset_t BlockStopSignals() {
   sigset_t stop;
   sigemptyset(&stop);
   sigaddset(&stop, SIGTERM);
   sigaddset(&stop, SIGINT);
   pthread_sigmask(SIG_BLOCK, &stop, nullptr);
+  return stop;
+}
 
+// --report_clock_hz, rounded to whole Hz (0: the component's CLOCK_HZ).
+absl::StatusOr<uint64_t> ReportClockFromFlag() {
   const double report_clock_hz = absl::GetFlag(FLAGS_report_clock_hz);
   if (!std::isfinite(report_clock_hz) || report_clock_hz < 0 || report_clock_hz > 1e12) {
-    std::cerr << "riskplan-fpga-shim: --report_clock_hz must be a clock in Hz (0: the "
-                 "component's CLOCK_HZ)\n";
-    return 2;
+    return absl::InvalidArgumentError(
+        "--report_clock_hz must be a clock in Hz (0: the component's CLOCK_HZ)");
   }
-  absl::StatusOr<OpenedDevice> opened = MakeDevice();
-  if (!opened.ok()) {
-    std::cerr << "riskplan-fpga-shim: " << opened.status().message() << "\n";
-    return 2;
-  }
-  std::unique_ptr<EwmmDevice> device = std::move(opened->device);
-  const uint64_t wanted_clock_hz = static_cast<uint64_t>(std::llround(report_clock_hz));
-  if (wanted_clock_hz != 0 && device->info().backend == "model") {
+  return static_cast<uint64_t>(std::llround(report_clock_hz));
+}
+
+// The device as served: reporting `clock_hz` where one was asked for. The
+// model backend counts no cycles, so it is left as it is, with a warning.
+std::unique_ptr<EwmmDevice> WithReportedClock(std::unique_ptr<EwmmDevice> device,
+                                              uint64_t clock_hz) {
+  if (clock_hz == 0) return device;
+  if (device->info().backend == "model") {
     std::cerr << "riskplan-fpga-shim: --report_clock_hz: the model backend counts no cycles; "
                  "ignored\n";
-  } else if (wanted_clock_hz != 0) {
-    device = std::make_unique<ReportedClockDevice>(std::move(device), wanted_clock_hz);
+    return device;
   }
+  return std::make_unique<ReportedClockDevice>(std::move(device), clock_hz);
+}
+
+absl::StatusOr<ShimServerOptions> ServerOptionsFromFlags() {
   ShimServerOptions options;
   absl::StatusOr<std::shared_ptr<net::TlsContext>> tls = ListenerTls();
-  if (!tls.ok()) {
-    std::cerr << "riskplan-fpga-shim: cannot start: " << tls.status().message() << "\n";
-    return 1;
-  }
+  if (!tls.ok()) return tls.status();
   options.tls = *std::move(tls);
   options.on_tls_event = [](const std::string& line) {
     std::cerr << "riskplan-fpga-shim: " + line + "\n" << std::flush;
@@ -234,17 +240,10 @@ int Main() {
   options.limits.store_bytes = uint64_t(absl::GetFlag(FLAGS_store_mb)) << 20;
   options.limits.max_sites_per_eval = static_cast<uint32_t>(absl::GetFlag(FLAGS_max_sites));
   options.idle_timeout = absl::Seconds(absl::GetFlag(FLAGS_idle_timeout_s));
-  const DeviceInfo info = device->info();
-  const std::function<uint64_t()> bus_clocks = opened->bus_clocks;
-  // The clocks of the reset and of reading the component's identity are not
-  // the EVALs'.
-  const uint64_t bus_clocks_before = bus_clocks ? bus_clocks() : 0;
-  ShimServer server(std::move(device), options);
-  absl::StatusOr<std::string> bound = server.Start(absl::GetFlag(FLAGS_listen));
-  if (!bound.ok()) {
-    std::cerr << "riskplan-fpga-shim: " << bound.status().message() << "\n";
-    return 1;
-  }
+  return options;
+}
+
+void PrintDevice(const DeviceInfo& info) {
   std::cerr << "riskplan-fpga-shim: device " << info.backend << " (" << info.device << ", "
             << info.firmware << "), format " << info.format.Name() << ", " << info.lanes
             << " lane(s)";
@@ -252,13 +251,12 @@ int Main() {
     std::cerr << ", times reported at " << static_cast<double>(info.clock_hz) / 1e6 << " MHz";
   }
   std::cerr << "\n";
-  // Flushed at once: whoever started the shim learns the port from this line.
-  std::cout << "riskplan-fpga-shim listening on " << *bound << std::endl;
-  int signal = 0;
-  sigwait(&stop, &signal);
-  server.Stop();
-  // What the device did, and what it would take at the reported clock.
-  const ShimContext& served = server.context();
+}
+
+// What the device did, and what it would take at the reported clock. `bus`
+// is the clocks the bus simulated while serving (absent: not counted).
+void PrintServed(const ShimContext& served, const DeviceInfo& info,
+                 std::optional<uint64_t> bus) {
   const uint64_t sites = served.sites.load(), cycles = served.device_cycles.load();
   const auto report = [&](const char* what, uint64_t count) {
     std::cerr << "; " << what << " " << count << " cycles = "
@@ -271,12 +269,50 @@ int Main() {
             << " site(s)";
   if (cycles > 0 && info.clock_hz > 0) {
     report("jobs (START to DONE)", cycles);
-    if (bus_clocks) {
-      report("bus (every simulated clock, CSR accesses included)",
-             bus_clocks() - bus_clocks_before);
-    }
+    if (bus.has_value()) report("bus (every simulated clock, CSR accesses included)", *bus);
   }
   std::cerr << "\n";
+}
+
+int Main() {
+  sigset_t stop = BlockStopSignals();
+  absl::StatusOr<uint64_t> report_clock_hz = ReportClockFromFlag();
+  if (!report_clock_hz.ok()) {
+    std::cerr << "riskplan-fpga-shim: " << report_clock_hz.status().message() << "\n";
+    return 2;
+  }
+  absl::StatusOr<OpenedDevice> opened = MakeDevice();
+  if (!opened.ok()) {
+    std::cerr << "riskplan-fpga-shim: " << opened.status().message() << "\n";
+    return 2;
+  }
+  std::unique_ptr<EwmmDevice> device =
+      WithReportedClock(std::move(opened->device), *report_clock_hz);
+  absl::StatusOr<ShimServerOptions> options = ServerOptionsFromFlags();
+  if (!options.ok()) {
+    std::cerr << "riskplan-fpga-shim: cannot start: " << options.status().message() << "\n";
+    return 1;
+  }
+  const DeviceInfo info = device->info();
+  const std::function<uint64_t()> bus_clocks = opened->bus_clocks;
+  // The clocks of the reset and of reading the component's identity are not
+  // the EVALs'.
+  const uint64_t bus_clocks_before = bus_clocks ? bus_clocks() : 0;
+  ShimServer server(std::move(device), *options);
+  absl::StatusOr<std::string> bound = server.Start(absl::GetFlag(FLAGS_listen));
+  if (!bound.ok()) {
+    std::cerr << "riskplan-fpga-shim: " << bound.status().message() << "\n";
+    return 1;
+  }
+  PrintDevice(info);
+  // Flushed at once: whoever started the shim learns the port from this line.
+  std::cout << "riskplan-fpga-shim listening on " << *bound << std::endl;
+  int signal = 0;
+  sigwait(&stop, &signal);
+  server.Stop();
+  std::optional<uint64_t> bus;
+  if (bus_clocks) bus = bus_clocks() - bus_clocks_before;
+  PrintServed(server.context(), info, bus);
   return 0;
 }
 

@@ -106,7 +106,9 @@ ABSL_FLAG(std::string, report_json, "", "load: also write the report as JSON to 
 namespace {
 
 // The help: every command with the flags it reads (cmdline/help.h checks
-// that each flag above is read by one at least).
+// that each flag above is read by one at least). It is long but one table,
+// kept whole so that it reads like the --help it prints: the flag groups
+// first, as several commands share them, then one entry per command.
 riskplan::cmdline::ProgramHelp Help() {
   riskplan::cmdline::ProgramHelp help;
   help.program = "riskplan";

@@ -117,6 +117,123 @@ absl::StatusOr<std::vector<double>> DensityFromRaster(ImportContext& ctx) {
   return values;
 }
 
+// The census polygons that meet the map: each one's people, whole area (not
+// only the part in the map) and geometry in the map's frame.
+struct CensusPolygons {
+  std::vector<double> people;
+  std::vector<double> area_m2;
+  std::vector<std::unique_ptr<OGRGeometry>> carried;
+};
+
+// Checks every feature (a polygon with a count >= 0 and an area) and carries
+// it into an equal-area frame (for its area) and into the map's frame.
+absl::StatusOr<CensusPolygons> CarryCensusPolygons(const VectorInput& in,
+                                                   const std::vector<SourceFeature>& features,
+                                                   const std::string& count_field,
+                                                   const TargetGrid& grid) {
+  auto to_frame = ToFrame(*in.srs, grid);
+  if (!to_frame.ok()) return to_frame.status();
+  auto equal_area = EqualAreaFrame(grid);
+  if (!equal_area.ok()) return equal_area.status();
+  auto to_equal_area = TransformationBetween(*in.srs, **equal_area);
+  if (!to_equal_area.ok()) return to_equal_area.status();
+
+  CensusPolygons out;
+  CarryBudget budget;  // this input's
+  for (const SourceFeature& f : features) {
+    if (!IsPolygonal(*f.geometry)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: feature %d is a %s; census areas must be polygons", in.Label(),
+                          f.fid, OGRGeometryTypeToName(f.geometry->getGeometryType())));
+    }
+    if (!f.number.has_value() || !std::isfinite(*f.number) || *f.number < 0.0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: feature %d has %s '%s'; a population count must be a number >= 0", in.Label(),
+          f.fid, f.number.has_value() ? absl::StrFormat("%.9g in", *f.number) : "no value in",
+          count_field));
+    }
+    auto ea = Carry(*f.geometry, *in.srs, **to_equal_area, budget);
+    if (!ea.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: feature %d: %s", in.Label(), f.fid, ea.status().message()));
+    }
+    const double area = OGR_G_Area(OGRGeometry::ToHandle(ea->get()));
+    if (!(area > 0.0)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: feature %d has no area", in.Label(), f.fid));
+    }
+    auto g = Carry(*f.geometry, *in.srs, **to_frame, budget);
+    if (!g.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: feature %d: %s", in.Label(), f.fid, g.status().message()));
+    }
+    out.people.push_back(*f.number);
+    out.area_m2.push_back(area);
+    out.carried.push_back(*std::move(g));
+  }
+  return out;
+}
+
+// The polygon of each cell, numbered from 1 in the order of `polygons`
+// (0: none).
+absl::StatusOr<std::vector<int32_t>> BurnPolygonIds(const TargetGrid& grid,
+                                                    const CensusPolygons& polygons) {
+  std::vector<const OGRGeometry*> geometries;
+  std::vector<int32_t> ids;
+  for (size_t k = 0; k < polygons.carried.size(); ++k) {
+    geometries.push_back(polygons.carried[k].get());
+    ids.push_back(static_cast<int32_t>(k + 1));
+  }
+  return BurnIds(grid, geometries, ids);
+}
+
+// Each polygon's people spread evenly over its area (NaN outside every one).
+std::vector<double> SpreadOverArea(const std::vector<int32_t>& id,
+                                   const CensusPolygons& polygons) {
+  std::vector<double> density(id.size(), std::nan(""));
+  for (size_t c = 0; c < id.size(); ++c) {
+    const int32_t v = id[c];
+    if (v > 0) density[c] = polygons.people[v - 1] / polygons.area_m2[v - 1];
+  }
+  return density;
+}
+
+// The polygon's people in the map (its share of the polygon's area), spread
+// over the built-up part of its cells in the map; a polygon without buildings
+// in the map spreads over its area (counted in *no_buildings).
+absl::StatusOr<std::vector<double>> SpreadOverBuiltUp(ImportContext& ctx,
+                                                      const std::vector<int32_t>& id,
+                                                      const CensusPolygons& polygons,
+                                                      int* no_buildings) {
+  const size_t n = polygons.carried.size();
+  std::vector<int64_t> cells_of(n, 0);
+  for (int32_t v : id) {
+    if (v > 0) ++cells_of[v - 1];
+  }
+  auto share = BuiltUpShare(ctx);
+  if (!share.ok()) return share.status();
+  std::vector<double> built(n, 0.0);
+  for (size_t c = 0; c < id.size(); ++c) {
+    if (id[c] > 0) built[id[c] - 1] += (**share)[c];
+  }
+  *no_buildings = 0;
+  for (size_t p = 0; p < n; ++p) *no_buildings += (cells_of[p] > 0 && built[p] == 0.0);
+  std::vector<double> density(id.size(), std::nan(""));
+  for (size_t c = 0; c < id.size(); ++c) {
+    const int32_t v = id[c];
+    if (v <= 0) continue;
+    const size_t p = v - 1;
+    if (built[p] > 0.0) {
+      const double in_map =
+          polygons.people[p] * cells_of[p] * ctx.cell_area_m2() / polygons.area_m2[p];
+      density[c] = in_map * (**share)[c] / built[p] / ctx.cell_area_m2();
+    } else {
+      density[c] = polygons.people[p] / polygons.area_m2[p];
+    }
+  }
+  return density;
+}
+
 absl::StatusOr<std::vector<double>> DensityFromPolygons(ImportContext& ctx) {
   const ImportOptions& o = ctx.options;
   auto spec = ParseVectorSpec(o.population);
@@ -125,91 +242,21 @@ absl::StatusOr<std::vector<double>> DensityFromPolygons(ImportContext& ctx) {
   if (!in.ok()) return in.status();
   auto features = ReadFeatures(*in, ctx.grid, 0.0, o.population_field, "");
   if (!features.ok()) return features.status();
-  auto to_frame = ToFrame(*in->srs, ctx.grid);
-  if (!to_frame.ok()) return to_frame.status();
-  auto equal_area = EqualAreaFrame(ctx.grid);
-  if (!equal_area.ok()) return equal_area.status();
-  auto to_equal_area = TransformationBetween(*in->srs, **equal_area);
-  if (!to_equal_area.ok()) return to_equal_area.status();
-
-  // Each polygon's people and whole area (not only the part in the map).
-  std::vector<double> people, area_m2;
-  std::vector<std::unique_ptr<OGRGeometry>> carried;
-  CarryBudget budget;  // this input's
-  for (const SourceFeature& f : *features) {
-    if (!IsPolygonal(*f.geometry)) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("%s: feature %d is a %s; census areas must be polygons", in->Label(),
-                          f.fid, OGRGeometryTypeToName(f.geometry->getGeometryType())));
-    }
-    if (!f.number.has_value() || !std::isfinite(*f.number) || *f.number < 0.0) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s: feature %d has %s '%s'; a population count must be a number >= 0", in->Label(),
-          f.fid, f.number.has_value() ? absl::StrFormat("%.9g in", *f.number) : "no value in",
-          o.population_field));
-    }
-    auto ea = Carry(*f.geometry, *in->srs, **to_equal_area, budget);
-    if (!ea.ok()) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, ea.status().message()));
-    }
-    const double area = OGR_G_Area(OGRGeometry::ToHandle(ea->get()));
-    if (!(area > 0.0)) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("%s: feature %d has no area", in->Label(), f.fid));
-    }
-    auto g = Carry(*f.geometry, *in->srs, **to_frame, budget);
-    if (!g.ok()) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("%s: feature %d: %s", in->Label(), f.fid, g.status().message()));
-    }
-    people.push_back(*f.number);
-    area_m2.push_back(area);
-    carried.push_back(*std::move(g));
-  }
-  std::vector<const OGRGeometry*> geometries;
-  std::vector<int32_t> ids;
-  for (size_t k = 0; k < carried.size(); ++k) {
-    geometries.push_back(carried[k].get());
-    ids.push_back(static_cast<int32_t>(k + 1));
-  }
-  auto id = BurnIds(ctx.grid, geometries, ids);
+  auto polygons = CarryCensusPolygons(*in, *features, o.population_field, ctx.grid);
+  if (!polygons.ok()) return polygons.status();
+  auto id = BurnPolygonIds(ctx.grid, *polygons);
   if (!id.ok()) return id.status();
 
-  const size_t n = carried.size();
-  std::vector<int64_t> cells_of(n, 0);
-  for (int32_t v : *id) {
-    if (v > 0) ++cells_of[v - 1];
-  }
-  std::vector<double> density(id->size(), std::nan(""));
+  const size_t n = polygons->carried.size();
+  std::vector<double> density;
   std::string spread = "spread over each polygon's area";
   if (o.buildings.empty()) {
-    for (size_t c = 0; c < id->size(); ++c) {
-      const int32_t v = (*id)[c];
-      if (v > 0) density[c] = people[v - 1] / area_m2[v - 1];
-    }
+    density = SpreadOverArea(*id, *polygons);
   } else {
-    // The polygon's people in the map (its share of the polygon's area), then
-    // spread over the built-up part of its cells in the map.
-    auto share = BuiltUpShare(ctx);
-    if (!share.ok()) return share.status();
-    std::vector<double> built(n, 0.0);
-    for (size_t c = 0; c < id->size(); ++c) {
-      if ((*id)[c] > 0) built[(*id)[c] - 1] += (**share)[c];
-    }
     int no_buildings = 0;
-    for (size_t p = 0; p < n; ++p) no_buildings += (cells_of[p] > 0 && built[p] == 0.0);
-    for (size_t c = 0; c < id->size(); ++c) {
-      const int32_t v = (*id)[c];
-      if (v <= 0) continue;
-      const size_t p = v - 1;
-      if (built[p] > 0.0) {
-        const double in_map = people[p] * cells_of[p] * ctx.cell_area_m2() / area_m2[p];
-        density[c] = in_map * (**share)[c] / built[p] / ctx.cell_area_m2();
-      } else {
-        density[c] = people[p] / area_m2[p];
-      }
-    }
+    auto built_up = SpreadOverBuiltUp(ctx, *id, *polygons, &no_buildings);
+    if (!built_up.ok()) return built_up.status();
+    density = *std::move(built_up);
     spread = absl::StrFormat(
         "spread over the built-up part of each polygon in the map (the buildings input); %d "
         "polygons without buildings in the map spread over their area",

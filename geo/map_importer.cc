@@ -101,6 +101,100 @@ std::string FrameText(const TargetGrid& g) {
       g.frame.origin_lat_deg(), g.frame.origin_lon_deg(), g.frame.proj_definition());
 }
 
+// Runs the layer steps in their order, noting each one's time.
+absl::StatusOr<MapLayers> ImportLayers(internal::ImportContext& ctx) {
+  std::vector<std::string> timings;
+  absl::Time t = absl::Now();
+  auto lap = [&](const char* step) {
+    const absl::Time now = absl::Now();
+    timings.push_back(absl::StrFormat("%s %.2f s", step, absl::ToDoubleSeconds(now - t)));
+    t = now;
+  };
+
+  // Land cover before the shelter and the landing sites (both read it), and
+  // no-fly before the landing sites (no site may lie in a no-fly cell).
+  auto terrain = internal::ImportTerrain(ctx);
+  if (!terrain.ok()) return terrain.status();
+  lap("terrain");
+  auto density = internal::ImportPopulation(ctx);
+  if (!density.ok()) return density.status();
+  lap("population");
+  auto land_cover = internal::ImportLandCover(ctx);
+  if (!land_cover.ok()) return land_cover.status();
+  auto shelter = internal::ImportShelter(ctx, *land_cover);
+  if (!shelter.ok()) return shelter.status();
+  lap("shelter");
+  auto nofly = internal::ImportNoFly(ctx);
+  if (!nofly.ok()) return nofly.status();
+  auto sites = internal::ImportLandingSites(ctx, *land_cover, *nofly);
+  if (!sites.ok()) return sites.status();
+  lap("no-fly and landing sites");
+  ctx.Note(absl::StrCat("timings: ", absl::StrJoin(timings, ", ")));
+
+  MapLayers layers;
+  layers.terrain = *std::move(terrain);
+  layers.density = *std::move(density);
+  layers.shelter = *std::move(shelter);
+  layers.nofly = *std::move(nofly);
+  layers.landing_sites = *std::move(sites);
+  return layers;
+}
+
+// The map's header: its grid, where it lies, and a one-line provenance.
+MapHeader MakeHeader(const ImportOptions& options, const TargetGrid& g,
+                     const std::vector<InputRecord>& inputs) {
+  MapHeader header;
+  header.name = options.name;
+  header.x0 = g.frame.x0();
+  header.y0 = g.frame.y0();
+  header.res = g.res_m;
+  header.nx = g.nx;
+  header.ny = g.ny;
+  GeoReference geo;
+  geo.origin_lat_deg = g.frame.origin_lat_deg();
+  geo.origin_lon_deg = g.frame.origin_lon_deg();
+  geo.crs = FrameText(g);
+  header.geo = geo;
+  std::vector<std::string> described;
+  for (const InputRecord& r : inputs) {
+    described.push_back(absl::StrFormat("%s from '%s' (%s, %s)", r.layer, r.path, r.driver, r.crs));
+  }
+  header.provenance =
+      absl::StrFormat("riskplan-tool import: %s; %d x %d cells of %.9g m; command: %s",
+                      described.empty() ? "no inputs" : absl::StrJoin(described, "; "), g.nx, g.ny,
+                      g.res_m, options.command_line);
+  return header;
+}
+
+// The structured provenance of `out` (its inputs, notes and people) as JSON.
+std::string ProvenanceJson(const ImportOptions& options, const TargetGrid& g,
+                           const ImportedMap& out) {
+  const LatLon centre = g.Center();
+  nlohmann::json p;
+  p["command"] = options.command_line;
+  p["frame"] = {{"definition", g.frame.proj_definition()},
+                {"origin_lat_deg", g.frame.origin_lat_deg()},
+                {"origin_lon_deg", g.frame.origin_lon_deg()},
+                {"centre_lat_deg", centre.lat_deg},
+                {"centre_lon_deg", centre.lon_deg}};
+  p["inputs"] = nlohmann::json::array();
+  for (const InputRecord& r : out.inputs) {
+    p["inputs"].push_back({{"layer", r.layer},
+                           {"path", r.path},
+                           {"driver", r.driver},
+                           {"crs", r.crs},
+                           {"crs_wkt", r.crs_wkt},
+                           {"detail", r.detail}});
+  }
+  p["notes"] = out.notes;
+  p["people_total"] = out.stats.people_total;
+  p["gdal"] = GDALVersionInfo("RELEASE_NAME");
+  // Paths, CRS names and the command line are bytes from the user's files
+  // and shell, not always UTF-8 (a Latin-1 file name): replaced by U+FFFD
+  // rather than letting the JSON library throw out of the import.
+  return p.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 }  // namespace
 
 absl::StatusOr<FillRule> ParseFillRule(const std::string& flag, const std::string& text,
@@ -157,84 +251,11 @@ absl::StatusOr<ImportedMap> ImportMap(const ImportOptions& options) {
 
   ImportedMap out;
   internal::ImportContext ctx{options, *grid, *std::move(frame_srs), &out, std::nullopt};
-  std::vector<std::string> timings;
-  absl::Time t = absl::Now();
-  auto lap = [&](const char* step) {
-    const absl::Time now = absl::Now();
-    timings.push_back(absl::StrFormat("%s %.2f s", step, absl::ToDoubleSeconds(now - t)));
-    t = now;
-  };
-
-  // Land cover before the shelter and the landing sites (both read it), and
-  // no-fly before the landing sites (no site may lie in a no-fly cell).
-  auto terrain = internal::ImportTerrain(ctx);
-  if (!terrain.ok()) return terrain.status();
-  lap("terrain");
-  auto density = internal::ImportPopulation(ctx);
-  if (!density.ok()) return density.status();
-  lap("population");
-  auto land_cover = internal::ImportLandCover(ctx);
-  if (!land_cover.ok()) return land_cover.status();
-  auto shelter = internal::ImportShelter(ctx, *land_cover);
-  if (!shelter.ok()) return shelter.status();
-  lap("shelter");
-  auto nofly = internal::ImportNoFly(ctx);
-  if (!nofly.ok()) return nofly.status();
-  auto sites = internal::ImportLandingSites(ctx, *land_cover, *nofly);
-  if (!sites.ok()) return sites.status();
-  lap("no-fly and landing sites");
-  out.notes.push_back(absl::StrCat("timings: ", absl::StrJoin(timings, ", ")));
-
-  const TargetGrid& g = ctx.grid;
-  out.header.name = options.name;
-  out.header.x0 = g.frame.x0();
-  out.header.y0 = g.frame.y0();
-  out.header.res = g.res_m;
-  out.header.nx = g.nx;
-  out.header.ny = g.ny;
-  GeoReference geo;
-  geo.origin_lat_deg = g.frame.origin_lat_deg();
-  geo.origin_lon_deg = g.frame.origin_lon_deg();
-  geo.crs = FrameText(g);
-  out.header.geo = geo;
-  std::vector<std::string> described;
-  for (const InputRecord& r : out.inputs) {
-    described.push_back(absl::StrFormat("%s from '%s' (%s, %s)", r.layer, r.path, r.driver, r.crs));
-  }
-  out.header.provenance =
-      absl::StrFormat("riskplan-tool import: %s; %d x %d cells of %.9g m; command: %s",
-                      described.empty() ? "no inputs" : absl::StrJoin(described, "; "), g.nx, g.ny,
-                      g.res_m, options.command_line);
-  out.layers.terrain = *std::move(terrain);
-  out.layers.density = *std::move(density);
-  out.layers.shelter = *std::move(shelter);
-  out.layers.nofly = *std::move(nofly);
-  out.layers.landing_sites = *std::move(sites);
-
-  const LatLon centre = g.Center();
-  nlohmann::json p;
-  p["command"] = options.command_line;
-  p["frame"] = {{"definition", g.frame.proj_definition()},
-                {"origin_lat_deg", g.frame.origin_lat_deg()},
-                {"origin_lon_deg", g.frame.origin_lon_deg()},
-                {"centre_lat_deg", centre.lat_deg},
-                {"centre_lon_deg", centre.lon_deg}};
-  p["inputs"] = nlohmann::json::array();
-  for (const InputRecord& r : out.inputs) {
-    p["inputs"].push_back({{"layer", r.layer},
-                           {"path", r.path},
-                           {"driver", r.driver},
-                           {"crs", r.crs},
-                           {"crs_wkt", r.crs_wkt},
-                           {"detail", r.detail}});
-  }
-  p["notes"] = out.notes;
-  p["people_total"] = out.stats.people_total;
-  p["gdal"] = GDALVersionInfo("RELEASE_NAME");
-  // Paths, CRS names and the command line are bytes from the user's files
-  // and shell, not always UTF-8 (a Latin-1 file name): replaced by U+FFFD
-  // rather than letting the JSON library throw out of the import.
-  out.provenance_json = p.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  auto layers = ImportLayers(ctx);
+  if (!layers.ok()) return layers.status();
+  out.header = MakeHeader(options, ctx.grid, out.inputs);
+  out.layers = *std::move(layers);
+  out.provenance_json = ProvenanceJson(options, ctx.grid, out);
   return out;
 }
 

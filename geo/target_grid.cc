@@ -80,66 +80,62 @@ std::vector<LatLon> Outline(const LonLatBox& b) {
   return points;
 }
 
-}  // namespace
-
-LatLon TargetGrid::Center() const {
-  auto c = frame.ToWgs84(LocalXY{frame.x0() + width_m() / 2, frame.y0() + height_m() / 2});
-  return c.ok() ? *c : LatLon{frame.origin_lat_deg(), frame.origin_lon_deg()};
+// The centre and the size of a centred area, checked before PROJ runs.
+absl::Status CheckCentredArea(const LatLon& c, const AreaSpec& area, double res) {
+  if (absl::Status s = CheckLatitude("the centre's", c.lat_deg); !s.ok()) return s;
+  if (!(std::isfinite(c.lon_deg) && std::abs(c.lon_deg) <= 180.0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "area: the centre's longitude %.9g is outside [-180, 180] deg", c.lon_deg));
+  }
+  for (auto [what, v] : {std::pair{"width", area.width_m}, std::pair{"height", area.height_m}}) {
+    if (!(std::isfinite(v) && v > 0.0)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("area: the %s %.9g m must be > 0 and finite", what, v));
+    }
+  }
+  // Fail on the size before PROJ runs on a corner 10^6 km away.
+  if (auto nx = CellsAlong("the width", area.width_m, res); !nx.ok()) return nx.status();
+  if (auto ny = CellsAlong("the height", area.height_m, res); !ny.ok()) return ny.status();
+  return absl::OkStatus();
 }
 
-absl::StatusOr<TargetGrid> MakeTargetGrid(const AreaSpec& area) {
-  const double res = area.res_m;
-  if (!(std::isfinite(res) && res > 0.0)) {
+// The south-west corner from which the centre `c` is the middle of a
+// width x height area in the corner's own frame.
+absl::StatusOr<LatLon> CornerOfCentredArea(const LatLon& c, double width_m, double height_m) {
+  auto centred = GeoFrame::Create({c.lat_deg, c.lon_deg, ""}, 0.0, 0.0);
+  if (!centred.ok()) return centred.status();
+  auto sw = centred->ToWgs84(LocalXY{-width_m / 2, -height_m / 2});
+  if (!sw.ok()) {
     return absl::InvalidArgumentError(
-        absl::StrFormat("area: the cell size %.9g m must be > 0 and finite", res));
+        absl::StrFormat("area: the south-west corner: %s", sw.status().message()));
   }
-  if (area.center.has_value() == area.bbox.has_value()) {
-    return absl::InvalidArgumentError(
-        "area: give either a centre with a size or a bounding box, not both or neither");
+  // The corner's frame is turned from the centre's by the meridians'
+  // convergence (3.7 m at 5 km here): move the corner until the centre is
+  // the map's middle in the corner's own frame.
+  for (int k = 0; k < kCentreIterations; ++k) {
+    if (absl::Status s = CheckLatitude("the south-west corner's", sw->lat_deg); !s.ok()) {
+      return s;
+    }
+    auto frame = GeoFrame::Create({sw->lat_deg, sw->lon_deg, ""}, 0.0, 0.0);
+    if (!frame.ok()) return frame.status();
+    auto at = frame->ToLocal(c);
+    if (!at.ok()) return at.status();
+    auto moved = frame->ToWgs84(LocalXY{at->x - width_m / 2, at->y - height_m / 2});
+    if (!moved.ok()) return moved.status();
+    sw = *moved;
   }
-  if (area.center.has_value()) {
-    const LatLon c = *area.center;
-    if (absl::Status s = CheckLatitude("the centre's", c.lat_deg); !s.ok()) return s;
-    if (!(std::isfinite(c.lon_deg) && std::abs(c.lon_deg) <= 180.0)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "area: the centre's longitude %.9g is outside [-180, 180] deg", c.lon_deg));
-    }
-    for (auto [what, v] : {std::pair{"width", area.width_m}, std::pair{"height", area.height_m}}) {
-      if (!(std::isfinite(v) && v > 0.0)) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("area: the %s %.9g m must be > 0 and finite", what, v));
-      }
-    }
-    // Fail on the size before PROJ runs on a corner 10^6 km away.
-    if (auto nx = CellsAlong("the width", area.width_m, res); !nx.ok()) return nx.status();
-    if (auto ny = CellsAlong("the height", area.height_m, res); !ny.ok()) return ny.status();
-    auto centred = GeoFrame::Create({c.lat_deg, c.lon_deg, ""}, 0.0, 0.0);
-    if (!centred.ok()) return centred.status();
-    auto sw = centred->ToWgs84(LocalXY{-area.width_m / 2, -area.height_m / 2});
-    if (!sw.ok()) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("area: the south-west corner: %s", sw.status().message()));
-    }
-    // The corner's frame is turned from the centre's by the meridians'
-    // convergence (3.7 m at 5 km here): move the corner until the centre is
-    // the map's middle in the corner's own frame.
-    for (int k = 0; k < kCentreIterations; ++k) {
-      if (absl::Status s = CheckLatitude("the south-west corner's", sw->lat_deg); !s.ok()) {
-        return s;
-      }
-      auto frame = GeoFrame::Create({sw->lat_deg, sw->lon_deg, ""}, 0.0, 0.0);
-      if (!frame.ok()) return frame.status();
-      auto at = frame->ToLocal(c);
-      if (!at.ok()) return at.status();
-      auto moved = frame->ToWgs84(LocalXY{at->x - area.width_m / 2, at->y - area.height_m / 2});
-      if (!moved.ok()) return moved.status();
-      sw = *moved;
-    }
-    if (absl::Status s = CheckLatitude("the south-west corner's", sw->lat_deg); !s.ok()) return s;
-    return GridAt(*sw, area.width_m, area.height_m, res);
-  }
+  if (absl::Status s = CheckLatitude("the south-west corner's", sw->lat_deg); !s.ok()) return s;
+  return *sw;
+}
 
-  const LonLatBox b = *area.bbox;
+absl::StatusOr<TargetGrid> GridAroundCentre(const LatLon& c, const AreaSpec& area, double res) {
+  if (absl::Status s = CheckCentredArea(c, area, res); !s.ok()) return s;
+  auto sw = CornerOfCentredArea(c, area.width_m, area.height_m);
+  if (!sw.ok()) return sw.status();
+  return GridAt(*sw, area.width_m, area.height_m, res);
+}
+
+absl::Status CheckBox(const LonLatBox& b) {
   for (auto [what, lat] : {std::pair{"south", b.south_lat_deg}, {"north", b.north_lat_deg}}) {
     if (absl::Status s = CheckLatitude(what, lat); !s.ok()) return s;
   }
@@ -161,6 +157,14 @@ absl::StatusOr<TargetGrid> MakeTargetGrid(const AreaSpec& area) {
         "antimeridian is not supported; the order is WEST,SOUTH,EAST,NORTH)",
         b.west_lon_deg, b.east_lon_deg));
   }
+  return absl::OkStatus();
+}
+
+// Fits the box in the frame at its own south-west corner, then moves the
+// frame to the fitted rectangle's corner and measures the box again there
+// (so that the box is covered to within millimetres).
+absl::StatusOr<TargetGrid> GridOverBox(const LonLatBox& b, double res) {
+  if (absl::Status s = CheckBox(b); !s.ok()) return s;
   const std::vector<LatLon> outline = Outline(b);
   auto first = GeoFrame::Create({b.south_lat_deg, b.west_lon_deg, ""}, 0.0, 0.0);
   if (!first.ok()) return first.status();
@@ -186,6 +190,27 @@ absl::StatusOr<TargetGrid> MakeTargetGrid(const AreaSpec& area) {
     max_y = std::max(max_y, p.y);
   }
   return GridAt(*sw, max_x, max_y, res);
+}
+
+}  // namespace
+
+LatLon TargetGrid::Center() const {
+  auto c = frame.ToWgs84(LocalXY{frame.x0() + width_m() / 2, frame.y0() + height_m() / 2});
+  return c.ok() ? *c : LatLon{frame.origin_lat_deg(), frame.origin_lon_deg()};
+}
+
+absl::StatusOr<TargetGrid> MakeTargetGrid(const AreaSpec& area) {
+  const double res = area.res_m;
+  if (!(std::isfinite(res) && res > 0.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("area: the cell size %.9g m must be > 0 and finite", res));
+  }
+  if (area.center.has_value() == area.bbox.has_value()) {
+    return absl::InvalidArgumentError(
+        "area: give either a centre with a size or a bounding box, not both or neither");
+  }
+  if (area.center.has_value()) return GridAroundCentre(*area.center, area, res);
+  return GridOverBox(*area.bbox, res);
 }
 
 }  // namespace riskplan::geo

@@ -32,6 +32,101 @@ std::string FieldNames(OGRLayer& layer) {
   return names.empty() ? "none" : absl::StrJoin(names, ", ");
 }
 
+// The index of `field` in the input's layer, or -1 for "" (no field asked).
+absl::StatusOr<int> FieldIndex(const VectorInput& input, const std::string& field) {
+  if (field.empty()) return -1;
+  OGRLayer& layer = *input.ogr_layer;
+  const int index = layer.GetLayerDefn()->GetFieldIndex(field.c_str());
+  if (index < 0) {
+    return absl::InvalidArgumentError(absl::StrFormat("%s: no field '%s'; it has: %s",
+                                                      input.Label(), field, FieldNames(layer)));
+  }
+  return index;
+}
+
+// Sets OGR's spatial filter to the envelope of the map's outline, grown by
+// the margin, carried into the input's CRS.
+absl::Status FilterToMap(VectorInput& input, const TargetGrid& grid, double margin_m) {
+  OGRLayer& layer = *input.ogr_layer;
+  auto frame = SpatialReferenceFrom(grid.frame.proj_definition());
+  if (!frame.ok()) return frame.status();
+  auto to_input = TransformationBetween(**frame, *input.srs);
+  if (!to_input.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(input.Label(), ": ", to_input.status().message()));
+  }
+  const double x0 = grid.frame.x0() - margin_m, y0 = grid.frame.y0() - margin_m;
+  const double x1 = grid.frame.x0() + grid.width_m() + margin_m;
+  const double y1 = grid.frame.y0() + grid.height_m() + margin_m;
+  // Points along every edge, not just the corners: in the input's CRS the
+  // outline's edges are curves, and the envelope must hold all of them.
+  std::vector<double> xs, ys;
+  for (int k = 0; k <= kOutlinePoints; ++k) {
+    const double t = static_cast<double>(k) / kOutlinePoints;
+    for (auto [x, y] : {std::pair{x0 + t * (x1 - x0), y0},
+                        {x0 + t * (x1 - x0), y1},
+                        {x0, y0 + t * (y1 - y0)},
+                        {x1, y0 + t * (y1 - y0)}}) {
+      xs.push_back(x);
+      ys.push_back(y);
+    }
+  }
+  std::vector<int> ok(xs.size());
+  (*to_input)->Transform(static_cast<int>(xs.size()), xs.data(), ys.data(), nullptr, ok.data());
+  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
+  double max_x = -min_x, max_y = -min_x;
+  for (size_t k = 0; k < xs.size(); ++k) {
+    if (!ok[k] || !std::isfinite(xs[k]) || !std::isfinite(ys[k])) continue;
+    min_x = std::min(min_x, xs[k]);
+    max_x = std::max(max_x, xs[k]);
+    min_y = std::min(min_y, ys[k]);
+    max_y = std::max(max_y, ys[k]);
+  }
+  // When no outline point could be carried into the input's CRS, no filter
+  // rather than a wrong one: every feature is read.
+  if (min_x <= max_x && min_y <= max_y) {
+    layer.SetSpatialFilterRect(min_x, min_y, max_x, max_y);
+  } else {
+    layer.SetSpatialFilter(nullptr);
+  }
+  return absl::OkStatus();
+}
+
+// The features that pass the layer's filters, with the fields at
+// `number_index` and `text_index` (-1: none).
+absl::StatusOr<std::vector<SourceFeature>> ReadFiltered(VectorInput& input, int number_index,
+                                                        int text_index) {
+  OGRLayer& layer = *input.ogr_layer;
+  GdalErrorCapture errors;
+  std::vector<SourceFeature> features;
+  layer.ResetReading();
+  for (auto& feature : layer) {
+    if (static_cast<int64_t>(features.size()) >= kMaxFeaturesPerInput) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: more than %d features meet the map; clip the input to the area first (ogr2ogr "
+          "-spat)",
+          input.Label(), kMaxFeaturesPerInput));
+    }
+    const OGRGeometry* g = feature->GetGeometryRef();
+    if (g == nullptr || g->IsEmpty()) continue;
+    SourceFeature f;
+    f.fid = feature->GetFID();
+    f.geometry.reset(g->clone());
+    if (number_index >= 0 && feature->IsFieldSetAndNotNull(number_index)) {
+      f.number = feature->GetFieldAsDouble(number_index);
+    }
+    if (text_index >= 0 && feature->IsFieldSetAndNotNull(text_index)) {
+      f.text = feature->GetFieldAsString(text_index);
+    }
+    features.push_back(std::move(f));
+  }
+  if (!errors.Errors("").empty()) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s: reading its features failed: %s", input.Label(), errors.Errors()));
+  }
+  return features;
+}
+
 }  // namespace
 
 std::string VectorInput::Label() const {
@@ -109,90 +204,15 @@ absl::StatusOr<std::vector<SourceFeature>> ReadFeatures(VectorInput& input, cons
                                                         double margin_m,
                                                         const std::string& number_field,
                                                         const std::string& text_field) {
-  OGRLayer& layer = *input.ogr_layer;
-  OGRFeatureDefn* defn = layer.GetLayerDefn();
   int number_index = -1, text_index = -1;
   for (auto [field, index] :
        {std::pair{&number_field, &number_index}, {&text_field, &text_index}}) {
-    if (field->empty()) continue;
-    *index = defn->GetFieldIndex(field->c_str());
-    if (*index < 0) {
-      return absl::InvalidArgumentError(absl::StrFormat("%s: no field '%s'; it has: %s",
-                                                        input.Label(), *field, FieldNames(layer)));
-    }
+    auto found = FieldIndex(input, *field);
+    if (!found.ok()) return found.status();
+    *index = *found;
   }
-  // The map's outline, grown by the margin, carried into the input's CRS: its
-  // envelope is OGR's spatial filter.
-  auto frame = SpatialReferenceFrom(grid.frame.proj_definition());
-  if (!frame.ok()) return frame.status();
-  auto to_input = TransformationBetween(**frame, *input.srs);
-  if (!to_input.ok()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(input.Label(), ": ", to_input.status().message()));
-  }
-  const double x0 = grid.frame.x0() - margin_m, y0 = grid.frame.y0() - margin_m;
-  const double x1 = grid.frame.x0() + grid.width_m() + margin_m;
-  const double y1 = grid.frame.y0() + grid.height_m() + margin_m;
-  // Points along every edge, not just the corners: in the input's CRS the
-  // outline's edges are curves, and the envelope must hold all of them.
-  std::vector<double> xs, ys;
-  for (int k = 0; k <= kOutlinePoints; ++k) {
-    const double t = static_cast<double>(k) / kOutlinePoints;
-    for (auto [x, y] : {std::pair{x0 + t * (x1 - x0), y0},
-                        {x0 + t * (x1 - x0), y1},
-                        {x0, y0 + t * (y1 - y0)},
-                        {x1, y0 + t * (y1 - y0)}}) {
-      xs.push_back(x);
-      ys.push_back(y);
-    }
-  }
-  std::vector<int> ok(xs.size());
-  (*to_input)->Transform(static_cast<int>(xs.size()), xs.data(), ys.data(), nullptr, ok.data());
-  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
-  double max_x = -min_x, max_y = -min_x;
-  for (size_t k = 0; k < xs.size(); ++k) {
-    if (!ok[k] || !std::isfinite(xs[k]) || !std::isfinite(ys[k])) continue;
-    min_x = std::min(min_x, xs[k]);
-    max_x = std::max(max_x, xs[k]);
-    min_y = std::min(min_y, ys[k]);
-    max_y = std::max(max_y, ys[k]);
-  }
-  // When no outline point could be carried into the input's CRS, no filter
-  // rather than a wrong one: every feature is read.
-  if (min_x <= max_x && min_y <= max_y) {
-    layer.SetSpatialFilterRect(min_x, min_y, max_x, max_y);
-  } else {
-    layer.SetSpatialFilter(nullptr);
-  }
-
-  GdalErrorCapture errors;
-  std::vector<SourceFeature> features;
-  layer.ResetReading();
-  for (auto& feature : layer) {
-    if (static_cast<int64_t>(features.size()) >= kMaxFeaturesPerInput) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s: more than %d features meet the map; clip the input to the area first (ogr2ogr "
-          "-spat)",
-          input.Label(), kMaxFeaturesPerInput));
-    }
-    const OGRGeometry* g = feature->GetGeometryRef();
-    if (g == nullptr || g->IsEmpty()) continue;
-    SourceFeature f;
-    f.fid = feature->GetFID();
-    f.geometry.reset(g->clone());
-    if (number_index >= 0 && feature->IsFieldSetAndNotNull(number_index)) {
-      f.number = feature->GetFieldAsDouble(number_index);
-    }
-    if (text_index >= 0 && feature->IsFieldSetAndNotNull(text_index)) {
-      f.text = feature->GetFieldAsString(text_index);
-    }
-    features.push_back(std::move(f));
-  }
-  if (!errors.Errors("").empty()) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("%s: reading its features failed: %s", input.Label(), errors.Errors()));
-  }
-  return features;
+  if (absl::Status s = FilterToMap(input, grid, margin_m); !s.ok()) return s;
+  return ReadFiltered(input, number_index, text_index);
 }
 
 double VerticesAddedBySegmentize(const OGRGeometry& geometry, double max_length) {

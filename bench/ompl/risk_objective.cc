@@ -15,7 +15,7 @@ bool Admissible(const RiskModel& model, const Pose& q) {
 
 PieceRisk EdgeRule(const RiskModel& model, const Pose& a, const Pose& b) {
   const ModelParams& p = model.params();
-  return PieceRisk(TrajectoryPiece::Manoeuvre(a, b, p.turn_radius_m, p.max_climb_rad),
+  return PieceRisk(TrajectoryPiece::Manoeuvre(a, b, p.GroundTurnRadius(), p.GroundClimbAngle()),
                    p.sample_step_m, p);
 }
 
@@ -82,7 +82,7 @@ ob::Cost RiskObjective::motionCost(const ob::State* s1, const ob::State* s2) con
   for (const Pose& q : midpoints) {
     if (!Admissible(model_, q)) return infiniteCost();
   }
-  for (const Pose& q : midpoints) edge.Add(model_.Evaluate(q));
+  for (const Pose& q : midpoints) edge.Add(model_.Evaluate(q), q);
   configurations_ += midpoints.size();
   // Exactly EvaluateTrajectory's piece risk.
   return ob::Cost(edge.Risk());

@@ -73,13 +73,13 @@ void DubinsAirplaneSpace::FromPose(const Pose& pose, ob::State* state) {
 
 double DubinsAirplaneSpace::distance(const ob::State* from, const ob::State* to) const {
   const ModelParams& p = model_->params();
-  return DubinsAirplanePath(ToPose(from), ToPose(to), p.turn_radius_m, p.max_climb_rad).Length();
+  return DubinsAirplanePath(ToPose(from), ToPose(to), p.GroundTurnRadius(), p.GroundClimbAngle()).Length();
 }
 
 void DubinsAirplaneSpace::interpolate(const ob::State* from, const ob::State* to, double t,
                                       ob::State* state) const {
   const ModelParams& p = model_->params();
-  const DubinsAirplanePath path(ToPose(from), ToPose(to), p.turn_radius_m, p.max_climb_rad);
+  const DubinsAirplanePath path(ToPose(from), ToPose(to), p.GroundTurnRadius(), p.GroundClimbAngle());
   FromPose(path.PoseAt(t * path.Length()), state);
 }
 
@@ -144,7 +144,7 @@ void AltitudeBandSampler::sampleGaussian(ob::State* state, const ob::State* mean
     const double high = map.terrain(i, j) + model_.params().max_agl_m;
     if (!(low <= high)) continue;
     const double z = std::clamp(c.z + rng_.gaussian(0.0, std_dev), low, high);
-    const double theta = c.theta + rng_.gaussian(0.0, std_dev / model_.params().turn_radius_m);
+    const double theta = c.theta + rng_.gaussian(0.0, std_dev / model_.params().GroundTurnRadius());
     DubinsAirplaneSpace::FromPose(Pose{x, y, z, theta}, state);
     return;
   }

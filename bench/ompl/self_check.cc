@@ -124,7 +124,7 @@ bool RunSelfCheck(std::shared_ptr<const RiskModel> model, int edges) {
     }
     // Interpolation: the pose at t along the manoeuvre.
     const ModelParams& mp = m.params();
-    const DubinsAirplanePath path(pa, pb, mp.turn_radius_m, mp.max_climb_rad);
+    const DubinsAirplanePath path(pa, pb, mp.GroundTurnRadius(), mp.GroundClimbAngle());
     for (double t : {0.0, 0.25, 0.5, 1.0}) {
       space->interpolate(a.get(), b.get(), t, c.get());
       const Pose got = DubinsAirplaneSpace::ToPose(c.get());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "absl/strings/str_format.h"
 
@@ -88,6 +89,14 @@ const std::vector<FieldRef>& Fields() {
           "below 1 (steeper than 45 degrees) is a fall, not a glide; the best sailplanes reach 70"),
       Real(&ModelParams::glide_clearance_m, "glide_clearance_m", 0.0, 1000.0,
            "terrain clearance of an emergency glide"),
+      Real(&ModelParams::wind_speed_mps, "wind_speed_mps", 0.0, 100.0,
+           "mean wind speed W; the model also bounds it by half the airspeed (a rule below)"),
+      Real(&ModelParams::wind_from_deg, "wind_from_deg", -std::numeric_limits<double>::max(),
+           std::numeric_limits<double>::max(),
+           "direction the wind blows from, degrees clockwise from north; any finite value, "
+           "taken modulo 360"),
+      Real(&ModelParams::glide_airspeed_mps, "glide_airspeed_mps", 0.0, 200.0,
+           "airspeed of the emergency glide v_g; 0 (the default) is the cruise airspeed"),
   };
   return *fields;
 }
@@ -153,6 +162,7 @@ const std::vector<std::string_view>& ModelParamRules() {
       "the drag's time constant 1 / (k max(airspeed_mps, v_t)), with k = air_density_kgpm3 "
       "drag_coefficient frontal_area_m2 / (2 mass_kg), is at least the ballistic "
       "integration's fixed step of 0.01 s",
+      "wind_speed_mps <= 0.5 airspeed_mps (every ground speed is then at least half the airspeed)",
   };
   return *rules;
 }
@@ -194,6 +204,12 @@ absl::Status ValidateModelParams(const ModelParams& p) {
         absl::StrFormat("parameter 'max_agl_m' (%g) must be greater than 'min_agl_m' (%g)",
                         p.max_agl_m, p.min_agl_m));
   }
+  if (p.wind_speed_mps > kMaxWindFraction * p.airspeed_mps) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "parameter 'wind_speed_mps' (%g) must be at most %g times 'airspeed_mps' (%g), i.e. %g "
+        "m/s: the model's wind triangle needs a ground speed of at least half the airspeed",
+        p.wind_speed_mps, kMaxWindFraction, p.airspeed_mps, kMaxWindFraction * p.airspeed_mps));
+  }
   // Each parameter in range can still make the fall last days (a light,
   // draggy body in thick air): refused here, before the impact table
   // integrates anything.
@@ -230,7 +246,7 @@ absl::Status ValidateModelParams(const ModelParams& p) {
   return absl::OkStatus();
 }
 
-bool SameImpactTableParams(const ModelParams& a, const ModelParams& b) {
+bool SameKernelParams(const ModelParams& a, const ModelParams& b) {
   return a.mass_kg == b.mass_kg && a.drag_coefficient == b.drag_coefficient &&
          a.frontal_area_m2 == b.frontal_area_m2 && a.airspeed_mps == b.airspeed_mps &&
          a.uav_radius_m == b.uav_radius_m && a.gravity_mps2 == b.gravity_mps2 &&
@@ -242,8 +258,28 @@ bool SameImpactTableParams(const ModelParams& a, const ModelParams& b) {
          a.max_half_width == b.max_half_width;
 }
 
+bool SameImpactTableParams(const ModelParams& a, const ModelParams& b) {
+  return SameKernelParams(a, b) && a.wind_speed_mps == b.wind_speed_mps &&
+         (a.Calm() || a.wind_from_deg == b.wind_from_deg);
+}
+
 bool SameGlideParams(const ModelParams& a, const ModelParams& b) {
-  return a.glide_ratio == b.glide_ratio && a.glide_clearance_m == b.glide_clearance_m;
+  if (a.glide_ratio != b.glide_ratio || a.glide_clearance_m != b.glide_clearance_m) return false;
+  // In still air the glide does not depend on its airspeed (spec section 6).
+  if (a.Calm() && b.Calm()) return true;
+  return a.wind_speed_mps == b.wind_speed_mps && a.wind_from_deg == b.wind_from_deg &&
+         a.GlideAirspeed() == b.GlideAirspeed();
+}
+
+double ModelParams::GroundTurnRadius() const {
+  if (Calm()) return turn_radius_m;
+  const double f = 1.0 + wind_speed_mps / airspeed_mps;
+  return turn_radius_m * f * f;
+}
+
+double ModelParams::GroundClimbAngle() const {
+  if (Calm()) return max_climb_rad;
+  return std::atan(std::tan(max_climb_rad) * airspeed_mps / (airspeed_mps + wind_speed_mps));
 }
 
 }  // namespace riskplan

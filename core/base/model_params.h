@@ -56,8 +56,27 @@ struct ModelParams {
   double glide_ratio = 10.0;        // G
   double glide_clearance_m = 10.0;  // clearance over terrain during a glide
 
+  // Mean wind (spec version 3, section 0): its speed W and the direction it
+  // blows FROM, in degrees clockwise from the map's north (meteorological);
+  // any finite direction is taken modulo 360.
+  double wind_speed_mps = 0.0;
+  double wind_from_deg = 0.0;
+  // v_g, the airspeed of the emergency glide (spec section 6); 0 means the
+  // cruise airspeed v (the spec's default, v_g = v).
+  double glide_airspeed_mps = 0.0;
+
   // Number of height bins of the impact table: h_table_max / Delta h.
   int HeightBins() const;
+
+  // True when there is no wind (W = 0): every number is version 2's.
+  bool Calm() const { return wind_speed_mps == 0.0; }
+  // v_g: glide_airspeed_mps, or airspeed_mps when that is 0.
+  double GlideAirspeed() const { return glide_airspeed_mps > 0.0 ? glide_airspeed_mps : airspeed_mps; }
+  // The Dubins-airplane radius and climb angle over the ground (spec section
+  // 5): R_w = R (1 + W/v)^2 and gamma_w = atan(tan(gamma_max) v / (v + W));
+  // exactly turn_radius_m and max_climb_rad when Calm().
+  double GroundTurnRadius() const;
+  double GroundClimbAngle() const;
 };
 
 // The range riskplan accepts for one parameter, [min_value, max_value]
@@ -115,6 +134,16 @@ const std::vector<std::string_view>& ModelParamNames();
 // True when the two parameter sets give the same impact table for the same map
 // resolution (every field the table depends on is equal).
 bool SameImpactTableParams(const ModelParams& a, const ModelParams& b);
+
+// True when the two parameter sets give the same kernel weights, dispersions
+// and falls (SameImpactTableParams but for the wind, which moves only the
+// kernels' offsets, energies and angles): a table in one wind can share the
+// weights of a table in another.
+bool SameKernelParams(const ModelParams& a, const ModelParams& b);
+
+// The largest wind the model accepts relative to the airspeed (spec:
+// 0 <= W <= 0.5 v, so that every ground speed is at least v / 2).
+inline constexpr double kMaxWindFraction = 0.5;
 
 // True when the two parameter sets give the same glide-altitude layer.
 bool SameGlideParams(const ModelParams& a, const ModelParams& b);

@@ -22,7 +22,9 @@ PieceRisk::PieceRisk(const TrajectoryPiece& piece, double step_m, const ModelPar
     : piece_(piece),
       parts_(PartCount(piece.Length(), step_m)),
       part_length_m_(parts_ > 0 ? piece.Length() / static_cast<double>(parts_) : 0.0),
-      per_metre_(params.failure_rate_per_s / params.airspeed_mps) {
+      wind_(params),
+      per_metre_(params.Calm() ? params.failure_rate_per_s / params.airspeed_mps
+                               : params.failure_rate_per_s) {
   RISKPLAN_DCHECK(parts_ < kMaxPartCount);
 }
 

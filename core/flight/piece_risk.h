@@ -4,7 +4,11 @@
 // ds = L / K. M is taken at the midpoint of part k, at arc length (k + 1/2) ds
 // from the piece's start, for k = 0 ... K-1; the M are summed in that order
 // (an undefined M adds nothing), and the piece risk is
-//   R_piece = lambda * sum(M) * ds / v,   computed as (lambda / v) * sum * ds.
+//   R_piece = lambda * sum(M * ds / gs(theta_k)),
+// computed as (lambda / v) * sum(M) * ds in still air (version 2, bit for bit)
+// and as lambda * sum(M / gs(theta_k)) * ds in wind (spec version 3, section
+// 4: gs the ground speed of the midpoint's track heading). The flight time of
+// the piece is L / v in still air and sum(ds / gs(theta_k)) in wind.
 // Admissibility is checked at the piece's start, its K midpoints and its end,
 // in order of arc length (spec section 6).
 //
@@ -30,6 +34,7 @@
 #include "core/base/check.h"
 #include "core/base/geometry.h"
 #include "core/base/model_params.h"
+#include "core/base/wind.h"
 #include "core/flight/trajectory_piece.h"
 #include "core/risk/risk_model.h"
 
@@ -76,11 +81,19 @@ class PieceRisk {
   // start. REQUIRES: 0 <= i < admissibility_samples().
   Pose AdmissibilitySample(int64_t i, double* arc_m = nullptr) const;
 
-  // Adds M of the next midpoint, number added(). An undefined M adds nothing.
+  // Adds M of the next midpoint, number added(), which is `q` (Midpoint(
+  // added())): its track heading sets the ground speed in wind. An undefined
+  // M adds no risk (but its time).
   // REQUIRES: !complete().
-  void Add(const ConfigurationRisk& m) {
+  void Add(const ConfigurationRisk& m, const Pose& q) {
     RISKPLAN_DCHECK(added_ < parts_);
-    if (m.defined) sum_ += m.risk;
+    if (wind_.calm()) {
+      if (m.defined) sum_ += m.risk;
+    } else {
+      const double inv_speed = 1.0 / wind_.GroundSpeed(q.theta);
+      if (m.defined) sum_ += m.risk * inv_speed;
+      inv_speed_sum_ += inv_speed;
+    }
     ++added_;
   }
   // Midpoints added so far.
@@ -95,7 +108,7 @@ class PieceRisk {
   }
   bool complete() const { return added_ == parts_; }
 
-  // lambda * sum(M) * ds / v over the midpoints added so far: never more than
+  // lambda * sum(M ds / gs) over the midpoints added so far: never more than
   // the piece risk, and equal to it once complete().
   double PartialRisk() const { return per_metre_ * sum_ * part_length_m_; }
   // The piece risk. REQUIRES: complete().
@@ -103,13 +116,22 @@ class PieceRisk {
     RISKPLAN_DCHECK(complete());
     return PartialRisk();
   }
+  // The piece's flight time (spec section 4): L / v in still air, else
+  // sum(ds / gs(theta_k)) over its midpoints. REQUIRES: complete().
+  double FlightTimeS() const {
+    RISKPLAN_DCHECK(complete());
+    if (wind_.calm()) return piece_.Length() / wind_.airspeed_mps();
+    return inv_speed_sum_ * part_length_m_;
+  }
 
  private:
   TrajectoryPiece piece_;
   int64_t parts_ = 0;
   double part_length_m_ = 0.0;
-  double per_metre_ = 0.0;  // lambda / v: failures per metre flown
-  double sum_ = 0.0;        // sum of M over midpoints [0, added_), in order
+  WindTriangle wind_;
+  double per_metre_ = 0.0;  // lambda / v in still air: failures per metre; lambda in wind
+  double sum_ = 0.0;        // sum of M (M / gs in wind) over midpoints [0, added_), in order
+  double inv_speed_sum_ = 0.0;  // sum of 1 / gs over midpoints [0, added_), in wind
   int64_t added_ = 0;
 };
 

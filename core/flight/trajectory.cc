@@ -46,8 +46,8 @@ absl::StatusOr<std::vector<TrajectoryPiece>> PiecesFromWaypoints(std::span<const
   std::vector<TrajectoryPiece> pieces;
   pieces.reserve(poses.size() - 1);
   for (size_t i = 0; i + 1 < poses.size(); ++i) {
-    pieces.push_back(TrajectoryPiece::Manoeuvre(poses[i], poses[i + 1], params.turn_radius_m,
-                                                params.max_climb_rad));
+    pieces.push_back(TrajectoryPiece::Manoeuvre(poses[i], poses[i + 1], params.GroundTurnRadius(),
+                                                params.GroundClimbAngle()));
   }
   return pieces;
 }
@@ -114,6 +114,7 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
   // `checked` its admissibility samples done so far.
   size_t checking = 0;
   int64_t checked = 0;
+  double wind_time_s = 0.0;  // sum of the pieces' flight times
   double piece_start_m = 0.0;  // arc length at the start of piece `checking`
   // `m`, when given, is q's M as evaluated: for a midpoint it tells the
   // window rule without locating q again.
@@ -137,7 +138,9 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
     const Pose end = rule.AdmissibilitySample(rule.admissibility_samples() - 1, &s);
     check(checking, end, s);
     out.pieces[checking].risk = rule.Risk();
+    out.pieces[checking].flight_time_s = rule.FlightTimeS();
     out.risk += out.pieces[checking].risk;
+    wind_time_s += out.pieces[checking].flight_time_s;
     piece_start_m += pieces[checking].Length();
     ++checking;
     checked = 0;
@@ -179,7 +182,7 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
       // A midpoint is the very pose that was evaluated.
       const int64_t i = rule.added();
       const double s = rule.MidpointArc(i);
-      rule.Add(risks[k]);
+      rule.Add(risks[k], batch[k]);
       check(p, batch[k], s, &risks[k]);
       ++checked;
       if (options.keep_samples) {
@@ -190,6 +193,8 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
   }
   while (checking < pieces.size()) finish_piece();
   out.length_m = length_m;
+  // Still air: L / v of the whole length, as version 2 computed it.
+  out.flight_time_s = params.Calm() ? FlightTimeS(length_m, params.airspeed_mps) : wind_time_s;
   return out;
 }
 

@@ -46,6 +46,7 @@ struct Violation {
 struct PieceEvaluation {
   double risk = 0.0;      // lambda * sum M * ds / v over defined samples
   double length_m = 0.0;  // 3-D length
+  double flight_time_s = 0.0;  // spec section 4: L / v in still air, sum(ds / gs) in wind
   int64_t parts = 0;      // K
   bool admissible = true;
 };
@@ -64,6 +65,9 @@ struct TrajectoryEvaluation {
   // planner treats it as infinite risk.
   double risk = 0.0;
   double length_m = 0.0;
+  // Spec section 4: FlightTimeS(length_m, v) in still air (version 2), the
+  // sum of ds / gs(theta_k) over every midpoint in wind.
+  double flight_time_s = 0.0;
   bool admissible = true;
   std::optional<Violation> first_violation;
   std::vector<PieceEvaluation> pieces;
@@ -90,8 +94,9 @@ absl::StatusOr<TrajectoryEvaluation> EvaluateTrajectory(const RiskModel& model,
                                                         RiskEvaluator* evaluator = nullptr,
                                                         const StopCondition& stop = {});
 
-// How long a flight of `length_m` lasts at `airspeed_mps` (spec section 4:
-// the aircraft flies at constant airspeed along the path's 3-D length), s.
+// How long a flight of `length_m` lasts at `airspeed_mps` in still air (spec
+// section 4: the aircraft flies at constant airspeed along the path's 3-D
+// length), s. In wind the time is TrajectoryEvaluation::flight_time_s.
 double FlightTimeS(double length_m, double airspeed_mps);
 
 // Expected casualties per flight hour of a flight of `risk` expected

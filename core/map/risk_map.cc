@@ -294,7 +294,8 @@ absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double 
                                                          const std::vector<uint8_t>& nofly,
                                                          const std::vector<LandingSite>& sites,
                                                          double glide_ratio, double clearance_m,
-                                                         const StopCondition& stop) {
+                                                         const StopCondition& stop,
+                                                         const GlideWind& wind) {
   RISKPLAN_DCHECK(terrain.size() == static_cast<size_t>(nx) * static_cast<size_t>(ny));
   RISKPLAN_DCHECK(nofly.size() == terrain.size());
   RISKPLAN_DCHECK(glide_ratio > 0.0);
@@ -332,6 +333,34 @@ absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double 
   const double diagonal_climb = (res * std::numbers::sqrt2) / glide_ratio;
   constexpr int kDi[8] = {1, -1, 0, 0, 1, 1, -1, -1};
   constexpr int kDj[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+  // climb[d]: the height a glide needs per edge d, dist(c, n) / G(c -> n),
+  // where the search steps from the settled cell n to its neighbour c =
+  // n + (kDi[d], kDj[d]): the glide flies from c back to n, along -(di, dj).
+  // +infinity for an edge that cannot be glided in the wind.
+  double climb[8];
+  for (int d = 0; d < 8; ++d) {
+    const double dist = d < 4 ? res : res * std::numbers::sqrt2;
+    if (wind.Calm()) {
+      climb[d] = d < 4 ? straight_climb : diagonal_climb;
+      continue;
+    }
+    const double norm = d < 4 ? 1.0 : std::numbers::sqrt2;
+    const double dx = -kDi[d] / norm;  // d-hat: from c's centre towards n's
+    const double dy = -kDj[d] / norm;
+    const double along = wind.x * dx + wind.y * dy;   // w . d-hat
+    const double across = -wind.x * dy + wind.y * dx;  // w . m-hat, m-hat = (-d_y, d_x)
+    const double vg = wind.airspeed_mps;
+    if (!(std::fabs(across) < vg)) {
+      climb[d] = kInf;
+      continue;
+    }
+    const double ground_speed = std::sqrt(vg * vg - across * across) + along;
+    if (!(ground_speed > 0.0)) {
+      climb[d] = kInf;
+      continue;
+    }
+    climb[d] = dist / (glide_ratio * ground_speed / vg);
+  }
 
   for (uint64_t settled = 0; !heap.empty(); ++settled) {
     // A few milliseconds between polls: 2^16 relaxations.
@@ -357,7 +386,7 @@ absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double 
       if (ni < 0 || nj < 0 || ni >= nx || nj >= ny) continue;
       const uint32_t nk = static_cast<uint32_t>(nj) * static_cast<uint32_t>(nx) + ni;
       Cell& n = work[nk];
-      const double alt = std::max(n.floor, top.alt + (d < 4 ? straight_climb : diagonal_climb));
+      const double alt = std::max(n.floor, top.alt + climb[d]);
       if (alt < n.glide) {
         n.glide = alt;
         if (top_replaced) {

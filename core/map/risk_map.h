@@ -188,7 +188,10 @@ class RiskMap {
 // Computes the glide-altitude layer of spec section 6: Dijkstra over the
 // 8-connected grid from every landing site, edges of length res or res*sqrt(2),
 //   glide(site) = T(site) + clearance,
-//   glide(c) = min over neighbours n of max(T(c) + clearance, glide(n) + dist(c, n)/G).
+//   glide(c) = min over neighbours n of max(T(c) + clearance, glide(n) + dist(c, n)/G(c->n)),
+// with G(c->n) the glide ratio over the ground of a glide from c towards n in
+// `wind` (G in still air; an edge no crab angle holds, or whose ground speed
+// is not positive, is not glided: spec version 3, section 6).
 // No-fly cells are neither entered nor crossed by a glide (their glide altitude
 // is +infinity, as is that of every cell no site can be reached from; a landing
 // site in a no-fly cell is ignored). With no landing sites every cell is
@@ -204,6 +207,15 @@ std::vector<double> ComputeGlideAltitude(int nx, int ny, double res,
                                          const std::vector<uint8_t>& nofly,
                                          const std::vector<LandingSite>& sites, double glide_ratio,
                                          double clearance_m);
+// The wind of a glide (spec version 3, section 6): the wind vector (where the
+// air moves to) and the glide's airspeed v_g. The default is still air.
+struct GlideWind {
+  double x = 0.0;
+  double y = 0.0;
+  double airspeed_mps = 0.0;  // v_g; unused in still air
+  bool Calm() const { return x == 0.0 && y == 0.0; }
+};
+
 // The same, polling `stop` every few milliseconds: Cancelled once it is
 // reached (a request's glide parameters make a layer of their own, and a
 // server that drains stops building it).
@@ -212,7 +224,8 @@ absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double 
                                                          const std::vector<uint8_t>& nofly,
                                                          const std::vector<LandingSite>& sites,
                                                          double glide_ratio, double clearance_m,
-                                                         const StopCondition& stop);
+                                                         const StopCondition& stop,
+                                                         const GlideWind& wind = {});
 
 }  // namespace riskplan
 

@@ -199,7 +199,7 @@ PieceMemo& Run::Piece(const Pose& a, const Pose& b) {
   if (inserted) {
     const ModelParams& mp = model_.params();
     const TrajectoryPiece piece =
-        TrajectoryPiece::Manoeuvre(a, b, mp.turn_radius_m, mp.max_climb_rad);
+        TrajectoryPiece::Manoeuvre(a, b, mp.GroundTurnRadius(), mp.GroundClimbAngle());
     m.length_m = piece.Length();
     m.violations = checker_.Violations(piece, /*first_only=*/false);
   }
@@ -213,7 +213,10 @@ absl::Status Run::FlushBatch(std::vector<std::pair<PieceMemo*, PieceRisk>>* pend
   }
   size_t cursor = 0;
   for (auto& [m, rule] : *pending) {
-    while (!rule.complete()) rule.Add(risks_[cursor++]);
+    while (!rule.complete()) {
+      rule.Add(risks_[cursor], batch_[cursor]);
+      ++cursor;
+    }
     m->risk = rule.Risk();
     m->pending = false;
     m->has_risk = true;
@@ -263,7 +266,7 @@ absl::Status Run::Evaluate(std::vector<Chromosome>* pool, size_t first) {
       if (m.has_risk || m.pending) continue;
       // The piece-risk rule of spec section 4 with the fitness's step.
       PieceRisk rule(
-          TrajectoryPiece::Manoeuvre(poses[k], poses[k + 1], mp.turn_radius_m, mp.max_climb_rad),
+          TrajectoryPiece::Manoeuvre(poses[k], poses[k + 1], mp.GroundTurnRadius(), mp.GroundClimbAngle()),
           risk_step_m_, mp);
       // A batch is evaluated once it holds kMaxBatch samples (it holds
       // every piece's whole samples, so it may hold one piece more): the
@@ -347,7 +350,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
   const Pose& g = problem_.goal;
   length_ref_m_ = std::max(
       std::sqrt((g.x - s.x) * (g.x - s.x) + (g.y - s.y) * (g.y - s.y) + (g.z - s.z) * (g.z - s.z)),
-      mp.turn_radius_m);
+      mp.GroundTurnRadius());
   {
     // R_ref: the straight segment's risk, sampled like the fitness's.
     PieceRisk line(TrajectoryPiece::Segment({s.x, s.y, s.z}, {g.x, g.y, g.z}), risk_step_m_, mp);
@@ -357,7 +360,7 @@ absl::StatusOr<PlanResult> Run::Execute() {
     if (!samples.empty()) {
       if (absl::Status st = evaluator_->EvaluateBatch(model_, samples, risks); !st.ok()) return st;
     }
-    for (const ConfigurationRisk& r : risks) line.Add(r);
+    for (size_t k = 0; k < risks.size(); ++k) line.Add(risks[k], samples[k]);
     // A floor of 1e-12 per metre keeps the weight finite on an empty map.
     const double per_metre = mp.failure_rate_per_s / mp.airspeed_mps;
     risk_ref_ = std::max(line.Risk(), per_metre * length_ref_m_ * 1e-12);

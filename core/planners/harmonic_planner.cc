@@ -165,7 +165,7 @@ absl::Status Run::Report(const std::vector<GridCell>& cells) {
   path.push_back({problem_.goal.x, problem_.goal.y});
   RealizerOptions realizer_options;
   realizer_options.flight_altitude_m = flight_altitude_m_;
-  realizer_options.max_deviation_m = std::max(2.0 * cell_m_, model_.params().turn_radius_m);
+  realizer_options.max_deviation_m = std::max(2.0 * cell_m_, model_.params().GroundTurnRadius());
   const PathRealizer realizer(checker_, realizer_options);
   std::optional<std::vector<Pose>> waypoints =
       realizer.Realize(problem_.start, problem_.goal, path);

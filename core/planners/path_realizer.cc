@@ -62,7 +62,7 @@ int TrajectoryChecker::Violations(const TrajectoryPiece& piece, bool first_only)
   const double ds = rule.part_length_m();
   // A chord of length c on a turn of radius R lies within c^2 / (8 R) of the
   // arc; consecutive samples are at most ds apart along the arc.
-  const double margin = piece.is_segment() ? 0.0 : ds * ds / (8.0 * mp.turn_radius_m) + 1e-6;
+  const double margin = piece.is_segment() ? 0.0 : ds * ds / (8.0 * mp.GroundTurnRadius()) + 1e-6;
   int count = 0;
   Pose prev = rule.AdmissibilitySample(0);
   if (SampleFails(prev)) {
@@ -84,8 +84,8 @@ int TrajectoryChecker::Violations(std::span<const Pose> waypoints, bool first_on
   const ModelParams& mp = model_.params();
   int count = 0;
   for (size_t i = 0; i + 1 < waypoints.size(); ++i) {
-    count += Violations(TrajectoryPiece::Manoeuvre(waypoints[i], waypoints[i + 1], mp.turn_radius_m,
-                                                   mp.max_climb_rad),
+    count += Violations(TrajectoryPiece::Manoeuvre(waypoints[i], waypoints[i + 1], mp.GroundTurnRadius(),
+                                                   mp.GroundClimbAngle()),
                         first_only);
     if (first_only && count > 0) return count;
   }
@@ -173,7 +173,7 @@ std::optional<std::vector<Pose>> PathRealizer::Realize(const Pose& start, const 
   const double step = model_.map().res();
   // The direct manoeuvre first: when it passes, no path point is needed.
   const TrajectoryPiece direct =
-      TrajectoryPiece::Manoeuvre(start, goal, mp.turn_radius_m, mp.max_climb_rad);
+      TrajectoryPiece::Manoeuvre(start, goal, mp.GroundTurnRadius(), mp.GroundClimbAngle());
   if (checker_.Violations(direct, /*first_only=*/true) == 0) {
     return std::vector<Pose>{start, goal};
   }
@@ -201,7 +201,7 @@ std::optional<std::vector<Pose>> PathRealizer::Realize(const Pose& start, const 
   // 2. Altitude profile: with the margins first, then at the band's edges and
   // the full climb limit.
   std::vector<double> z;
-  const double tan_climb = std::tan(mp.max_climb_rad);
+  const double tan_climb = std::tan(mp.GroundClimbAngle());
   if (!Profile(start, goal, points, arc, options_.band_margin_m,
                options_.slope_fraction * tan_climb, &z) &&
       !Profile(start, goal, points, arc, 0.0, tan_climb, &z)) {
@@ -222,7 +222,7 @@ std::optional<std::vector<Pose>> PathRealizer::Realize(const Pose& start, const 
     const size_t k = chosen[w];
     return Pose{points[k].x, points[k].y, z[k], heading(w)};
   };
-  const double straight_m = std::max(2.0 * step, 0.1 * mp.turn_radius_m);
+  const double straight_m = std::max(2.0 * step, 0.1 * mp.GroundTurnRadius());
   while (true) {
     std::vector<Pose> poses;
     for (size_t w = 0; w < chosen.size(); ++w) poses.push_back(pose_at(w));
@@ -238,7 +238,7 @@ std::optional<std::vector<Pose>> PathRealizer::Realize(const Pose& start, const 
         ok = it->second;
       } else {
         const TrajectoryPiece piece =
-            TrajectoryPiece::Manoeuvre(poses[w], poses[w + 1], mp.turn_radius_m, mp.max_climb_rad);
+            TrajectoryPiece::Manoeuvre(poses[w], poses[w + 1], mp.GroundTurnRadius(), mp.GroundClimbAngle());
         ok = checker_.Violations(piece, /*first_only=*/true) == 0;
         passed.emplace(key, ok);
       }

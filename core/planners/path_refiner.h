@@ -106,7 +106,7 @@ class PathRefiner {
         double length = 0.0;
         for (size_t i = first; i < last; ++i) {
           between.push_back(TrajectoryPiece::Manoeuvre(waypoints[i], waypoints[i + 1],
-                                                       mp.turn_radius_m, mp.max_climb_rad));
+                                                       mp.GroundTurnRadius(), mp.GroundClimbAngle()));
           length += between.back().Length();
         }
         double s = (0.1 + 0.8 * rng.Uniform()) * length;
@@ -129,11 +129,11 @@ class PathRefiner {
     // The new pieces, evaluated against the risk of those they replace.
     const Pose& to_first = e.has_waypoint ? e.waypoint : waypoints[last];
     pieces_[0] =
-        TrajectoryPiece::Manoeuvre(waypoints[first], to_first, mp.turn_radius_m, mp.max_climb_rad);
+        TrajectoryPiece::Manoeuvre(waypoints[first], to_first, mp.GroundTurnRadius(), mp.GroundClimbAngle());
     const int count = e.has_waypoint ? 2 : 1;
     if (e.has_waypoint) {
-      pieces_[1] = TrajectoryPiece::Manoeuvre(e.waypoint, waypoints[last], mp.turn_radius_m,
-                                              mp.max_climb_rad);
+      pieces_[1] = TrajectoryPiece::Manoeuvre(e.waypoint, waypoints[last], mp.GroundTurnRadius(),
+                                              mp.GroundClimbAngle());
     }
     double risks[2] = {0.0, 0.0};
     double done_risk = 0.0;  // complete pieces
@@ -173,7 +173,7 @@ class PathRefiner {
       }
       risks_.resize(poses_.size());
       if (absl::Status s = evaluator_->EvaluateBatch(model_, poses_, risks_); !s.ok()) return s;
-      for (const ConfigurationRisk& r : risks_) rule.Add(r);
+      for (size_t k = 0; k < risks_.size(); ++k) rule.Add(risks_[k], poses_[k]);
       if (!(rule.PartialRisk() < limit)) return kInf;
     }
     return rule.Risk();

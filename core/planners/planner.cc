@@ -188,11 +188,11 @@ EdgeSampleBound ProjectEdgeSamples(PlannerAlgorithm algorithm, const RiskMap& ma
     }
     if (info.name == "risk_step_m" && value > 0.0) b.step_m = std::min(b.step_m, value);
   }
-  const double r = params.turn_radius_m;
+  const double r = params.GroundTurnRadius();
   b.map_diagonal_m = std::hypot(map.width_m(), map.height_m());
   b.climb_m = z_high - z_low;
   const double planar_m = b.map_diagonal_m + (2.0 + 4.0 * kPi) * r;
-  const double spiral_m = b.climb_m / std::tan(params.max_climb_rad) + kTwoPi * r;
+  const double spiral_m = b.climb_m / std::tan(params.GroundClimbAngle()) + kTwoPi * r;
   b.length_m = std::hypot(std::max(planar_m, spiral_m), b.climb_m);
   const int64_t parts = PartCount(b.length_m, b.step_m);
   b.samples = parts >= kMaxPartCount - 2 ? kMaxPartCount : parts + 2;
@@ -210,7 +210,7 @@ absl::Status CheckEdgeSampleBound(PlannerAlgorithm algorithm, const RiskMap& map
       "diagonal %.1f m, turn_radius_m %g, climbs of up to %.1f m at max_climb_rad %g) sampled "
       "every %g m (sample_step_m%s); the limit is %d samples per edge%s",
       PlannerAlgorithmName(algorithm), map.name(), b.samples, b.length_m, b.map_diagonal_m,
-      params.turn_radius_m, b.climb_m, params.max_climb_rad, b.step_m,
+      params.GroundTurnRadius(), b.climb_m, params.GroundClimbAngle(), b.step_m,
       algorithm == PlannerAlgorithm::kGenetic ? " or risk_step_m" : "", max_edge_samples,
       limit_source.empty() ? std::string() : absl::StrFormat(" (%s)", std::string(limit_source))));
 }

@@ -16,7 +16,7 @@ int32_t Run::NearestNode(const Pose& q) const {
   for (const auto& [d2, id] : candidates) {
     if (IsStart(id)) continue;  // a start is never a parent
     const double length =
-        DubinsAirplanePath(q, nodes_[id].pose, mp.turn_radius_m, mp.max_climb_rad).Length();
+        DubinsAirplanePath(q, nodes_[id].pose, mp.GroundTurnRadius(), mp.GroundClimbAngle()).Length();
     if (length < best_length) {
       best_length = length;
       best = id;
@@ -44,7 +44,7 @@ void Run::AddCandidate(const Pose& from, const Pose& to, int32_t node, double ba
   const ModelParams& mp = model_.params();
   edges->emplace_back(
       node,
-      PieceRisk(TrajectoryPiece::Manoeuvre(from, to, mp.turn_radius_m, mp.max_climb_rad),
+      PieceRisk(TrajectoryPiece::Manoeuvre(from, to, mp.GroundTurnRadius(), mp.GroundClimbAngle()),
                 mp.sample_step_m, mp),
       base, limit);
 }
@@ -95,7 +95,9 @@ absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool sha
       CandidateEdge& e = (*edges)[n];
       if (!e.alive) continue;
       // The rule adds in EvaluateTrajectory's order, whatever the chunking.
-      for (int64_t i = 0; i < e.in_batch; ++i) e.rule.Add(batch_risks_[cursor++]);
+      for (int64_t i = 0; i < e.in_batch; ++i, ++cursor) {
+        e.rule.Add(batch_risks_[cursor], batch_poses_[cursor]);
+      }
       const double limit = shared_limit ? best : e.limit;
       const double partial = e.rule.PartialRisk();
       if (!(e.base + partial < limit)) {
@@ -197,7 +199,7 @@ std::vector<int32_t> Run::KNearestFrom(const Pose& from, const std::vector<int32
   for (int32_t id : near) {
     if (IsStart(id) || nodes_[id].cost >= max_cost) continue;
     const double length =
-        DubinsAirplanePath(from, nodes_[id].pose, mp.turn_radius_m, mp.max_climb_rad).Length();
+        DubinsAirplanePath(from, nodes_[id].pose, mp.GroundTurnRadius(), mp.GroundClimbAngle()).Length();
     ranked.push_back({length, id});
   }
   std::sort(ranked.begin(), ranked.end());

@@ -184,7 +184,7 @@ void Run::MaybeReportMission(size_t m) {
     Node& node = nodes_[n];
     if (node.length_parent != node.parent) {
       node.edge_length = TrajectoryPiece::Manoeuvre(node.pose, nodes_[node.parent].pose,
-                                                    mp.turn_radius_m, mp.max_climb_rad)
+                                                    mp.GroundTurnRadius(), mp.GroundClimbAngle())
                              .Length();
       node.length_parent = node.parent;
     }

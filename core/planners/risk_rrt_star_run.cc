@@ -35,7 +35,7 @@ bool Run::SamplePathBiased(size_t m, Pose* q) {
     const std::vector<Pose>& w = r.best->waypoints;
     for (size_t i = 0; i + 1 < w.size(); ++i) {
       r.best_pieces.push_back(
-          TrajectoryPiece::Manoeuvre(w[i], w[i + 1], mp.turn_radius_m, mp.max_climb_rad));
+          TrajectoryPiece::Manoeuvre(w[i], w[i + 1], mp.GroundTurnRadius(), mp.GroundClimbAngle()));
     }
   }
   const double length = r.best->length_m;
@@ -118,7 +118,7 @@ absl::Status Run::Extend(const Pose& q_new) {
     if (n == kGoal || n == parent || !(cost < nodes_[n].cost)) continue;
     if (IsStart(n) && !Running(n - kFirstStart)) continue;  // its result is out
     const double length =
-        DubinsAirplanePath(nodes_[n].pose, q_new, mp.turn_radius_m, mp.max_climb_rad).Length();
+        DubinsAirplanePath(nodes_[n].pose, q_new, mp.GroundTurnRadius(), mp.GroundClimbAngle()).Length();
     ranked.push_back({length, n});
   }
   std::sort(ranked.begin(), ranked.end());
@@ -204,7 +204,7 @@ absl::Status Run::Iterate() {
   const Pose q_rand = Sample(&start_of);
   const int32_t near = NearestNode(q_rand);
   if (near < 0) return absl::OkStatus();
-  const DubinsAirplanePath to_near(q_rand, nodes_[near].pose, mp.turn_radius_m, mp.max_climb_rad);
+  const DubinsAirplanePath to_near(q_rand, nodes_[near].pose, mp.GroundTurnRadius(), mp.GroundClimbAngle());
   if (start_of >= 0 && to_near.Length() <= params_.step_m) {
     if (absl::Status s = ConnectStart(start_of); !s.ok()) return s;
   } else {

@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_format.h"
 #include "core/base/geometry.h"
+#include "core/base/wind.h"
 
 namespace riskplan {
 
@@ -106,7 +107,75 @@ absl::Status CheckTableBytes(double bytes, bool at_least, const ModelParams& par
           : absl::StrFormat(" (%s)", std::string(limits.max_table_bytes_source))));
 }
 
+// The wind-dependent numbers of kernel (b, k) (spec version 3, section 2):
+// its offset, impact energy and angle over the ground, and exposed area. In
+// still air they are the height bin's own (version 2), copied bit for bit.
+absl::Status SetKernelFall(const HeightBin& hb, int k, int n_head, const ModelParams& params,
+                           const WindVector& w, ImpactKernel* kernel) {
+  const double theta = k * kTwoPi / n_head;
+  const double c = std::cos(theta);
+  const double s = std::sin(theta);
+  const double d = hb.fall.distance_m;
+  if (params.Calm()) {
+    kernel->offset_x_m = d * c;
+    kernel->offset_y_m = d * s;
+    kernel->energy_j = hb.fall.energy_j;
+    kernel->impact_angle_rad = hb.fall.angle_rad;
+    kernel->exposed_area_m2 = hb.exposed_area_m2;
+    return absl::OkStatus();
+  }
+  const double t = hb.fall.fall_time_s;
+  const double vh = hb.fall.v_horizontal_mps;
+  const double vz = hb.fall.v_vertical_mps;
+  const double wind = params.wind_speed_mps;
+  kernel->offset_x_m = d * c + w.x * t;
+  kernel->offset_y_m = d * s + w.y * t;
+  // |v_h u_k + w|^2, written as the spec writes it.
+  const double ground2 = vh * vh + 2.0 * vh * (w.x * c + w.y * s) + wind * wind;
+  kernel->energy_j = 0.5 * params.mass_kg * (ground2 + vz * vz);
+  kernel->impact_angle_rad = std::atan2(std::fabs(vz), std::sqrt(std::max(0.0, ground2)));
+  kernel->exposed_area_m2 = ExposedArea(kernel->impact_angle_rad, params);
+  if (!std::isfinite(kernel->energy_j) || !std::isfinite(kernel->exposed_area_m2) ||
+      !std::isfinite(kernel->offset_x_m) || !std::isfinite(kernel->offset_y_m)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "impact table: at height %g m, air heading bin %d, the wind of %g m/s from %g degrees "
+        "gives impact energy %g J and exposed area %g m^2; each must be finite",
+        hb.height_m, k, params.wind_speed_mps, params.wind_from_deg, kernel->energy_j,
+        kernel->exposed_area_m2));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
+
+absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::InWind(const ImpactTable& base,
+                                                                       const ModelParams& params) {
+  if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
+  if (!SameKernelParams(base.params_, params)) {
+    return absl::InvalidArgumentError(
+        "impact table: a table in another wind can be made only from one of the same kernel "
+        "parameters");
+  }
+  auto table = std::shared_ptr<ImpactTable>(new ImpactTable());
+  table->params_ = params;
+  table->res_m_ = base.res_m_;
+  table->heading_bins_ = base.heading_bins_;
+  table->bins_ = base.bins_;
+  table->kernels_ = base.kernels_;  // the weights pointers stay valid: weights_ is shared
+  table->weights_ = base.weights_;
+  const WindVector w = WindVectorOf(params.wind_speed_mps, params.wind_from_deg);
+  const int n_head = table->heading_bins_;
+  for (int b = 1; b <= table->height_bins(); ++b) {
+    for (int k = 0; k < n_head; ++k) {
+      if (absl::Status s = SetKernelFall(table->bins_[b - 1], k, n_head, params, w,
+                                         &table->kernels_[static_cast<size_t>(b - 1) * n_head + k]);
+          !s.ok()) {
+        return s;
+      }
+    }
+  }
+  return std::shared_ptr<const ImpactTable>(std::move(table));
+}
 
 double ImpactTable::MinBytes(const ModelParams& params) {
   // TableBytes with a half-width of 0 for every bin: one row of
@@ -158,8 +227,9 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(
     total_weights += static_cast<size_t>(KernelWeights(hb.half_width)) * n_head;
   }
 
-  table->weights_.resize(total_weights);
+  auto weights = std::make_shared<std::vector<double>>(total_weights);
   table->kernels_.resize(static_cast<size_t>(n_bins) * n_head);
+  const WindVector wind = WindVectorOf(params.wind_speed_mps, params.wind_from_deg);
   size_t cursor = 0;
   for (int b = 1; b <= n_bins; ++b) {
     if (limits.stop.Reached()) return absl::CancelledError("impact table: stopped");
@@ -175,7 +245,7 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(
       const double theta = k * kTwoPi / n_head;
       const double c = std::cos(theta);
       const double s = std::sin(theta);
-      double* w = &table->weights_[cursor];
+      double* w = &(*weights)[cursor];
       double sum = 0.0;
       for (int v = -hw; v <= hw; ++v) {
         for (int u = -hw; u <= hw; ++u) {
@@ -202,12 +272,14 @@ absl::StatusOr<std::shared_ptr<const ImpactTable>> ImpactTable::Build(
       for (int i = 0; i < side * stride; ++i) w[i] /= sum;
       ImpactKernel& kernel = table->kernels_[static_cast<size_t>(b - 1) * n_head + k];
       kernel.half_width = hw;
-      kernel.offset_x_m = hb.fall.distance_m * c;
-      kernel.offset_y_m = hb.fall.distance_m * s;
+      if (absl::Status st = SetKernelFall(hb, k, n_head, params, wind, &kernel); !st.ok()) {
+        return st;
+      }
       kernel.weights = w;
       cursor += static_cast<size_t>(side) * stride;
     }
   }
+  table->weights_ = std::move(weights);
   return std::shared_ptr<const ImpactTable>(std::move(table));
 }
 
@@ -227,7 +299,7 @@ int ImpactTable::HeadingBinOf(double theta) const {
 
 size_t ImpactTable::MemoryBytes() const {
   return sizeof(*this) + bins_.capacity() * sizeof(HeightBin) +
-         kernels_.capacity() * sizeof(ImpactKernel) + weights_.capacity() * sizeof(double);
+         kernels_.capacity() * sizeof(ImpactKernel) + WeightBytes();
 }
 
 }  // namespace riskplan

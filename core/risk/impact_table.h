@@ -43,8 +43,15 @@ struct ImpactKernel {
   int half_width = 0;
   // Entries per stored row: Side() rounded up to a multiple of kKernelLanes.
   int Stride() const { return (Side() + kKernelLanes - 1) / kKernelLanes * kKernelLanes; }
-  double offset_x_m = 0.0;  // d(h_b) * cos(theta_k)
-  double offset_y_m = 0.0;  // d(h_b) * sin(theta_k)
+  // o(b, k) = d(h_b) u_k + w t_f(h_b) (spec version 3, section 2): where the
+  // fall carried by the air mass lands, from the failure's position.
+  double offset_x_m = 0.0;
+  double offset_y_m = 0.0;
+  // Energy and angle of the impact over the ground, and the exposed area of
+  // that angle (section 3 step 5). In still air the height bin's own.
+  double energy_j = 0.0;
+  double impact_angle_rad = 0.0;
+  double exposed_area_m2 = 0.0;
   const double* weights = nullptr;
   int Side() const { return 2 * half_width + 1; }
 };
@@ -73,6 +80,17 @@ class ImpactTable {
   // would not be finite; Cancelled when limits.stop is reached.
   static absl::StatusOr<std::shared_ptr<const ImpactTable>> Build(
       const ModelParams& params, double res_m, const ModelBuildLimits& limits = {});
+
+  // The table for `params` built from `base`, a table of the same kernel
+  // parameters (SameKernelParams) in another wind: the falls, dispersions and
+  // kernel weights do not depend on the wind, so they are shared with `base`
+  // (kept alive by the new table), and only each kernel's offset, energy,
+  // angle and exposed area are computed again: a few thousand numbers, not
+  // megabytes of weights. The result equals Build(params, base.res_m()) bit
+  // for bit. InvalidArgument when the kernel parameters differ or a number
+  // would not be finite. REQUIRES: ValidateModelParams(params).
+  static absl::StatusOr<std::shared_ptr<const ImpactTable>> InWind(const ImpactTable& base,
+                                                                   const ModelParams& params);
 
   // The bytes Build would allocate (exactly MemoryBytes() of the table),
   // computed from the parameters and one ballistic integration, without
@@ -107,7 +125,12 @@ class ImpactTable {
     return kernels_[static_cast<size_t>(b - 1) * heading_bins_ + k];
   }
 
+  // Bytes of the table, its kernel weights included even when they are shared
+  // with another table (InWind).
   size_t MemoryBytes() const;
+  // Bytes of the kernel weights alone (shared between the tables InWind
+  // makes from one another).
+  size_t WeightBytes() const { return weights_->capacity() * sizeof(double); }
 
  private:
   ImpactTable() = default;
@@ -117,7 +140,9 @@ class ImpactTable {
   int heading_bins_ = 0;
   std::vector<HeightBin> bins_;
   std::vector<ImpactKernel> kernels_;
-  std::vector<double> weights_;  // storage behind every kernel's weights
+  // Storage behind every kernel's weights, shared by the tables of one set of
+  // kernel parameters in different winds.
+  std::shared_ptr<const std::vector<double>> weights_;
 };
 
 // Casualty probability of spec section 3 step 6, with the spec's limits:

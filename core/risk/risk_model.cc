@@ -15,12 +15,14 @@ namespace riskplan {
 namespace {
 
 // Steps 1-3 of spec section 3 for a q inside the map (cell (i, j)) and above
-// its terrain by h > 0, with a finite heading: the bins and the impact cell,
-// whether or not the window lies inside the map.
-KernelSite SiteOf(const RiskMap& map, const ImpactTable& table, const Pose& q, double h) {
+// its terrain by h > 0, with a finite heading: the bins (the heading bin of
+// the air heading, version 3) and the impact cell, whether or not the window
+// lies inside the map.
+KernelSite SiteOf(const RiskMap& map, const ImpactTable& table, const WindTriangle& wind,
+                  const Pose& q, double h) {
   KernelSite site;
   site.height_bin = table.HeightBinOf(h);
-  site.heading_bin = table.HeadingBinOf(q.theta);
+  site.heading_bin = table.HeadingBinOf(wind.AirHeading(q.theta));
   const ImpactKernel& kernel = table.kernel(site.height_bin, site.heading_bin);
   site.impact_i = static_cast<int>(std::floor((q.x + kernel.offset_x_m - map.x0()) / map.res()));
   site.impact_j = static_cast<int>(std::floor((q.y + kernel.offset_y_m - map.y0()) / map.res()));
@@ -97,9 +99,15 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
                         params.max_half_width, RiskMap::kPad));
   }
   if (table != nullptr &&
-      (!SameImpactTableParams(table->params(), params) || table->res_m() != map->res())) {
+      (!SameKernelParams(table->params(), params) || table->res_m() != map->res())) {
     return absl::InvalidArgumentError(
         "risk model: the impact table given was built for other parameters or cell size");
+  }
+  if (table != nullptr && !SameImpactTableParams(table->params(), params)) {
+    // Another wind: share its weights, compute the offsets and energies.
+    absl::StatusOr<std::shared_ptr<const ImpactTable>> in_wind = ImpactTable::InWind(*table, params);
+    if (!in_wind.ok()) return in_wind.status();
+    table = *std::move(in_wind);
   }
   if (table == nullptr) {
     absl::StatusOr<std::shared_ptr<const ImpactTable>> built =
@@ -111,14 +119,17 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
   model->map_ = std::move(map);
   model->table_ = std::move(table);
   model->params_ = params;
-  if (model->map_->glide_ratio() == params.glide_ratio &&
+  model->wind_ = WindTriangle(params);
+  if (params.Calm() && model->map_->glide_ratio() == params.glide_ratio &&
       model->map_->glide_clearance_m() == params.glide_clearance_m) {
     model->glide_ = &model->map_->glide_altitude();
   } else {
     const RiskMap& m = *model->map_;
+    const WindVector w = WindVectorOf(params.wind_speed_mps, params.wind_from_deg);
     absl::StatusOr<std::vector<double>> glide = ComputeGlideAltitude(
         m.nx(), m.ny(), m.res(), m.layers().terrain, m.layers().nofly, m.landing_sites(),
-        params.glide_ratio, params.glide_clearance_m, limits.stop);
+        params.glide_ratio, params.glide_clearance_m, limits.stop,
+        GlideWind{.x = w.x, .y = w.y, .airspeed_mps = params.GlideAirspeed()});
     if (!glide.ok()) return glide.status();
     model->own_glide_ = std::make_shared<const std::vector<double>>(*std::move(glide));
     model->glide_ = model->own_glide_.get();
@@ -189,7 +200,7 @@ ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) cons
   const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h);
   if (kind != ViolationKind::kNone) return kind;
   // Last, as it needs the height bin: the impact window inside the map.
-  if (!WindowInsideMap(SiteOf(*map_, *table_, q, h))) return ViolationKind::kImpactOutsideMap;
+  if (!WindowInsideMap(SiteOf(*map_, *table_, wind_, q, h))) return ViolationKind::kImpactOutsideMap;
   return ViolationKind::kNone;
 }
 
@@ -313,7 +324,7 @@ bool RiskModel::Locate(const Pose& q, KernelSite* site) const {
   }
   const double h = q.z - static_cast<double>(map_->terrain(i, j));
   if (!(h > 0.0)) return false;
-  *site = SiteOf(*map_, *table_, q, h);
+  *site = SiteOf(*map_, *table_, wind_, q, h);
   return WindowInsideMap(*site);
 }
 
@@ -336,13 +347,15 @@ ImpactReach RiskModel::Reach(double height_agl_m) const {
 
 ConfigurationRisk RiskModel::FromSums(const KernelSite& site, double impact_factor,
                                       double expected_shelter) const {
-  const HeightBin& bin = table_->bin(site.height_bin);
+  // Version 3: energy and exposed area per (height bin, air-heading bin); in
+  // still air both are the height bin's own, bit for bit.
+  const ImpactKernel& kernel = table_->kernel(site.height_bin, site.heading_bin);
   ConfigurationRisk out;
   out.impact_factor = impact_factor;
   out.expected_shelter = expected_shelter;
   out.casualty_probability =
-      CasualtyProbability(bin.fall.energy_j, expected_shelter, params_.alpha_j, params_.beta_j);
-  out.exposed_area_m2 = bin.exposed_area_m2;
+      CasualtyProbability(kernel.energy_j, expected_shelter, params_.alpha_j, params_.beta_j);
+  out.exposed_area_m2 = kernel.exposed_area_m2;
   out.risk = out.exposed_area_m2 * out.casualty_probability * impact_factor;
   out.height_bin = site.height_bin;
   out.heading_bin = site.heading_bin;
@@ -358,6 +371,10 @@ ConfigurationRisk RiskModel::Evaluate(const Pose& q) const {
   Ewmm(table_->kernel(site.height_bin, site.heading_bin), site.impact_i, site.impact_j,
        &impact_factor, &shelter);
   return FromSums(site, impact_factor, shelter);
+}
+
+size_t RiskModel::GlideBytes() const {
+  return own_glide_ ? own_glide_->size() * sizeof(double) : 0;
 }
 
 size_t RiskModel::MemoryBytes() const {

@@ -15,6 +15,7 @@
 #include "absl/status/statusor.h"
 #include "core/base/geometry.h"
 #include "core/base/model_params.h"
+#include "core/base/wind.h"
 #include "core/map/risk_map.h"
 #include "core/risk/impact_table.h"
 
@@ -94,7 +95,9 @@ struct CellMargins {
 class RiskModel {
  public:
   // Builds the model. `table` may be passed to share an already built table;
-  // it must match params and the map's cell size. The glide layer of the map is
+  // it must have the kernel parameters of `params` (SameKernelParams) and the
+  // map's cell size. A table in another wind lends its kernel weights to this
+  // model's own table (ImpactTable::InWind), which is cheap. The glide layer of the map is
   // reused when the glide parameters match, else computed (about a second on a
   // 1600 x 1600 map). `limits` bound the table built and stop the build
   // (ImpactTable::Build's errors, and Cancelled).
@@ -107,6 +110,8 @@ class RiskModel {
   const ImpactTable& table() const { return *table_; }
   const std::shared_ptr<const ImpactTable>& table_ptr() const { return table_; }
   const ModelParams& params() const { return params_; }
+  // The cruise's wind triangle (spec section 0).
+  const WindTriangle& wind() const { return wind_; }
 
   // M(q) of spec section 3. Never fails: `defined` is false where the spec
   // leaves M undefined (outside the map or not finite, h <= 0, or the impact
@@ -167,6 +172,8 @@ class RiskModel {
   // Bytes this model holds beyond its map: the impact table (which other
   // models may share) and a glide layer of its own, if it has one.
   size_t MemoryBytes() const;
+  // Bytes of a glide layer of its own (0 when it uses the map's).
+  size_t GlideBytes() const;
 
  private:
   RiskModel() = default;
@@ -177,6 +184,7 @@ class RiskModel {
   std::shared_ptr<const RiskMap> map_;
   std::shared_ptr<const ImpactTable> table_;
   ModelParams params_;
+  WindTriangle wind_{ModelParams{}};
   // Points at the map's own layer or at own_glide_ below.
   const std::vector<double>* glide_ = nullptr;
   std::shared_ptr<const std::vector<double>> own_glide_;

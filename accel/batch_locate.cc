@@ -84,6 +84,9 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
   alignas(32) double fx[kLocateBlock];
   alignas(32) double fy[kLocateBlock];
   alignas(32) double kf[kLocateBlock];
+  alignas(32) double psi[kLocateBlock];  // air headings (spec version 3), in wind only
+  const WindTriangle& wind = model.wind();
+  const bool calm = wind.calm();
   alignas(32) double h[kLocateBlock];
   alignas(32) double bf[kLocateBlock];
   alignas(32) double ox[kLocateBlock];
@@ -106,6 +109,13 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
   for (size_t base = 0; base < n; base += kLocateBlock) {
     const size_t m = std::min(kLocateBlock, n - base);
     const size_t m4 = (m + 3) / 4 * 4;  // lanes past m hold copies of the last pose
+    // Pass 0, in wind: the air heading of each track heading, whose bin
+    // picks the kernel (RiskModel::Locate's SiteOf).
+    if (!calm) {
+      for (size_t t = 0; t < m4; ++t) {
+        psi[t] = wind.AirHeading(configs[base + std::min(t, m - 1)].theta);
+      }
+    }
     // Pass 1: x, y and the floors of the cell and of the heading bin.
     for (size_t t = 0; t < m4; t += 4) {
       const auto pose = [&](size_t u) { return &configs[base + std::min(u, m - 1)].x; };
@@ -119,7 +129,8 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
       const __m256d t3 = _mm256_unpackhi_pd(r2, r3);
       const __m256d x = _mm256_permute2f128_pd(t0, t2, 0x20);
       const __m256d y = _mm256_permute2f128_pd(t1, t3, 0x20);
-      const __m256d theta = _mm256_permute2f128_pd(t1, t3, 0x31);
+      const __m256d theta =
+          calm ? _mm256_permute2f128_pd(t1, t3, 0x31) : _mm256_load_pd(psi + t);
       _mm256_store_pd(xs + t, x);
       _mm256_store_pd(ys + t, y);
       _mm256_store_pd(fx + t, _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(x, x0), res), kFloor));
@@ -179,7 +190,7 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
         const int r = static_cast<int>(kf[t]) % c.heading_bins;
         k = r < 0 ? r + c.heading_bins : r;
       } else {
-        k = table.HeadingBinOf(configs[base + t].theta);
+        k = table.HeadingBinOf(calm ? configs[base + t].theta : psi[t]);
       }
       const ImpactKernel& kernel = table.kernel(b, k);
       site[t].height_bin = b;

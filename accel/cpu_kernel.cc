@@ -21,7 +21,7 @@ ConfigurationRisk FromCached(const RiskModel& model, const KernelSite& site,
   out.impact_factor = v.impact_factor;
   out.expected_shelter = v.expected_shelter;
   out.casualty_probability = v.casualty_probability;
-  out.exposed_area_m2 = model.table().bin(site.height_bin).exposed_area_m2;
+  out.exposed_area_m2 = model.table().kernel(site.height_bin, site.heading_bin).exposed_area_m2;
   out.risk = out.exposed_area_m2 * out.casualty_probability * v.impact_factor;
   out.height_bin = site.height_bin;
   out.heading_bin = site.heading_bin;

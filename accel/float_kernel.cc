@@ -266,18 +266,22 @@ void FastRiskFinisher::PrepareFor(const RiskModel& model) {
   alpha_j_ = p.alpha_j;
   beta_j_ = p.beta_j;
   sqrt_alpha_over_beta_ = std::sqrt(p.alpha_j / p.beta_j);
-  bins_.resize(t.height_bins());
+  heading_bins_ = t.heading_bins();
+  bins_.resize(static_cast<size_t>(t.height_bins()) * heading_bins_);
   for (int b = 1; b <= t.height_bins(); ++b) {
-    const HeightBin& bin = t.bin(b);
-    const double energy = bin.fall.energy_j;
-    bins_[b - 1] =
-        Bin{bin.exposed_area_m2, energy > p.beta_j ? 3.0 * std::log(p.beta_j / energy) : 0.0,
-            energy > p.beta_j};
+    for (int k = 0; k < heading_bins_; ++k) {
+      const ImpactKernel& kernel = t.kernel(b, k);
+      const double energy = kernel.energy_j;
+      bins_[static_cast<size_t>(b - 1) * heading_bins_ + k] =
+          Bin{kernel.exposed_area_m2, energy > p.beta_j ? 3.0 * std::log(p.beta_j / energy) : 0.0,
+              energy > p.beta_j};
+    }
   }
 }
 
-double FastRiskFinisher::CasualtyProbability(int height_bin, double expected_shelter) const {
-  const Bin& bin = bins_[height_bin - 1];
+double FastRiskFinisher::CasualtyProbability(const KernelSite& site,
+                                             double expected_shelter) const {
+  const Bin& bin = BinOf(site);
   if (!bin.harmful) return 0.0;
   if (!(expected_shelter > 0.0)) return 1.0;
   // (beta/E)^(3/S~) = exp(3 ln(beta/E) / S~): below 1 since beta < E.
@@ -289,12 +293,14 @@ double FastRiskFinisher::CasualtyProbability(int height_bin, double expected_she
 ConfigurationRisk FastRiskFinisher::Finish(const KernelSite& site, double impact_factor,
                                            double expected_shelter) const {
   // PrepareFor(model) ran: the site's height bin has its constants.
-  RISKPLAN_DCHECK(site.height_bin >= 1 && static_cast<size_t>(site.height_bin) <= bins_.size());
+  RISKPLAN_DCHECK(site.height_bin >= 1 && site.heading_bin >= 0 &&
+                  static_cast<size_t>(site.height_bin - 1) * heading_bins_ + site.heading_bin <
+                      bins_.size());
   ConfigurationRisk out;
   out.impact_factor = impact_factor;
   out.expected_shelter = expected_shelter;
-  out.casualty_probability = CasualtyProbability(site.height_bin, expected_shelter);
-  out.exposed_area_m2 = bins_[site.height_bin - 1].exposed_area_m2;
+  out.casualty_probability = CasualtyProbability(site, expected_shelter);
+  out.exposed_area_m2 = BinOf(site).exposed_area_m2;
   out.risk = out.exposed_area_m2 * out.casualty_probability * impact_factor;
   out.height_bin = site.height_bin;
   out.heading_bin = site.heading_bin;

@@ -59,15 +59,16 @@ FloatEwmmFn FloatLoopFor(Isa isa, int n, int side, bool shared);
 // pow. Thread-compatible.
 class FastRiskFinisher {
  public:
-  // Prepares the per-bin constants of `model` unless they are the current
-  // ones (a cheap check).
+  // Prepares the per-kernel constants of `model` (per height bin and air-heading
+  // bin: in wind each has its own energy and exposed area) unless they are
+  // the current ones (a cheap check).
   void PrepareFor(const RiskModel& model);
 
   // REQUIRES: PrepareFor(model) of the model the site belongs to.
   ConfigurationRisk Finish(const KernelSite& site, double impact_factor,
                            double expected_shelter) const;
   // Only p_cas, for SiteCache entries.
-  double CasualtyProbability(int height_bin, double expected_shelter) const;
+  double CasualtyProbability(const KernelSite& site, double expected_shelter) const;
 
  private:
   struct Bin {
@@ -79,7 +80,11 @@ class FastRiskFinisher {
   double alpha_j_ = 0.0;
   double beta_j_ = 0.0;
   double sqrt_alpha_over_beta_ = 0.0;
-  std::vector<Bin> bins_;  // index b - 1
+  int heading_bins_ = 0;
+  std::vector<Bin> bins_;  // index (b - 1) * heading_bins_ + k
+  const Bin& BinOf(const KernelSite& site) const {
+    return bins_[static_cast<size_t>(site.height_bin - 1) * heading_bins_ + site.heading_bin];
+  }
 };
 
 }  // namespace riskplan::accel

@@ -61,6 +61,21 @@ inline std::shared_ptr<const RiskModel> SmallCity() {
   return model;
 }
 
+// SmallCity() in an 8 m/s wind from the south-west (risk model version 3): its
+// own impact table (the still-air weights, the wind's offsets and energies)
+// and glide layer. Built once.
+inline std::shared_ptr<const RiskModel> SmallCityInWind() {
+  static const std::shared_ptr<const RiskModel> model = [] {
+    ModelParams params;
+    params.wind_speed_mps = 8.0;
+    params.wind_from_deg = 225.0;
+    auto m = RiskModel::Create(SmallCity()->map_ptr(), params, SmallCity()->table_ptr());
+    EXPECT_TRUE(m.ok()) << m.status();
+    return *m;
+  }();
+  return model;
+}
+
 // n configurations: two thirds along straight legs (5 m apart) at 20 to 200 m
 // above ground, the rest uniform over the map, and a few undefined ones
 // (outside the map, below the terrain, NaN).

@@ -99,6 +99,37 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Combine(::testing::Values(Isa::kPortable, Isa::kAvx2, Isa::kAvx512),
                        ::testing::Bool(), ::testing::Bool(), ::testing::Values(0, 64)));
 
+// In wind every path locates by the air heading and finishes with the (b, k)
+// entry's energy: still RiskModel::Evaluate's results, bit for bit.
+TEST(CpuKernelTest, MatchesRiskModelBitForBitInWind) {
+  const RiskModel& model = *testing::SmallCityInWind();
+  ASSERT_FALSE(model.wind().calm());
+  const std::vector<Pose> configs = MixedConfigs(model, 20000, 17);
+  for (Isa isa : {Isa::kPortable, Isa::kAvx2, Isa::kAvx512}) {
+    if (static_cast<int>(isa) > static_cast<int>(CpuRiskKernel::BestIsa())) continue;
+    for (bool cached : {false, true}) {
+      PreparedMapCache maps(size_t{1} << 30);
+      KernelWeightsCache weights(size_t{1} << 30);
+      SiteCache cache(cached ? size_t{1} << 20 : 0);
+      CpuKernelOptions options;
+      options.isa = isa;
+      CpuRiskKernel kernel(&maps, &cache, options, &weights);
+      ExpectExact(model, kernel, configs);
+      // The still-air model's results through the same caches stay its own.
+      ExpectExact(*SmallCity(), kernel, configs);
+      ExpectExact(model, kernel, configs);
+    }
+  }
+  // And the wind changes the answers: same poses, other risks.
+  int differ = 0;
+  for (size_t n = 0; n < 2000; ++n) {
+    const ConfigurationRisk a = model.Evaluate(configs[n]);
+    const ConfigurationRisk b = SmallCity()->Evaluate(configs[n]);
+    if (a.defined && b.defined && a.risk != b.risk) ++differ;
+  }
+  EXPECT_GT(differ, 500);
+}
+
 TEST(CpuKernelTest, AwkwardConfigurations) {
   const RiskModel& model = *SmallCity();
   const RiskMap& m = model.map();

@@ -174,6 +174,18 @@ INSTANTIATE_TEST_SUITE_P(AllPaths, Float32PathTest,
                                                               Isa::kAvx512),
                                             ::testing::Bool(), ::testing::Values(256, 5000)));
 
+TEST(Float32PathTest, WithinTheSpecBoundInWind) {
+  const RiskModel& model = *testing::SmallCityInWind();
+  PreparedMapCache maps(size_t{1} << 30);
+  KernelWeightsCache weights(size_t{1} << 30);
+  CpuKernelOptions options;
+  options.precision = KernelPrecision::kFloat32;
+  CpuRiskKernel kernel(&maps, nullptr, options, &weights);
+  const std::vector<Pose> configs = RandomConfigurations(model, 4000, 0.0, 5);
+  const Errors e = ExpectWithinBound(model, kernel, configs, 256);
+  EXPECT_GT(e.compared, configs.size() * 9 / 10);
+}
+
 TEST(Float32PathTest, AwkwardAndMixedConfigurations) {
   // Undefined configurations, windows off the map, headings far beyond 2 pi,
   // heights above the table, on the small city.

@@ -37,12 +37,11 @@ void WindowSums(const RiskModel& model, const KernelSite& s, double* sum_rho, do
 }
 
 void CheckBoard(const std::vector<std::string>& shim_args, const NumberFormat& format,
-                double risk_tolerance) {
+                double risk_tolerance, const RiskModel& model = *SmallCity()) {
   auto shim = ShimProcess::Start(shim_args);
   ASSERT_NE(shim, nullptr);
   std::unique_ptr<RiskEngine> engine = testing::BoardOnlyEngine(shim->endpoint(), 2000);
   ASSERT_NE(engine, nullptr);
-  const RiskModel& model = *SmallCity();
   const std::vector<Pose> configs = MixedConfigs(model, 6000, 21);
   std::vector<ConfigurationRisk> out(configs.size());
   ASSERT_TRUE(engine->Evaluate(model, configs, out).ok());
@@ -92,6 +91,16 @@ TEST(FpgaAccuracyTest, ModelBackendBoardFormat) {
 
 TEST(FpgaAccuracyTest, ModelBackendPreciseFormat) {
   CheckBoard({"--device=model", "--format=precise"}, NumberFormat::Precise(), 1e-10);
+}
+
+// Version 3: in wind the board computes the same sums (the weights do not
+// move with the wind); the host locates by the air heading and finishes with
+// the (b, k) entry's energy. Within the format's bound of the exact model.
+TEST(FpgaAccuracyTest, ModelBackendInWind) {
+  CheckBoard({"--device=model", "--format=board"}, NumberFormat::Board(), 1e-5,
+             *testing::SmallCityInWind());
+  CheckBoard({"--device=model", "--format=precise"}, NumberFormat::Precise(), 1e-10,
+             *testing::SmallCityInWind());
 }
 
 TEST(FpgaAccuracyTest, MmioBackendOnTheComponentModel) {

@@ -43,7 +43,7 @@ TrajectoryEvaluation Reference(const RiskModel& model, std::span<const Trajector
       const Pose q = rule.AdmissibilitySample(i, &s);
       if (i >= 1 && i <= rule.parts()) {
         const ConfigurationRisk m = model.Evaluate(q);
-        rule.Add(m);
+        rule.Add(m, q);
         if (keep_samples) {
           out.samples.push_back(SampleEvaluation{q, start_s + s, static_cast<int>(p), m});
         }

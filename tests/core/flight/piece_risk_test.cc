@@ -73,13 +73,13 @@ TEST(PieceRiskTest, PartialRiskGrowsToTheRiskAndUndefinedAddsNothing) {
   double previous = 0.0;
   for (double value : {1e-3, 2e-3, 0.0}) {
     m.risk = value;
-    rule.Add(m);
+    rule.Add(m, Pose{});
     EXPECT_GE(rule.PartialRisk(), previous);
     previous = rule.PartialRisk();
   }
   ConfigurationRisk undefined;
   undefined.risk = 0.5;  // ignored: an undefined M adds nothing
-  rule.Add(undefined);
+  rule.Add(undefined, Pose{});
   ASSERT_TRUE(rule.complete());
   EXPECT_EQ(rule.Risk(), per_metre * ((0.0 + 1e-3) + 2e-3 + 0.0) * 5.0);
 }
@@ -106,7 +106,7 @@ TEST(PieceRiskTest, ChunkedSumsEqualEvaluateTrajectoryBitForBit) {
         EXPECT_EQ(rule.ChunkEnd(chunk), end);
         std::vector<Pose> batch;
         rule.AppendMidpoints(rule.added(), end, &batch);
-        for (const Pose& q : batch) rule.Add((*model)->Evaluate(q));
+        for (const Pose& q : batch) rule.Add((*model)->Evaluate(q), q);
         EXPECT_LE(rule.PartialRisk(), evaluation->pieces[p].risk);
       }
       EXPECT_EQ(rule.Risk(), evaluation->pieces[p].risk) << "piece " << p << " chunk " << chunk;

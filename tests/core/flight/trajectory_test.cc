@@ -183,7 +183,7 @@ TEST(EvaluateTrajectoryBatchesTest, ManyBatchesGiveWhatTheRuleGivesBitForBit) {
       const Pose q = rule.AdmissibilitySample(i, &s);
       if (i >= 1 && i <= rule.parts()) {
         const ConfigurationRisk m = (*model)->Evaluate(q);
-        rule.Add(m);
+        rule.Add(m, q);
         ASSERT_LT(sample, eval->samples.size());
         const SampleEvaluation& got = eval->samples[sample++];
         ASSERT_EQ(got.pose.x, q.x);

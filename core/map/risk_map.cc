@@ -354,8 +354,11 @@ absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double 
       climb[d] = kInf;
       continue;
     }
+    // A ground speed of zero up to rounding (v_g = W and the edge has any
+    // headwind: sqrt(v_g^2 - W^2 sin^2) - W cos is 0 in exact arithmetic)
+    // is not positive: below 1e-9 v_g the edge is not glided.
     const double ground_speed = std::sqrt(vg * vg - across * across) + along;
-    if (!(ground_speed > 0.0)) {
+    if (!(ground_speed > 1e-9 * vg)) {
       climb[d] = kInf;
       continue;
     }

@@ -162,7 +162,7 @@ TEST(ModelParamRulesTest, FallTimeLowerBoundIsFreeFallWithoutDrag) {
 }
 
 TEST(ModelParamRulesTest, EveryRuleIsListed) {
-  EXPECT_EQ(ModelParamRules().size(), 5u);
+  EXPECT_EQ(ModelParamRules().size(), 6u);
   ModelParams p;
   p.alpha_j = p.beta_j;
   EXPECT_THAT(std::string(ValidateModelParams(p).message()), HasSubstr("'alpha_j'"));
@@ -172,6 +172,11 @@ TEST(ModelParamRulesTest, EveryRuleIsListed) {
   p = ModelParams{};
   p.table_max_height_m = 303.0;
   EXPECT_THAT(std::string(ValidateModelParams(p).message()), HasSubstr("a multiple"));
+  // Version 3: the wind is at most half the airspeed.
+  p = ModelParams{};
+  p.wind_speed_mps = 9.5;
+  EXPECT_THAT(std::string(ValidateModelParams(p).message()),
+              HasSubstr("'wind_speed_mps' (9.5) must be at most 0.5 times 'airspeed_mps' (18)"));
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// Risk model version 3: the mean wind. Every expected number here is derived
-// by hand from shared/spec/risk-model.md (sections 0-6), not read off the code.
+// Risk model version 3: the mean wind, from the wind triangle to trajectories.
+// Every expected number here is derived by hand from shared/spec/risk-model.md
+// (sections 0-6), not read off the code.
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -210,7 +211,7 @@ double HandRisk(const ModelParams& p, const BallisticImpact& fall, double ground
   const double e = std::pow(p.beta_j / energy, 3.0 / 4.0);
   const double k = std::min(1.0, e);
   const double p_cas = (1.0 - k) / (1.0 - 2.0 * k + std::sqrt(p.alpha_j / p.beta_j) * e);
-  return area * p_cas * 1e-3;
+  return area * p_cas * static_cast<double>(1e-3f);  // the layer's float
 }
 
 TEST(WindRiskTest, AStraightLegUpwindAgainstDownwind) {

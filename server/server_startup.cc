@@ -265,6 +265,7 @@ absl::StatusOr<Serving> BuildAndStart(const ServerConfig& config, PlannerService
     return absl::UnavailableError(
         absl::StrFormat("cannot start: gRPC did not start on --listen=%s", listen));
   }
+  if (security.rotation != nullptr) metrics.AddCollectable(security.rotation->metrics());
   serving.acceptor = *std::move(acceptor);
   serving.acceptor->Start(std::move(connections), [&metrics] { metrics.RecordAcceptError(); });
   if (!config.health_listen.empty()) {

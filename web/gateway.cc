@@ -33,6 +33,12 @@ namespace {
 using Json = nlohmann::json;
 
 constexpr int kMaxLayerSideCells = 1024;
+// The side the page asks its map layers at (map.js, fetchLayer).
+constexpr int kPageLayerSideCells = 400;
+// A warm-up call waits no longer: a SIGTERM waits for the one in flight.
+constexpr absl::Duration kWarmCallTimeout = absl::Seconds(10);
+constexpr v1::MapLayer kPageLayers[] = {v1::POPULATION_DENSITY, v1::SHELTER, v1::TERRAIN,
+                                        v1::NO_FLY};
 
 // Where the pre-routing handler moves a request's Accept-Encoding (below,
 // Routes): cpp-httplib then compresses nothing itself.
@@ -362,13 +368,21 @@ absl::StatusOr<int> Gateway::Bind() {
   // stream and its calls, or a few viewers arriving together, would wait for
   // SYN retransmissions (1 s, then 3 s). Listening again sets the backlog.
   if (listen_socket_ >= 0) ::listen(listen_socket_, kListenBacklog);
+  // Started here, on the thread that binds (before Serve's), so that Stop
+  // finds it set.
+  if (!warm_.joinable()) warm_ = std::thread([this] { WarmLayers(); });
   return bound;
 }
 
 void Gateway::Serve() { http_->listen_after_bind(); }
 
 void Gateway::Stop() {
-  if (stopping_.exchange(true)) return;
+  if (stopping_.exchange(true)) {
+    return;
+  }
+  // The warm-up checks stopping_ between layers (each a call of at most
+  // kWarmCallTimeout).
+  if (warm_.joinable()) warm_.join();
   // Ends the event streams (their waits wake up) and the plans, then the
   // HTTP server, which joins its threads once their streams returned.
   plans_.StopAll();
@@ -590,27 +604,60 @@ void Gateway::GetLayer(const httplib::Request& req, httplib::Response& res) {
     request.set_max_side_cells(side);  // the server checks the rest of its range
   }
   // The layer of a map the gateway knows (by its fingerprint) is made once.
-  std::string key;
-  {
-    absl::MutexLock lock(&cache_mu_);
-    if (auto it = map_fingerprints_.find(request.map()); it != map_fingerprints_.end()) {
-      key = absl::StrCat(it->second, "|", v1::MapLayer_Name(layer), "|",
-                         request.max_side_cells());
-    }
-  }
+  const std::string key = LayerKey(request.map(), layer, request.max_side_cells());
   if (!key.empty()) {
     if (std::shared_ptr<const CachedLayer> cached = FindLayer(key)) {
       return SendJsonTo(req, res, cached->json, cached->gzip);
     }
   }
+  absl::StatusOr<std::shared_ptr<const CachedLayer>> made =
+      MakeLayer(request, key, options_.rpc_timeout);
+  if (!made.ok()) {
+    return SendServerError(res, grpc::Status(static_cast<grpc::StatusCode>(made.status().code()),
+                                             std::string(made.status().message())));
+  }
+  SendJsonTo(req, res, (*made)->json, (*made)->gzip);
+}
+
+std::string Gateway::LayerKey(const std::string& map, v1::MapLayer layer, int max_side_cells) {
+  absl::MutexLock lock(&cache_mu_);
+  const auto it = map_fingerprints_.find(map);
+  if (it == map_fingerprints_.end()) return "";
+  return absl::StrCat(it->second, "|", v1::MapLayer_Name(layer), "|", max_side_cells);
+}
+
+absl::StatusOr<std::shared_ptr<const Gateway::CachedLayer>> Gateway::MakeLayer(
+    const v1::GetMapLayerRequest& request, const std::string& key, absl::Duration timeout) {
   v1::GetMapLayerResponse response;
-  const grpc::Status status = client_.GetMapLayer(request, &response, options_.rpc_timeout);
-  if (!status.ok()) return SendServerError(res, status);
+  const grpc::Status status = client_.GetMapLayer(request, &response, timeout);
+  if (!status.ok()) {
+    return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
+                        status.error_message());
+  }
   auto made = std::make_shared<CachedLayer>();
   made->json = ToJson(response);
   made->gzip = Gzip(made->json);
   if (!key.empty()) KeepLayer(key, made);
-  SendJsonTo(req, res, made->json, made->gzip);
+  return made;
+}
+
+void Gateway::WarmLayers() {
+  absl::StatusOr<std::shared_ptr<const v1::ListMapsResponse>> maps = Maps(true);
+  if (!maps.ok()) return;  // the server is not up yet: the page's calls make them
+  size_t made = 0;
+  for (const v1::MapInfo& info : (*maps)->maps()) {
+    for (const v1::MapLayer layer : kPageLayers) {
+      // The cache holds kMaxCachedLayers: warming more would drop the first.
+      if (stopping_.load() || made >= kMaxCachedLayers) return;
+      const std::string key = LayerKey(info.name(), layer, kPageLayerSideCells);
+      if (key.empty() || FindLayer(key) != nullptr) continue;
+      v1::GetMapLayerRequest request;
+      request.set_map(info.name());
+      request.set_layer(layer);
+      request.set_max_side_cells(kPageLayerSideCells);
+      if (MakeLayer(request, key, kWarmCallTimeout).ok()) ++made;
+    }
+  }
 }
 
 void Gateway::PostRiskLayer(const httplib::Request& req, httplib::Response& res) {

@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -123,6 +124,16 @@ class Gateway {
     std::string gzip;
   };
   std::shared_ptr<const CachedLayer> FindLayer(const std::string& key);
+  // The cache key of a layer of `map` (by its fingerprint), or "" when the
+  // gateway has not listed that map yet.
+  std::string LayerKey(const std::string& map, v1::MapLayer layer, int max_side_cells);
+  // GetMapLayer, made into JSON and gzip, kept under `key` (when not "").
+  absl::StatusOr<std::shared_ptr<const CachedLayer>> MakeLayer(
+      const v1::GetMapLayerRequest& request, const std::string& key, absl::Duration timeout);
+  // At start (Bind), every map's four layers at the side the page asks
+  // for, made before the first page asks: its first map is then drawn from
+  // the cache. Stops early when the gateway stops.
+  void WarmLayers();
   void KeepLayer(const std::string& key, std::shared_ptr<const CachedLayer> layer);
   static constexpr size_t kMaxCachedLayers = 64;
   // The plan a /api/plans/ID/... route names; null, with the 404 sent, when
@@ -143,6 +154,7 @@ class Gateway {
   static constexpr int kListenBacklog = 1024;
   std::atomic<int> viewers_{0};
   std::atomic<bool> stopping_{false};
+  std::thread warm_;  // WarmLayers, joined by Stop
 
   absl::Mutex cache_mu_;
   std::shared_ptr<const v1::ListMapsResponse> maps_ ABSL_GUARDED_BY(cache_mu_);

@@ -16,7 +16,6 @@
 #include "accel/engine_metrics.h"
 #include "net/net.h"
 #include "net/tls_context.h"
-#include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/health_check_service_interface.h"
 #include "grpcpp/impl/server_builder_option.h"
 #include "grpcpp/impl/server_builder_plugin.h"
@@ -47,26 +46,20 @@ void SetHealth(const Serving& serving, bool serving_status) {
   }
 }
 
-// What a builder serves besides its own services: gRPC's reflection plugin
-// when `reflection`, else none. A ServerBuilder copies every plugin factory
-// registered with the process (InitProtoReflectionServerBuilderPlugin adds
-// one for every builder made after it, which put reflection on the health
-// port too), so each builder states its own: this option replaces the list.
-class ReflectionOption final : public grpc::ServerBuilderOption {
+// No builder gets gRPC's reflection plugin: a ServerBuilder copies every
+// plugin factory registered with the process (something calling
+// InitProtoReflectionServerBuilderPlugin would put reflection, without a
+// token check, on every server, the health port's included), so each
+// builder drops it. The gRPC port serves riskplan's own reflection instead
+// (server/security/reflection_service.h).
+class NoReflectionPlugin final : public grpc::ServerBuilderOption {
  public:
-  explicit ReflectionOption(bool reflection) : reflection_(reflection) {}
   void UpdateArguments(grpc::ChannelArguments* /*args*/) override {}
   void UpdatePlugins(std::vector<std::unique_ptr<grpc::ServerBuilderPlugin>>* plugins) override {
     std::erase_if(*plugins, [](const std::unique_ptr<grpc::ServerBuilderPlugin>& plugin) {
       return plugin->name() == "proto_server_reflection";
     });
-    if (reflection_) {
-      plugins->push_back(std::make_unique<grpc::reflection::ProtoServerReflectionPlugin>());
-    }
   }
-
- private:
-  const bool reflection_;
 };
 
 // The plaintext health port: a server of its own, with no Planner service
@@ -74,7 +67,7 @@ class ReflectionOption final : public grpc::ServerBuilderOption {
 // and tokens.
 absl::StatusOr<std::unique_ptr<HealthPort>> StartHealthServer(const std::string& address) {
   grpc::ServerBuilder builder;
-  builder.SetOption(std::make_unique<ReflectionOption>(false));
+  builder.SetOption(std::make_unique<NoReflectionPlugin>());
   int port = 0;
   builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &port);
   auto health = std::make_unique<HealthPort>();
@@ -241,12 +234,7 @@ absl::StatusOr<Serving> BuildAndStart(const ServerConfig& config, PlannerService
   // builder plugin.
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;
-  // Reflection is a viewer method (server/security/auth.h). On a TLS port
-  // the token processor checks it before any handler; on a plaintext port
-  // only our handlers can check a token, and reflection has none of ours:
-  // there, with --token_file, it is not served at all (docs/security.md).
-  const bool reflection = security.tls || !security.authorizer->requires_tokens();
-  builder.SetOption(std::make_unique<ReflectionOption>(reflection));
+  builder.SetOption(std::make_unique<NoReflectionPlugin>());
   Serving serving;
   std::unique_ptr<grpc::experimental::ExternalConnectionAcceptor> connections =
       builder.experimental().AddExternalConnectionAcceptor(
@@ -260,6 +248,15 @@ absl::StatusOr<Serving> BuildAndStart(const ServerConfig& config, PlannerService
     builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_MS, static_cast<int>(age_ms));
   }
   builder.RegisterService(&service);
+  // Reflection, a viewer method (server/security/auth.h), with the token
+  // checked in its handler as in every Planner handler: on a plaintext port
+  // too, where gRPC allows no token processor.
+  serving.reflection = std::make_unique<ReflectionService>(
+      std::vector<std::string>{"grpc.health.v1.Health",
+                               "grpc.reflection.v1alpha.ServerReflection",
+                               v1::Planner::service_full_name()},
+      security.authorizer);
+  builder.RegisterService(serving.reflection.get());
   serving.server = builder.BuildAndStart();
   if (serving.server == nullptr) {
     return absl::UnavailableError(

@@ -21,6 +21,7 @@
 #include "server/observability/metrics.h"
 #include "server/planner_service.h"
 #include "server/security/connection_acceptor.h"
+#include "server/security/reflection_service.h"
 #include "server/security/server_security.h"
 #include "server/server_flags.h"
 
@@ -53,8 +54,8 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(const ServerConfig
 absl::Status StartMetrics(accel::RiskEngine* engine, ServerMetrics& metrics,
                           const std::string& address);
 
-// The gRPC server, serving `service`, health and reflection (not on a
-// plaintext port with tokens: docs/security.md) on the connections `acceptor` accepts (ConnectionAcceptor: it survives running out
+// The gRPC server, serving `service`, health and reflection (riskplan's
+// own, token-checked: server/security/reflection_service.h) on the connections `acceptor` accepts (ConnectionAcceptor: it survives running out
 // of file descriptors, which gRPC's own listener does not).
 // A completion queue that a thread of its own keeps polling. The health
 // port's server has no service of its own (gRPC adds its health service at
@@ -79,6 +80,8 @@ struct HealthPort {
 };
 
 struct Serving {
+  // Registered on `server`: declared first, destroyed after it.
+  std::unique_ptr<ReflectionService> reflection;
   std::unique_ptr<grpc::Server> server;
   // Health alone, plaintext (--health_listen); null when off.
   std::unique_ptr<HealthPort> health;

@@ -199,24 +199,42 @@ TEST_F(TlsTest, ReflectionOnTheTlsPortNeedsAToken) {
   EXPECT_THAT(viewer.response, HasSubstr("riskplan.v1.Planner"));
 }
 
-TEST_F(TlsTest, ReflectionIsNotServedWithoutTokensOnAPlaintextPortThatAsksForThem) {
+TEST_F(TlsTest, ReflectionOnAPlaintextPortNeedsATokenToo) {
   std::unique_ptr<ServerProcess> server = Start({"--token_file=" + P("tokens.txt")});
   ASSERT_NE(server, nullptr);
   client::ConnectionOptions no_token;
   for (const ReflectionAnswer& answer :
        {AskReflection(Client(*server, no_token).channel()),
         AskReflection(Client(*server, no_token).channel(), "riskplan.v1.Planner")}) {
-    EXPECT_EQ(answer.status.error_code(), grpc::StatusCode::UNIMPLEMENTED)
+    EXPECT_EQ(answer.status.error_code(), grpc::StatusCode::UNAUTHENTICATED)
         << answer.status.error_message();
+    EXPECT_EQ(answer.status.error_message(),
+              "this server requires a bearer token (riskplan --token_file=FILE)");
     EXPECT_THAT(answer.response, Not(HasSubstr("riskplan.v1.Planner")));
   }
+  client::ConnectionOptions viewer;
+  viewer.token_file = P("viewer.token");
+  const ReflectionAnswer listed = AskReflection(Client(*server, viewer).channel());
+  EXPECT_TRUE(listed.status.ok()) << listed.status.error_message();
+  EXPECT_THAT(listed.response, HasSubstr("riskplan.v1.Planner"));
+  EXPECT_THAT(listed.response, HasSubstr("grpc.health.v1.Health"));
+  const ReflectionAnswer file =
+      AskReflection(Client(*server, viewer).channel(), "riskplan.v1.Planner");
+  EXPECT_TRUE(file.status.ok()) << file.status.error_message();
+  EXPECT_THAT(file.response, HasSubstr("riskplan/v1/planner.proto"));
+  EXPECT_THAT(file.response, HasSubstr("PlanTrajectory"));
+  // A token the file does not list is refused as for any method.
+  client::ConnectionOptions unknown;
+  unknown.token_file = P("unknown.token");
+  EXPECT_EQ(AskReflection(Client(*server, unknown).channel()).status.error_code(),
+            grpc::StatusCode::UNAUTHENTICATED);
   // Without --token_file the plaintext loopback port is open to all, and
   // reflection with it.
   std::unique_ptr<ServerProcess> open = Start({});
   ASSERT_NE(open, nullptr);
-  const ReflectionAnswer listed = AskReflection(Client(*open, no_token).channel());
-  EXPECT_TRUE(listed.status.ok()) << listed.status.error_message();
-  EXPECT_THAT(listed.response, HasSubstr("riskplan.v1.Planner"));
+  const ReflectionAnswer open_list = AskReflection(Client(*open, no_token).channel());
+  EXPECT_TRUE(open_list.status.ok()) << open_list.status.error_message();
+  EXPECT_THAT(open_list.response, HasSubstr("riskplan.v1.Planner"));
 }
 
 // --- The shim link, end to end: the real riskplan-fpga-shim and server.

@@ -296,6 +296,13 @@ class FleetProgress {
     return PassOn(std::move(u), attempt);
   }
 
+  // Of `unfinished`, those whose drain-ended final is held back.
+  int Held(const std::vector<int>& unfinished) const {
+    int held = 0;
+    for (int i : unfinished) held += held_[i].has_value() ? 1 : 0;
+    return held;
+  }
+
   // The missions of the current call without a final yet.
   std::vector<int> Unfinished() const {
     std::vector<int> unfinished;
@@ -369,6 +376,15 @@ grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
     });
     if (progress.stopped()) return status;
     std::vector<int> unfinished = progress.Unfinished();
+    const std::string replica = context.peer();
+    if (resubmit.on_call_end) {
+      const int sent = static_cast<int>(progress.sent().size());
+      resubmit.on_call_end(FleetCallEnd{.attempt = attempt,
+                                        .replica = replica,
+                                        .status = status,
+                                        .sent = sent,
+                                        .ended = sent - static_cast<int>(unfinished.size())});
+    }
     const absl::Duration wait = resubmit.backoff * (1 << std::min(attempt, 16));
     const bool resubmit_now =
         !unfinished.empty() && attempt < resubmit.max_resubmits &&
@@ -384,7 +400,10 @@ grpc::Status RiskplanClient::PlanFleet(const v1::FleetRequest& request,
     if (resubmit.on_resubmit) {
       resubmit.on_resubmit(FleetResubmission{.attempt = attempt + 1,
                                              .broken = status,
-                                             .unfinished = static_cast<int>(unfinished.size())});
+                                             .unfinished = static_cast<int>(unfinished.size()),
+                                             .replica = replica,
+                                             .drained = progress.Held(unfinished),
+                                             .missions = unfinished});
     }
     absl::SleepFor(wait);
     call_request.clear_missions();

@@ -9,6 +9,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
@@ -52,6 +53,23 @@ struct FleetResubmission {
   int attempt = 0;      // 1 for the first re-submission
   grpc::Status broken;  // how the previous call ended
   int unfinished = 0;   // missions sent again
+  // The replica the previous call went to (its peer, "ipv4:127.0.0.1:50051";
+  // empty if it never connected).
+  std::string replica;
+  // Of `unfinished`, how many the replica's drain ended unplanned (final
+  // SHUTDOWN without a trajectory): the replica was draining; the others
+  // were lost with the stream.
+  int drained = 0;
+  std::vector<int> missions;  // sent again, by index in the request
+};
+
+// One call of PlanFleet has ended (the first, or a re-submission).
+struct FleetCallEnd {
+  int attempt = 0;       // 0 for the first call
+  std::string replica;   // its peer, as above
+  grpc::Status status;   // how it ended
+  int sent = 0;          // missions it carried
+  int ended = 0;         // of them, those that got their final in it
 };
 
 // How PlanFleet re-submits unfinished missions.
@@ -62,6 +80,9 @@ struct FleetResubmitOptions {
   absl::Duration backoff = absl::Milliseconds(250);
   // Told of every re-submission before it is sent (may be null).
   std::function<void(const FleetResubmission&)> on_resubmit;
+  // Told when each call ends, before any re-submission (may be null): which
+  // replica a call (a re-submission's too) went to, and what it ended.
+  std::function<void(const FleetCallEnd&)> on_call_end;
 };
 
 // How a client reaches the server (the `riskplan` flags of the same names,

@@ -2,10 +2,13 @@
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
+#include <cpl_vsi.h>
 #include <gdal.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
+#include <cerrno>
+#include <cstring>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -18,6 +21,19 @@
 #include "absl/strings/str_join.h"
 
 namespace riskplan::geo {
+namespace {
+
+// The captures made with kWithGdalWorkers, alive now.
+std::mutex& WorkerCapturesMutex() {
+  static std::mutex mu;
+  return mu;
+}
+std::vector<GdalErrorCapture*>& WorkerCaptures() {
+  static std::vector<GdalErrorCapture*> captures;
+  return captures;
+}
+
+}  // namespace
 
 void EnsureGdalRegistered() {
   static std::once_flag once;
@@ -29,6 +45,8 @@ void EnsureGdalRegistered() {
     // a pixel, so that a sample sits at its coordinates, not at its pixel's
     // corner (docs/geodata.md, "Pixel is point").
     CPLSetConfigOption("GTIFF_POINT_GEO_IGNORE", "FALSE");
+    // Messages of threads without a handler of their own (GDAL's workers).
+    CPLSetErrorHandler(&GdalErrorCapture::ProcessHandler);
     GDALAllRegister();
   });
 }
@@ -42,32 +60,80 @@ bool IsRemotePath(const std::string& path) {
   return false;
 }
 
-GdalErrorCapture::GdalErrorCapture() {
+GdalErrorCapture::GdalErrorCapture(Threads threads) : threads_(threads) {
   CPLErrorReset();
   CPLPushErrorHandlerEx(&GdalErrorCapture::Handler, this);
+  if (threads_ == Threads::kWithGdalWorkers) {
+    EnsureGdalRegistered();
+    std::lock_guard<std::mutex> lock(WorkerCapturesMutex());
+    WorkerCaptures().push_back(this);
+  }
 }
 
-GdalErrorCapture::~GdalErrorCapture() { CPLPopErrorHandler(); }
+GdalErrorCapture::~GdalErrorCapture() {
+  CPLPopErrorHandler();
+  if (threads_ == Threads::kWithGdalWorkers) {
+    std::lock_guard<std::mutex> lock(WorkerCapturesMutex());
+    std::erase(WorkerCaptures(), this);
+  }
+}
+
+void GdalErrorCapture::Keep(CPLErr level, const char* message) {
+  std::lock_guard<std::mutex> lock(mu_);
+  const auto keep = [message](std::vector<std::string>& kept, uint64_t& count) {
+    if (++count <= kMaxMessages) kept.emplace_back(message == nullptr ? "" : message);
+  };
+  if (level == CE_Failure || level == CE_Fatal) {
+    keep(errors_, error_count_);
+  } else if (level == CE_Warning) {
+    keep(warnings_, warning_count_);
+  }
+}
 
 void CPL_STDCALL GdalErrorCapture::Handler(CPLErr level, CPLErrorNum /*number*/,
                                            const char* message) {
   auto* self = static_cast<GdalErrorCapture*>(CPLGetErrorHandlerUserData());
   if (self == nullptr) return;
-  const auto keep = [message](std::vector<std::string>& kept, uint64_t& count) {
-    if (++count <= kMaxMessages) kept.emplace_back(message == nullptr ? "" : message);
-  };
-  if (level == CE_Failure || level == CE_Fatal) {
-    keep(self->errors_, self->error_count_);
-  } else if (level == CE_Warning) {
-    keep(self->warnings_, self->warning_count_);
+  self->Keep(level, message);
+}
+
+void CPL_STDCALL GdalErrorCapture::ProcessHandler(CPLErr level, CPLErrorNum number,
+                                                  const char* message) {
+  if (level == CE_Failure || level == CE_Fatal || level == CE_Warning) {
+    std::lock_guard<std::mutex> lock(WorkerCapturesMutex());
+    if (!WorkerCaptures().empty()) {
+      for (GdalErrorCapture* capture : WorkerCaptures()) capture->Keep(level, message);
+      return;
+    }
   }
+  CPLDefaultErrorHandler(level, number, message);
 }
 
 std::string GdalErrorCapture::Errors(const std::string& fallback) const {
+  std::lock_guard<std::mutex> lock(mu_);
   if (errors_.empty()) return fallback;
   std::string text = absl::StrJoin(errors_, "; ");
   if (error_count_ > errors_.size()) absl::StrAppend(&text, "; and ", error_count_ - errors_.size(), " more");
   return text;
+}
+
+absl::Status CheckReadable(const std::string& label, const std::string& path) {
+  VSIStatBufL st;
+  errno = 0;
+  if (VSIStatExL(path.c_str(), &st, VSI_STAT_EXISTS_FLAG | VSI_STAT_NATURE_FLAG) != 0) {
+    return absl::NotFoundError(absl::StrFormat("%s: cannot read it: %s", label,
+                                               errno != 0 ? std::strerror(errno) : "not found"));
+  }
+  if (VSI_ISREG(st.st_mode)) {
+    errno = 0;
+    VSILFILE* f = VSIFOpenL(path.c_str(), "rb");
+    if (f == nullptr) {
+      return absl::NotFoundError(absl::StrFormat(
+          "%s: cannot read it: %s", label, errno != 0 ? std::strerror(errno) : "cannot open it"));
+    }
+    VSIFCloseL(f);
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<SpatialReferencePtr> SpatialReferenceFrom(const std::string& text) {

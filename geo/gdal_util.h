@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -32,11 +33,21 @@ void EnsureGdalRegistered();
 // first kMaxMessages failures and warnings and counts the rest: one call can
 // report a failure per point (a transformation of millions of points), and
 // the messages must not grow without bound. Not copyable.
+//
+// GDAL's own worker threads (a warp with -multi reads the source on one,
+// NUM_THREADS computes on others) have no handler of ours: their messages go
+// to GDAL's process-wide handler, which EnsureGdalRegistered replaces with
+// one that hands them to every capture alive made with kWithGdalWorkers (to
+// stderr, as GDAL's default does, when there is none). So a capture around a
+// multi-threaded GDAL call gets GDAL's words from every thread of it. With
+// two such calls at once in one process each would get both's messages; an
+// import runs one at a time (geo/map_importer.h).
 class GdalErrorCapture {
  public:
   static constexpr size_t kMaxMessages = 16;
+  enum class Threads { kThisThread, kWithGdalWorkers };
 
-  GdalErrorCapture();
+  explicit GdalErrorCapture(Threads threads = Threads::kThisThread);
   ~GdalErrorCapture();
   GdalErrorCapture(const GdalErrorCapture&) = delete;
   GdalErrorCapture& operator=(const GdalErrorCapture&) = delete;
@@ -45,12 +56,27 @@ class GdalErrorCapture {
   // those not kept, or `fallback` when GDAL reported none.
   std::string Errors(const std::string& fallback = "no message from GDAL") const;
   // The warnings kept (at most kMaxMessages), and how many there were.
-  const std::vector<std::string>& warnings() const { return warnings_; }
-  uint64_t warning_count() const { return warning_count_; }
-  uint64_t error_count() const { return error_count_; }
+  std::vector<std::string> warnings() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return warnings_;
+  }
+  uint64_t warning_count() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return warning_count_;
+  }
+  uint64_t error_count() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return error_count_;
+  }
 
  private:
   static void CPL_STDCALL Handler(CPLErr level, CPLErrorNum number, const char* message);
+  static void CPL_STDCALL ProcessHandler(CPLErr level, CPLErrorNum number, const char* message);
+  void Keep(CPLErr level, const char* message);
+  friend void EnsureGdalRegistered();
+
+  const Threads threads_;
+  mutable std::mutex mu_;  // the workers' messages arrive on their threads
   std::vector<std::string> errors_;
   std::vector<std::string> warnings_;
   uint64_t error_count_ = 0;
@@ -73,6 +99,11 @@ using CoordinateTransformationPtr =
 // True for a path GDAL would read over the network (/vsicurl/, /vsis3/, ...,
 // http://, https://, ftp://): the importer reads local files only.
 bool IsRemotePath(const std::string& path);
+
+// NotFound, "LABEL: cannot read it: No such file or directory" (the
+// system's words), when `path` does not exist or, as a file, cannot be
+// opened for reading; OK otherwise (GDAL then says what else is wrong).
+absl::Status CheckReadable(const std::string& label, const std::string& path);
 
 // A spatial reference from any text GDAL accepts ("EPSG:4326", a PROJ string,
 // WKT), with OAMS_TRADITIONAL_GIS_ORDER: x is longitude (or easting) and y

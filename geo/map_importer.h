@@ -5,8 +5,12 @@
 // (geo/target_grid.h). `riskplan-tool import` is its command line;
 // docs/geodata.md says what each rule does and why.
 //
-// Every refusal is InvalidArgument (NotFound for a file that cannot be read)
-// and names the map layer, the input and what is wrong, e.g.
+// Every refusal is InvalidArgument (riskplan-tool exits 2), except an input
+// that does not exist or cannot be opened for reading: NotFound, with the
+// system's reason ("No such file or directory"; riskplan-tool exits 1).
+// Whatever GDAL refuses carries GDAL's own words, from every thread of the
+// call (geo/gdal_util.h, GdalErrorCapture). Each names the map layer, the
+// input and what is wrong, e.g.
 //   layer 'terrain', input 'dem.tif': 1200 of 40000 cells have no data:
 //   1200 outside the input's extent, 0 masked (nodata, mask band or alpha);
 //   they span local x 0 .. 250 m, y 0 .. 120 m, WGS84 lat 49.6 .. 49.61,

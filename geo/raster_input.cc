@@ -89,8 +89,12 @@ absl::StatusOr<RasterInput> OpenRasterInput(const std::string& layer, const std:
     return absl::InvalidArgumentError(absl::StrFormat(
         "%s: not a local file; an import reads no network (download it first)", in.Label()));
   }
+  if (absl::Status s = CheckReadable(in.Label(), path); !s.ok()) return s;
   GdalErrorCapture errors;
-  in.dataset.reset(GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+  // GDAL_OF_VERBOSE_ERROR: without it GDAL says nothing when no driver takes
+  // the file, and the refusal would have no reason.
+  in.dataset.reset(GDALDataset::Open(path.c_str(),
+                                     GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR));
   if (in.dataset == nullptr) {
     return absl::InvalidArgumentError(
         absl::StrFormat("%s: GDAL cannot open it as a raster: %s", in.Label(), errors.Errors()));
@@ -148,7 +152,9 @@ absl::StatusOr<std::vector<double>> WarpOntoGrid(const RasterInput& input, const
   }
   (*dst)->GetRasterBand(1)->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
 
-  GdalErrorCapture errors;
+  // The warp runs on GDAL's threads too (-multi reads the source on one):
+  // their messages must reach the refusal as well.
+  GdalErrorCapture errors(GdalErrorCapture::Threads::kWithGdalWorkers);
   GDALDatasetH source = GDALDataset::ToHandle(input.dataset.get());
   // GDALWarp warps every band into a destination of as many: a VRT of band 1
   // alone (no copy of the pixels) stands in for a multi-band input.

@@ -152,8 +152,10 @@ absl::StatusOr<VectorInput> OpenVectorInput(const std::string& layer, const std:
     return absl::InvalidArgumentError(absl::StrFormat(
         "%s: not a local file; an import reads no network (download it first)", label));
   }
+  if (absl::Status s = CheckReadable(label, path); !s.ok()) return s;
   GdalErrorCapture errors;
-  in.dataset.reset(GDALDataset::Open(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY));
+  in.dataset.reset(GDALDataset::Open(path.c_str(),
+                                     GDAL_OF_VECTOR | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR));
   if (in.dataset == nullptr) {
     return absl::InvalidArgumentError(
         absl::StrFormat("%s: GDAL cannot open it as a vector source: %s", label, errors.Errors()));

@@ -12,6 +12,7 @@
 #define RISKPLAN_NET_TLS_FILES_H_
 
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -48,6 +49,12 @@ absl::Status CheckCrl(const FlagFile& crl);
 // The subject of the leaf certificate of a PEM chain, "CN=...,O=..." (for
 // logs). Empty if it does not parse.
 std::string CertificateSubject(const std::string& pem);
+
+// The names the leaf certificate of a PEM chain is for, as a client checks
+// them: its subjectAltName DNS names ("riskplan.test") and IP addresses
+// ("127.0.0.1"), or its subject's CN when it has no subjectAltName. Empty if
+// it does not parse.
+std::vector<std::string> CertificateNames(const std::string& pem);
 
 // OpenSSL's queued errors of this thread as one line, "; " between them, and
 // the queue emptied. `if_none` when there was none.

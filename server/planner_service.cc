@@ -553,9 +553,7 @@ grpc::ServerUnaryReactor* PlannerService::GetMapLayer(grpc::CallbackServerContex
               return absl::OkStatus();
             });
         if (!queued) {
-          call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                      "riskplan-server's evaluation queue is full; retry later"),
-                         request.map());
+          call->Complete(EvaluationsWaiting(), request.map());
         }
       });
 }

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
@@ -15,8 +16,9 @@
 #include "accel/engine_metrics.h"
 #include "net/net.h"
 #include "net/tls_context.h"
-#include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/health_check_service_interface.h"
+#include "grpcpp/impl/server_builder_option.h"
+#include "grpcpp/impl/server_builder_plugin.h"
 #include "server/observability/accel_metrics.h"
 #include "server/observability/rpc_log.h"
 
@@ -31,7 +33,8 @@ namespace {
 // a window in which a Check of "riskplan.v1.Planner" still answered SERVING
 // after a watch of "" had read NOT_SERVING (ShutdownTest under ASan in CI).
 void SetHealth(const Serving& serving, bool serving_status) {
-  for (grpc::Server* server : {serving.server.get(), serving.health_server.get()}) {
+  for (grpc::Server* server :
+       {serving.server.get(), serving.health ? serving.health->server.get() : nullptr}) {
     if (server == nullptr) continue;
     grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
     if (serving_status) {
@@ -43,20 +46,41 @@ void SetHealth(const Serving& serving, bool serving_status) {
   }
 }
 
-// The plaintext health port: a server of its own, with no Planner service,
-// so that nothing but health is ever served without TLS and tokens.
-absl::StatusOr<std::unique_ptr<grpc::Server>> StartHealthServer(const std::string& address) {
+// No builder gets gRPC's reflection plugin: a ServerBuilder copies every
+// plugin factory registered with the process (something calling
+// InitProtoReflectionServerBuilderPlugin would put reflection, without a
+// token check, on every server, the health port's included), so each
+// builder drops it. The gRPC port serves riskplan's own reflection instead
+// (server/security/reflection_service.h).
+class NoReflectionPlugin final : public grpc::ServerBuilderOption {
+ public:
+  void UpdateArguments(grpc::ChannelArguments* /*args*/) override {}
+  void UpdatePlugins(std::vector<std::unique_ptr<grpc::ServerBuilderPlugin>>* plugins) override {
+    std::erase_if(*plugins, [](const std::unique_ptr<grpc::ServerBuilderPlugin>& plugin) {
+      return plugin->name() == "proto_server_reflection";
+    });
+  }
+};
+
+// The plaintext health port: a server of its own, with no Planner service
+// and no reflection, so that nothing but health is ever served without TLS
+// and tokens.
+absl::StatusOr<std::unique_ptr<HealthPort>> StartHealthServer(const std::string& address) {
   grpc::ServerBuilder builder;
+  builder.SetOption(std::make_unique<NoReflectionPlugin>());
   int port = 0;
   builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &port);
-  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
-  if (server == nullptr || port == 0) {
+  auto health = std::make_unique<HealthPort>();
+  std::unique_ptr<grpc::ServerCompletionQueue> queue = builder.AddCompletionQueue();
+  health->server = builder.BuildAndStart();
+  health->queue = std::make_unique<PolledQueue>(std::move(queue));
+  if (health->server == nullptr || port == 0) {
     return absl::UnavailableError(
         absl::StrFormat("cannot start: cannot listen on --health_listen=%s", address));
   }
   LogEvent("health_listening",
            absl::StrFormat("%s:%d", address.substr(0, address.rfind(':')), port));
-  return server;
+  return health;
 }
 
 // How long the orderly exit after a completed drain may take (destructors,
@@ -96,6 +120,19 @@ class ExitWatchdog {
 };
 
 }  // namespace
+
+PolledQueue::PolledQueue(std::unique_ptr<grpc::ServerCompletionQueue> queue)
+    : queue_(std::move(queue)), thread_([this] {
+        void* tag = nullptr;
+        bool ok = false;
+        while (queue_->Next(&tag, &ok)) {
+        }
+      }) {}
+
+PolledQueue::~PolledQueue() {
+  queue_->Shutdown();
+  thread_.join();
+}
 
 sigset_t BlockStopSignals() {
   sigset_t stop_signals;
@@ -193,11 +230,11 @@ absl::StatusOr<Serving> BuildAndStart(const ServerConfig& config, PlannerService
     return absl::UnavailableError(absl::StrFormat("cannot start: cannot listen on --listen=%s: %s",
                                                   listen, acceptor.status().message()));
   }
-  // Both must be set before the builder is created: they install themselves
-  // as builder plugins.
+  // Must be set before the builder is created: it installs itself as a
+  // builder plugin.
   grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
+  builder.SetOption(std::make_unique<NoReflectionPlugin>());
   Serving serving;
   std::unique_ptr<grpc::experimental::ExternalConnectionAcceptor> connections =
       builder.experimental().AddExternalConnectionAcceptor(
@@ -211,18 +248,27 @@ absl::StatusOr<Serving> BuildAndStart(const ServerConfig& config, PlannerService
     builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_MS, static_cast<int>(age_ms));
   }
   builder.RegisterService(&service);
+  // Reflection, a viewer method (server/security/auth.h), with the token
+  // checked in its handler as in every Planner handler: on a plaintext port
+  // too, where gRPC allows no token processor.
+  serving.reflection = std::make_unique<ReflectionService>(
+      std::vector<std::string>{"grpc.health.v1.Health",
+                               "grpc.reflection.v1alpha.ServerReflection",
+                               v1::Planner::service_full_name()},
+      security.authorizer);
+  builder.RegisterService(serving.reflection.get());
   serving.server = builder.BuildAndStart();
   if (serving.server == nullptr) {
     return absl::UnavailableError(
         absl::StrFormat("cannot start: gRPC did not start on --listen=%s", listen));
   }
+  if (security.rotation != nullptr) metrics.AddCollectable(security.rotation->metrics());
   serving.acceptor = *std::move(acceptor);
   serving.acceptor->Start(std::move(connections), [&metrics] { metrics.RecordAcceptError(); });
   if (!config.health_listen.empty()) {
-    absl::StatusOr<std::unique_ptr<grpc::Server>> health_server =
-        StartHealthServer(config.health_listen);
-    if (!health_server.ok()) return health_server.status();
-    serving.health_server = *std::move(health_server);
+    absl::StatusOr<std::unique_ptr<HealthPort>> health = StartHealthServer(config.health_listen);
+    if (!health.ok()) return health.status();
+    serving.health = *std::move(health);
   }
   SetHealth(serving, true);
   serving.host = config.listen_host;
@@ -282,8 +328,7 @@ void WaitAndDrain(const sigset_t& stop_signals, PlannerService& service, Serving
   server.Shutdown(absl::ToChronoTime(
       none_open ? absl::Now()
                 : std::max(drain_start + grace, absl::Now() + absl::Milliseconds(200))));
-  if (serving.health_server != nullptr)
-    serving.health_server->Shutdown(absl::ToChronoTime(absl::Now()));
+  if (serving.health != nullptr) serving.health->server->Shutdown(absl::ToChronoTime(absl::Now()));
   LogEvent("stopped",
            absl::StrFormat("seconds=%.3f", absl::ToDoubleSeconds(absl::Now() - drain_start)));
   // The drain is done; what is left is the orderly exit (destructors join

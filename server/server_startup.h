@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -20,6 +21,7 @@
 #include "server/observability/metrics.h"
 #include "server/planner_service.h"
 #include "server/security/connection_acceptor.h"
+#include "server/security/reflection_service.h"
 #include "server/security/server_security.h"
 #include "server/server_flags.h"
 
@@ -52,13 +54,37 @@ absl::StatusOr<std::unique_ptr<accel::RiskEngine>> MakeEngine(const ServerConfig
 absl::Status StartMetrics(accel::RiskEngine* engine, ServerMetrics& metrics,
                           const std::string& address);
 
-// The gRPC server, serving `service`, health and reflection on the
-// connections `acceptor` accepts (ConnectionAcceptor: it survives running out
+// The gRPC server, serving `service`, health and reflection (riskplan's
+// own, token-checked: server/security/reflection_service.h) on the connections `acceptor` accepts (ConnectionAcceptor: it survives running out
 // of file descriptors, which gRPC's own listener does not).
+// A completion queue that a thread of its own keeps polling. The health
+// port's server has no service of its own (gRPC adds its health service at
+// start), and gRPC builds no server without a polled queue; this one also
+// carries gRPC's UNIMPLEMENTED answers to every other method there.
+class PolledQueue {
+ public:
+  explicit PolledQueue(std::unique_ptr<grpc::ServerCompletionQueue> queue);
+  // Shuts the queue down and waits for the thread: only after the server
+  // that uses it has shut down (Serving declares it before the server).
+  ~PolledQueue();
+
+ private:
+  std::unique_ptr<grpc::ServerCompletionQueue> queue_;
+  std::thread thread_;
+};
+
+// The plaintext health port (--health_listen): gRPC's health service alone.
+struct HealthPort {
+  std::unique_ptr<PolledQueue> queue;    // declared first: destroyed after the server
+  std::unique_ptr<grpc::Server> server;
+};
+
 struct Serving {
+  // Registered on `server`: declared first, destroyed after it.
+  std::unique_ptr<ReflectionService> reflection;
   std::unique_ptr<grpc::Server> server;
   // Health alone, plaintext (--health_listen); null when off.
-  std::unique_ptr<grpc::Server> health_server;
+  std::unique_ptr<HealthPort> health;
   std::string host;  // of --listen
   int port = 0;      // the bound one (--listen may ask for port 0)
   // Declared after the server, so destroyed before it: no connection is

@@ -3,8 +3,13 @@
 #include <httplib.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <zlib.h>
 
+#include <cmath>
+#include <fstream>
+#include <functional>
 #include <memory>
+#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -28,6 +33,39 @@ namespace {
 using Json = nlohmann::json;
 
 constexpr int kMaxLayerSideCells = 1024;
+// The side the page asks its map layers at (map.js, fetchLayer).
+constexpr int kPageLayerSideCells = 400;
+// A warm-up call waits no longer: a SIGTERM waits for the one in flight.
+constexpr absl::Duration kWarmCallTimeout = absl::Seconds(10);
+constexpr v1::MapLayer kPageLayers[] = {v1::POPULATION_DENSITY, v1::SHELTER, v1::TERRAIN,
+                                        v1::NO_FLY};
+
+// Where the pre-routing handler moves a request's Accept-Encoding (below,
+// Routes): cpp-httplib then compresses nothing itself.
+constexpr char kAcceptEncodingSeen[] = "X-Riskplan-Accept-Encoding";
+// Smaller answers are sent as they are: compressing them saves nothing.
+constexpr size_t kMinGzipBytes = 1024;
+
+bool AcceptsGzip(const httplib::Request& req) {
+  return absl::StrContains(req.get_header_value(kAcceptEncodingSeen), "gzip");
+}
+
+// `text` gzipped at zlib's fastest level: a 2 MB layer in some 20 ms, to
+// about a fifth of its size (JSON of numbers compresses well even so).
+std::string Gzip(const std::string& text) {
+  z_stream z{};
+  // 15 + 16: a gzip header and trailer rather than zlib's.
+  if (deflateInit2(&z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return "";
+  std::string out(deflateBound(&z, text.size()), '\0');
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(text.data()));
+  z.avail_in = static_cast<uInt>(text.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = static_cast<uInt>(out.size());
+  const int result = deflate(&z, Z_FINISH);
+  out.resize(z.total_out);
+  deflateEnd(&z);
+  return result == Z_STREAM_END ? out : "";
+}
 
 // What the page sees of a failed request: the code, the message exactly as
 // its author wrote it, and who wrote it ("server" or "gateway").
@@ -96,6 +134,24 @@ void SendJson(httplib::Response& res, std::string json, int http_status = 200) {
   res.set_content(std::move(json), "application/json");
 }
 
+// The same, gzipped (`gzip`, or made here when empty) when the browser
+// takes gzip and the answer is worth it.
+void SendJsonTo(const httplib::Request& req, httplib::Response& res, std::string json,
+                std::string gzip = "") {
+  if (json.size() >= kMinGzipBytes && AcceptsGzip(req)) {
+    if (gzip.empty()) gzip = Gzip(json);
+    if (!gzip.empty()) {
+      res.status = 200;
+      res.set_header("Cache-Control", "no-store");
+      res.set_header("Content-Encoding", "gzip");
+      res.set_header("Vary", "Accept-Encoding");
+      res.set_content(std::move(gzip), "application/json");
+      return;
+    }
+  }
+  SendJson(res, std::move(json));
+}
+
 // A route that is one unary RPC: the body is the request's JSON form, the
 // answer the response's.
 template <typename RpcRequest, typename RpcResponse, typename Call>
@@ -105,7 +161,7 @@ void ForwardUnary(const httplib::Request& req, httplib::Response& res, Call call
   RpcResponse response;
   const grpc::Status status = call(request, &response);
   if (!status.ok()) return SendServerError(res, status);
-  SendJson(res, ToJson(response));
+  SendJsonTo(req, res, ToJson(response));
 }
 
 // The file of an export in `format` (geojson, plan or kml; checked by the
@@ -139,6 +195,64 @@ absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& add
     host = host.substr(1, host.size() - 2);
   }
   return std::make_pair(host, port);
+}
+
+// A map's fingerprint: its name and a hash of its MapInfo (a map replaced
+// on the server under the same name has another).
+std::string Fingerprint(const v1::MapInfo& info) {
+  return absl::StrCat(info.name(), "#", std::hash<std::string>{}(info.SerializeAsString()));
+}
+
+const v1::MapInfo* FindMap(const v1::ListMapsResponse& maps, const std::string& name) {
+  for (const v1::MapInfo& m : maps.maps()) {
+    if (m.name() == name) return &m;
+  }
+  return nullptr;
+}
+
+// Whether (lon, lat) lies inside the convex quadrilateral of `corners`
+// (south-west, south-east, north-east, north-west), on or off its edges.
+bool InsideCorners(const v1::GeoBounds& bounds, double lat, double lon) {
+  if (bounds.corners_size() != 4) return true;  // nothing to check against
+  int sign = 0;
+  for (int k = 0; k < 4; ++k) {
+    const v1::GeoPoint2& a = bounds.corners(k);
+    const v1::GeoPoint2& b = bounds.corners((k + 1) % 4);
+    const double cross = (b.lon_deg() - a.lon_deg()) * (lat - a.lat_deg()) -
+                         (b.lat_deg() - a.lat_deg()) * (lon - a.lon_deg());
+    const int s = cross > 0 ? 1 : (cross < 0 ? -1 : 0);
+    if (s != 0) {
+      if (sign != 0 && s != sign) return false;
+      sign = s;
+    }
+  }
+  return true;
+}
+
+// Start or goal of `request` against `map`'s area; `which` is "start" or
+// "goal".
+absl::Status CheckEndpoint(const v1::MapInfo& map, const char* which, const v1::Pose* local,
+                           const v1::GeoPose* wgs84) {
+  if (local != nullptr) {
+    const double x0 = map.x0_m(), x1 = map.x0_m() + map.width_m();
+    const double y0 = map.y0_m(), y1 = map.y0_m() + map.height_m();
+    if (!(local->x() >= x0 && local->x() <= x1 && local->y() >= y0 && local->y() <= y1)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s (x, y) = (%.1f, %.1f) m is outside map '%s' (x %.1f .. %.1f m, y %.1f .. %.1f m)",
+          which, local->x(), local->y(), map.name(), x0, x1, y0, y1));
+    }
+  } else if (wgs84 != nullptr && map.has_bounds_wgs84()) {
+    if (!std::isfinite(wgs84->lat_deg()) || !std::isfinite(wgs84->lon_deg()) ||
+        !InsideCorners(map.bounds_wgs84(), wgs84->lat_deg(), wgs84->lon_deg())) {
+      const v1::GeoBounds& b = map.bounds_wgs84();
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s_wgs84 (lat, lon) = (%.6f, %.6f) deg is outside map '%s' (lat %.6f .. %.6f, lon "
+          "%.6f .. %.6f deg)",
+          which, wgs84->lat_deg(), wgs84->lon_deg(), map.name(), b.min_lat_deg(),
+          b.max_lat_deg(), b.min_lon_deg(), b.max_lon_deg()));
+    }
+  }
+  return absl::OkStatus();
 }
 
 // The page's files and the libraries' directories must exist.
@@ -254,13 +368,21 @@ absl::StatusOr<int> Gateway::Bind() {
   // stream and its calls, or a few viewers arriving together, would wait for
   // SYN retransmissions (1 s, then 3 s). Listening again sets the backlog.
   if (listen_socket_ >= 0) ::listen(listen_socket_, kListenBacklog);
+  // Started here, on the thread that binds (before Serve's), so that Stop
+  // finds it set.
+  if (!warm_.joinable()) warm_ = std::thread([this] { WarmLayers(); });
   return bound;
 }
 
 void Gateway::Serve() { http_->listen_after_bind(); }
 
 void Gateway::Stop() {
-  if (stopping_.exchange(true)) return;
+  if (stopping_.exchange(true)) {
+    return;
+  }
+  // The warm-up checks stopping_ between layers (each a call of at most
+  // kWarmCallTimeout).
+  if (warm_.joinable()) warm_.join();
   // Ends the event streams (their waits wake up) and the plans, then the
   // HTTP server, which joins its threads once their streams returned.
   plans_.StopAll();
@@ -270,6 +392,47 @@ void Gateway::Stop() {
 void Gateway::Routes() {
   using httplib::Request;
   using httplib::Response;
+  // cpp-httplib 0.11 answers a browser that takes Brotli (Chromium does)
+  // with Brotli at its slowest level: 3 s for a 2 MB layer, every time. So
+  // it is told of no encoding at all (the request's Accept-Encoding moves to
+  // a header of ours) and the gateway compresses its JSON itself: gzip at
+  // the fastest level, a map layer once (docs/web.md, "Speed").
+  http_->set_pre_routing_handler([](const Request& req, Response&) {
+    // The request is the server's own object, passed const; moving one
+    // header is all that is changed.
+    auto& headers = const_cast<Request&>(req).headers;
+    const auto it = headers.find("Accept-Encoding");
+    if (it != headers.end()) {
+      std::string value = it->second;
+      headers.erase("Accept-Encoding");
+      headers.emplace(kAcceptEncodingSeen, std::move(value));
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
+  // What cpp-httplib refuses itself (a body over the limit: 413; a file or
+  // route that does not exist: 404) gets the {code, message} of every other
+  // refusal rather than an empty body.
+  http_->set_error_handler(httplib::Server::HandlerWithResponse(
+      [this](const Request& req, Response& res) {
+    if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    if (res.status == 413) {
+      SendError(res, 413, "RESOURCE_EXHAUSTED",
+                absl::StrFormat("the request body is larger than this gateway accepts (%d "
+                                "bytes at most)",
+                                options_.max_body_bytes),
+                "gateway");
+    } else if (res.status == 404) {
+      SendError(res, 404, "NOT_FOUND",
+                absl::StrFormat("no page, file or route %s %s on this gateway", req.method,
+                                req.path),
+                "gateway");
+    } else {
+      SendError(res, res.status, "UNKNOWN",
+                absl::StrFormat("HTTP %d for %s %s", res.status, req.method, req.path),
+                "gateway");
+    }
+    return httplib::Server::HandlerResponse::Handled;
+  }));
   http_->set_mount_point("/", options_.assets_dir);
   http_->set_mount_point("/lib/leaflet", options_.leaflet_dir);
   http_->set_mount_point("/lib/chart.js", options_.chartjs_dir);
@@ -289,6 +452,108 @@ void Gateway::Routes() {
   http_->Get(R"(/api/plans/([0-9a-f-]+))", route(&Gateway::GetPlan));
   http_->Post(R"(/api/plans/([0-9a-f-]+)/cancel)", route(&Gateway::PostPlanCancel));
   http_->Get(R"(/api/plans/([0-9a-f-]+)/events)", route(&Gateway::GetPlanEvents));
+  http_->Get("/favicon.ico", route(&Gateway::GetFavicon));
+}
+
+// Browsers ask for /favicon.ico whatever the page links; the page's own
+// icon (favicon.svg, which the page links) answers it.
+void Gateway::GetFavicon(const httplib::Request&, httplib::Response& res) {
+  std::ifstream in(options_.assets_dir + "/favicon.svg", std::ios::binary);
+  std::stringstream svg;
+  svg << in.rdbuf();
+  if (!in || svg.str().empty()) {
+    return SendError(res, 404, "NOT_FOUND", "this gateway's page has no favicon.svg", "gateway");
+  }
+  res.set_header("Cache-Control", "max-age=86400");
+  res.set_content(svg.str(), "image/svg+xml");
+}
+
+absl::StatusOr<std::shared_ptr<const v1::ListMapsResponse>> Gateway::Maps(bool refresh) {
+  if (!refresh) {
+    absl::MutexLock lock(&cache_mu_);
+    if (maps_ != nullptr) return maps_;
+  }
+  auto maps = std::make_shared<v1::ListMapsResponse>();
+  const grpc::Status status = client_.ListMaps(maps.get(), options_.rpc_timeout);
+  if (!status.ok()) {
+    return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
+                        status.error_message());
+  }
+  KeepMaps(maps);
+  return maps;
+}
+
+void Gateway::KeepMaps(std::shared_ptr<const v1::ListMapsResponse> maps) {
+  absl::MutexLock lock(&cache_mu_);
+  map_fingerprints_.clear();
+  for (const v1::MapInfo& m : maps->maps()) map_fingerprints_[m.name()] = Fingerprint(m);
+  maps_ = std::move(maps);
+}
+
+std::shared_ptr<const Gateway::CachedLayer> Gateway::FindLayer(const std::string& key) {
+  absl::MutexLock lock(&cache_mu_);
+  for (auto it = layers_.begin(); it != layers_.end(); ++it) {
+    if (it->first == key) {
+      layers_.splice(layers_.begin(), layers_, it);
+      return layers_.front().second;
+    }
+  }
+  return nullptr;
+}
+
+void Gateway::KeepLayer(const std::string& key, std::shared_ptr<const CachedLayer> layer) {
+  absl::MutexLock lock(&cache_mu_);
+  for (auto it = layers_.begin(); it != layers_.end(); ++it) {
+    if (it->first == key) {
+      layers_.erase(it);
+      break;
+    }
+  }
+  layers_.emplace_front(key, std::move(layer));
+  while (layers_.size() > kMaxCachedLayers) layers_.pop_back();
+}
+
+absl::Status Gateway::CheckPlan(const v1::PlanRequest& request) {
+  const int64_t time_ms = request.budget().time_ms();
+  if (time_ms < 0 || time_ms > options_.max_plan_time_ms) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "budget.time_ms has value %d; it must be in [0, %d] (0: no time limit; this gateway's "
+        "--max_plan_time_ms)",
+        time_ms, options_.max_plan_time_ms));
+  }
+  if (request.budget().iterations() < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("budget.iterations has value %d; it must be >= 0 (0: no iteration limit)",
+                        request.budget().iterations()));
+  }
+  if (request.start_frame_case() == v1::PlanRequest::START_FRAME_NOT_SET) {
+    return absl::InvalidArgumentError("start (or start_wgs84) is required");
+  }
+  if (request.goal_frame_case() == v1::PlanRequest::GOAL_FRAME_NOT_SET) {
+    return absl::InvalidArgumentError("goal (or goal_wgs84) is required");
+  }
+  absl::StatusOr<std::shared_ptr<const v1::ListMapsResponse>> maps = Maps(false);
+  if (!maps.ok()) return absl::OkStatus();  // the server will say what is wrong
+  const v1::MapInfo* map = FindMap(**maps, request.map());
+  if (map == nullptr) {
+    // A map the server loaded since the last look.
+    maps = Maps(true);
+    if (!maps.ok()) return absl::OkStatus();
+    map = FindMap(**maps, request.map());
+  }
+  if (map == nullptr) {
+    std::vector<std::string> names;
+    for (const v1::MapInfo& m : (*maps)->maps()) names.push_back(m.name());
+    return absl::NotFoundError(absl::StrFormat("map '%s' is not on the server (it has: %s)",
+                                               request.map(), absl::StrJoin(names, ", ")));
+  }
+  if (absl::Status s = CheckEndpoint(*map, "start", request.has_start() ? &request.start() : nullptr,
+                                     request.has_start_wgs84() ? &request.start_wgs84() : nullptr);
+      !s.ok()) {
+    return s;
+  }
+  return CheckEndpoint(*map, "goal", request.has_goal() ? &request.goal() : nullptr,
+                       request.has_goal_wgs84() ? &request.goal_wgs84() : nullptr);
 }
 
 void Gateway::GetStatus(const httplib::Request&, httplib::Response& res) {
@@ -300,11 +565,12 @@ void Gateway::GetStatus(const httplib::Request&, httplib::Response& res) {
                     .dump());
 }
 
-void Gateway::GetMaps(const httplib::Request&, httplib::Response& res) {
-  v1::ListMapsResponse maps;
-  const grpc::Status status = client_.ListMaps(&maps, options_.rpc_timeout);
+void Gateway::GetMaps(const httplib::Request& req, httplib::Response& res) {
+  auto maps = std::make_shared<v1::ListMapsResponse>();
+  const grpc::Status status = client_.ListMaps(maps.get(), options_.rpc_timeout);
   if (!status.ok()) return SendServerError(res, status);
-  SendJson(res, ToJson(maps));
+  KeepMaps(maps);
+  SendJsonTo(req, res, ToJson(*maps));
 }
 
 // GET /api/layer?map=M&layer=POPULATION_DENSITY|SHELTER|TERRAIN|NO_FLY&max_side_cells=N
@@ -337,10 +603,61 @@ void Gateway::GetLayer(const httplib::Request& req, httplib::Response& res) {
     }
     request.set_max_side_cells(side);  // the server checks the rest of its range
   }
+  // The layer of a map the gateway knows (by its fingerprint) is made once.
+  const std::string key = LayerKey(request.map(), layer, request.max_side_cells());
+  if (!key.empty()) {
+    if (std::shared_ptr<const CachedLayer> cached = FindLayer(key)) {
+      return SendJsonTo(req, res, cached->json, cached->gzip);
+    }
+  }
+  absl::StatusOr<std::shared_ptr<const CachedLayer>> made =
+      MakeLayer(request, key, options_.rpc_timeout);
+  if (!made.ok()) {
+    return SendServerError(res, grpc::Status(static_cast<grpc::StatusCode>(made.status().code()),
+                                             std::string(made.status().message())));
+  }
+  SendJsonTo(req, res, (*made)->json, (*made)->gzip);
+}
+
+std::string Gateway::LayerKey(const std::string& map, v1::MapLayer layer, int max_side_cells) {
+  absl::MutexLock lock(&cache_mu_);
+  const auto it = map_fingerprints_.find(map);
+  if (it == map_fingerprints_.end()) return "";
+  return absl::StrCat(it->second, "|", v1::MapLayer_Name(layer), "|", max_side_cells);
+}
+
+absl::StatusOr<std::shared_ptr<const Gateway::CachedLayer>> Gateway::MakeLayer(
+    const v1::GetMapLayerRequest& request, const std::string& key, absl::Duration timeout) {
   v1::GetMapLayerResponse response;
-  const grpc::Status status = client_.GetMapLayer(request, &response, options_.rpc_timeout);
-  if (!status.ok()) return SendServerError(res, status);
-  SendJson(res, ToJson(response));
+  const grpc::Status status = client_.GetMapLayer(request, &response, timeout);
+  if (!status.ok()) {
+    return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
+                        status.error_message());
+  }
+  auto made = std::make_shared<CachedLayer>();
+  made->json = ToJson(response);
+  made->gzip = Gzip(made->json);
+  if (!key.empty()) KeepLayer(key, made);
+  return made;
+}
+
+void Gateway::WarmLayers() {
+  absl::StatusOr<std::shared_ptr<const v1::ListMapsResponse>> maps = Maps(true);
+  if (!maps.ok()) return;  // the server is not up yet: the page's calls make them
+  size_t made = 0;
+  for (const v1::MapInfo& info : (*maps)->maps()) {
+    for (const v1::MapLayer layer : kPageLayers) {
+      // The cache holds kMaxCachedLayers: warming more would drop the first.
+      if (stopping_.load() || made >= kMaxCachedLayers) return;
+      const std::string key = LayerKey(info.name(), layer, kPageLayerSideCells);
+      if (key.empty() || FindLayer(key) != nullptr) continue;
+      v1::GetMapLayerRequest request;
+      request.set_map(info.name());
+      request.set_layer(layer);
+      request.set_max_side_cells(kPageLayerSideCells);
+      if (MakeLayer(request, key, kWarmCallTimeout).ok()) ++made;
+    }
+  }
 }
 
 void Gateway::PostRiskLayer(const httplib::Request& req, httplib::Response& res) {
@@ -392,6 +709,9 @@ void Gateway::PostExport(const httplib::Request& req, httplib::Response& res) {
 void Gateway::PostPlan(const httplib::Request& req, httplib::Response& res) {
   v1::PlanRequest request;
   if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+  // What the server would refuse at once is refused here, before a plan and
+  // its event stream exist (docs/web.md).
+  if (absl::Status s = CheckPlan(request); !s.ok()) return SendGatewayError(res, s);
   // A final tree can hold 50 000 edges: too much for an event kept in
   // memory and sent to every viewer.
   request.set_include_tree(false);

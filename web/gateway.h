@@ -15,12 +15,18 @@
 
 #include <atomic>
 #include <cstdint>
+#include <list>
+#include <map>
 #include <memory>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/client.h"
 #include "web/plan_session.h"
@@ -48,6 +54,9 @@ struct GatewayOptions {
   PlanRegistryLimits plans;
   size_t max_body_bytes = size_t{4} << 20;
   absl::Duration rpc_timeout = absl::Seconds(60);  // unary calls' deadline
+  // A plan's time budget above this is refused with 400 before the plan
+  // starts (the server's --max_plan_time_ms, whose default it is).
+  int64_t max_plan_time_ms = 600000;
 };
 
 // InvalidArgument naming the option when `options` cannot work.
@@ -96,6 +105,37 @@ class Gateway {
   void GetPlan(const httplib::Request& req, httplib::Response& res);
   void PostPlanCancel(const httplib::Request& req, httplib::Response& res);
   void GetPlanEvents(const httplib::Request& req, httplib::Response& res);
+  void GetFavicon(const httplib::Request& req, httplib::Response& res);
+
+  // The server's maps (ListMaps), kept from the last call: each map's
+  // fingerprint (its MapInfo's bytes) keys the layer cache, and its bounds
+  // check a plan's start and goal. `refresh` calls ListMaps again.
+  absl::StatusOr<std::shared_ptr<const v1::ListMapsResponse>> Maps(bool refresh);
+  void KeepMaps(std::shared_ptr<const v1::ListMapsResponse> maps);
+  // What the gateway checks of a plan before it starts one (docs/web.md,
+  // "Refused before the plan starts"): InvalidArgument or NotFound naming
+  // the field.
+  absl::Status CheckPlan(const v1::PlanRequest& request);
+
+  // A map layer as JSON and gzip (level 1), made once per map, layer and
+  // side and kept (kMaxCachedLayers, the least recently used dropped).
+  struct CachedLayer {
+    std::string json;
+    std::string gzip;
+  };
+  std::shared_ptr<const CachedLayer> FindLayer(const std::string& key);
+  // The cache key of a layer of `map` (by its fingerprint), or "" when the
+  // gateway has not listed that map yet.
+  std::string LayerKey(const std::string& map, v1::MapLayer layer, int max_side_cells);
+  // GetMapLayer, made into JSON and gzip, kept under `key` (when not "").
+  absl::StatusOr<std::shared_ptr<const CachedLayer>> MakeLayer(
+      const v1::GetMapLayerRequest& request, const std::string& key, absl::Duration timeout);
+  // At start (Bind), every map's four layers at the side the page asks
+  // for, made before the first page asks: its first map is then drawn from
+  // the cache. Stops early when the gateway stops.
+  void WarmLayers();
+  void KeepLayer(const std::string& key, std::shared_ptr<const CachedLayer> layer);
+  static constexpr size_t kMaxCachedLayers = 64;
   // The plan a /api/plans/ID/... route names; null, with the 404 sent, when
   // this gateway has none of that id.
   std::shared_ptr<PlanSession> FindPlan(const httplib::Request& req, httplib::Response& res);
@@ -114,6 +154,13 @@ class Gateway {
   static constexpr int kListenBacklog = 1024;
   std::atomic<int> viewers_{0};
   std::atomic<bool> stopping_{false};
+  std::thread warm_;  // WarmLayers, joined by Stop
+
+  absl::Mutex cache_mu_;
+  std::shared_ptr<const v1::ListMapsResponse> maps_ ABSL_GUARDED_BY(cache_mu_);
+  std::map<std::string, std::string> map_fingerprints_ ABSL_GUARDED_BY(cache_mu_);
+  std::list<std::pair<std::string, std::shared_ptr<const CachedLayer>>> layers_
+      ABSL_GUARDED_BY(cache_mu_);  // most recently used first
 };
 
 }  // namespace riskplan::web

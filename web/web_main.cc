@@ -42,6 +42,9 @@ ABSL_FLAG(int, max_events_per_plan, 2000,
 ABSL_FLAG(int, heartbeat_ms, 5000,
           "Comment sent on an idle event stream, which also finds viewers that left");
 ABSL_FLAG(int, rpc_timeout_ms, 60000, "Deadline of the unary calls to the server");
+ABSL_FLAG(int64_t, max_plan_time_ms, 600000,
+          "A plan whose time budget is above this is refused (400) before it starts: the "
+          "server's --max_plan_time_ms");
 
 namespace {
 
@@ -86,6 +89,11 @@ int Run() {
   options.plans.events.max_events = max_events < 1 ? 0 : static_cast<size_t>(max_events);
   options.heartbeat = absl::Milliseconds(absl::GetFlag(FLAGS_heartbeat_ms));
   options.rpc_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_rpc_timeout_ms));
+  options.max_plan_time_ms = absl::GetFlag(FLAGS_max_plan_time_ms);
+  if (options.max_plan_time_ms < 1) {
+    std::fprintf(stderr, "riskplan-web: --max_plan_time_ms must be at least 1\n");
+    return 2;
+  }
   if (absl::GetFlag(FLAGS_rpc_timeout_ms) < 1) {
     std::fprintf(stderr, "riskplan-web: --rpc_timeout_ms must be at least 1\n");
     return 2;

@@ -1,12 +1,16 @@
 // `riskplan fleet --missions=FILE.json`: one PlanFleet call, its progress
-// mission by mission as the stream runs, a summary table, and a picture of
-// every mission's trajectory.
+// mission by mission as the stream runs, a summary table, a picture of
+// every mission's trajectory, and with --report_json the same as JSON.
+#include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "nlohmann/json.hpp"
 #include "client/cli/command_support.h"
 #include "client/cli/commands.h"
 #include "client/cli/fleet_file.h"
@@ -27,7 +31,43 @@ struct MissionRow {
   int64_t iterations = 0;
   double elapsed_s = 0.0;
   int order = 0;  // the order it ended in, 1-based
+  int call = 0;   // the call (0: the first) that ended it
+  std::string replica;  // that call's replica
+  int resubmits = 0;    // times it was sent again
 };
+
+// The report of --report_json: the call's outcome and every mission.
+nlohmann::json FleetReportJson(const std::string& missions_file, const grpc::Status& status,
+                               const std::vector<MissionRow>& rows, int resubmissions) {
+  nlohmann::json missions = nlohmann::json::array();
+  for (const MissionRow& r : rows) {
+    nlohmann::json m = {{"id", r.id},
+                        {"priority", r.priority},
+                        {"algorithm", r.algorithm},
+                        {"map", r.map},
+                        {"replica", r.replica},
+                        {"end", r.end},
+                        {"resubmissions", r.resubmits},
+                        {"iterations", r.iterations},
+                        {"elapsed_s", r.elapsed_s},
+                        {"order", r.order}};
+    if (r.has_best) {
+      m["risk"] = r.best.risk();
+      m["length_m"] = r.best.length_m();
+      m["flight_time_s"] = r.best.flight_time_s();
+    } else {
+      m["risk"] = nullptr;
+      m["length_m"] = nullptr;
+      m["flight_time_s"] = nullptr;
+    }
+    missions.push_back(std::move(m));
+  }
+  return {{"missions_file", missions_file},
+          {"status", StatusCodeName(status.error_code())},
+          {"message", status.error_message()},
+          {"resubmissions", resubmissions},
+          {"missions", std::move(missions)}};
+}
 
 void PrintUpdate(const v1::FleetUpdate& u, int missions) {
   if (u.error_code() != 0) {
@@ -122,6 +162,11 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
       request->tenant().empty() ? "" : absl::StrFormat(", tenant %s", request->tenant()).c_str());
   std::fflush(stdout);
   int order = 0;
+  // Which call (and so which replica) each update came in: the calls end in
+  // order, each told by on_call_end before the next begins.
+  int call = 0;
+  std::vector<std::string> call_replicas;
+  int resubmissions = 0;
   // No deadline by default, as for `plan`: the budgets bound the missions.
   const absl::Duration timeout = TimeoutOr(o, absl::InfiniteDuration());
   grpc::Status status = client.PlanFleet(
@@ -134,6 +179,7 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
         if (u.error_code() != 0) {
           row.end = StatusCodeName(static_cast<grpc::StatusCode>(u.error_code()));
           row.order = ++order;
+          row.call = call;
         } else if (u.update().final()) {
           row.end = v1::EndReason_Name(u.update().end_reason());
           row.has_best = u.update().has_trajectory();
@@ -141,6 +187,9 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
           row.iterations = u.update().iterations();
           row.elapsed_s = u.update().elapsed_s();
           row.order = ++order;
+          // A final held back from a drained call and passed on after the
+          // last call ended counts for the last call (clamped below).
+          row.call = call;
         }
         return true;
       },
@@ -148,16 +197,68 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
       FleetResubmitOptions{
           .max_resubmits = o.max_resubmits,
           .on_resubmit =
-              [](const FleetResubmission& r) {
+              [&](const FleetResubmission& r) {
+                ++resubmissions;
+                std::vector<std::string> ids;
+                for (int i : r.missions) {
+                  if (i < 0 || i >= n) continue;
+                  ++rows[i].resubmits;
+                  ids.push_back(rows[i].id);
+                }
+                const std::string replica = r.replica.empty() ? "(unknown)" : r.replica;
+                std::string why;
+                if (r.drained > 0) {
+                  why = absl::StrFormat(
+                      "replica %s was draining (shutting down): it ended PlanFleet %s with %d "
+                      "missions unplanned",
+                      replica, StatusCodeName(r.broken.error_code()), r.drained);
+                  if (r.unfinished > r.drained) {
+                    absl::StrAppendFormat(&why, " and %d without a result",
+                                          r.unfinished - r.drained);
+                  }
+                } else {
+                  why = absl::StrFormat(
+                      "PlanFleet on replica %s ended %s%s with %d missions without a result",
+                      replica, StatusCodeName(r.broken.error_code()),
+                      r.broken.error_message().empty()
+                          ? ""
+                          : absl::StrFormat(" (%s)", r.broken.error_message()),
+                      r.unfinished);
+                }
                 std::fprintf(stderr,
-                             "riskplan: PlanFleet ended %s (%s) with %d missions without a "
-                             "result; sending them again (re-submission %d)\n",
-                             StatusCodeName(r.broken.error_code()).c_str(),
-                             r.broken.error_message().c_str(), r.unfinished, r.attempt);
+                             "riskplan: %s (%s); sending them again to another replica "
+                             "(re-submission %d)\n",
+                             why.c_str(), absl::StrJoin(ids, ", ").c_str(), r.attempt);
+              },
+          .on_call_end =
+              [&](const FleetCallEnd& c) {
+                call_replicas.push_back(c.replica.empty() ? "(unknown)" : c.replica);
+                ++call;
+                if (c.attempt > 0) {
+                  std::fprintf(stderr,
+                               "riskplan: re-submission %d went to replica %s: %d missions, %d "
+                               "ended there (%s)\n",
+                               c.attempt, call_replicas.back().c_str(), c.sent, c.ended,
+                               StatusCodeName(c.status.error_code()).c_str());
+                }
               }});
+  for (MissionRow& r : rows) {
+    if (r.order > 0 && !call_replicas.empty()) {
+      r.replica = call_replicas[std::min<size_t>(r.call, call_replicas.size() - 1)];
+    }
+  }
   PrintSummary(rows);
   if (!o.picture.empty()) {
     if (int code = WriteFleetPicture(o, rows, picture); code != 0) return code;
+  }
+  if (!o.report_json.empty()) {
+    std::ofstream out(o.report_json);
+    out << FleetReportJson(o.missions, status, rows, resubmissions).dump(2) << "\n";
+    if (!out) {
+      std::fprintf(stderr, "riskplan: cannot write --report_json=%s\n", o.report_json.c_str());
+      return 1;
+    }
+    std::printf("report: %s\n", o.report_json.c_str());
   }
   if (!status.ok()) return RpcError(o, "PlanFleet", status);
   // 3: the call succeeded but some mission has no trajectory (its own

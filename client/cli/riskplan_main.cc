@@ -101,7 +101,8 @@ ABSL_FLAG(int, max_outstanding, 10000,
           "load, open loop: calls in flight at most (more count as CLIENT_OVERLOADED)");
 ABSL_FLAG(bool, ceiling, false,
           "load: first run Ping (a no-op RPC) with the same settings, and report the ratio");
-ABSL_FLAG(std::string, report_json, "", "load: also write the report as JSON to this file");
+ABSL_FLAG(std::string, report_json, "",
+          "load, fleet: also write the report as JSON to this file");
 
 namespace {
 
@@ -188,13 +189,15 @@ riskplan::cmdline::ProgramHelp Help() {
        "every mission's trajectory on --map. Exit code 3: some mission has no\n"
        "trajectory (its own error, or NO_SOLUTION). With several replicas in\n"
        "--server, missions a broken stream left without a result are sent again\n"
-       "(--max_resubmits times at most).\n"
+       "(--max_resubmits times at most). --report_json=FILE also writes the report\n"
+       "as JSON: per mission its id, replica, end, risk, length, flight time and\n"
+       "re-submissions (docs/fleet.md).\n"
        "\n"
        "Example:\n"
        "  riskplan fleet --missions=fleet.json --goal=6800,6500,250,0.785 --iterations=2000 "
        "--picture=fleet.svg",
        join(join(join(connection, {"map", "missions", "max_resubmits"}), planning),
-            {"params", "picture", "picture_size"})},
+            {"params", "picture", "picture_size", "report_json"})},
       {"load", "load test of one RPC (eval, plan, fleet or ping), closed or open loop",
        "  riskplan load [--rpc=eval|plan|fleet|ping] [--mode=closed|open] [flags]\n"
        "\n"

@@ -42,8 +42,9 @@ class LoadRun {
   template <typename Update>
   grpc::Status ReadStream(grpc::ClientReader<Update>& reader, absl::Time intended)
       ABSL_LOCKS_EXCLUDED(mu_);
-  void Record(absl::Time intended, const grpc::Status& status, absl::Time done)
-      ABSL_LOCKS_EXCLUDED(mu_);
+  // `context`: the call's, whose peer names the replica that answered.
+  void Record(absl::Time intended, const grpc::Status& status, absl::Time done,
+              const grpc::ClientContext& context) ABSL_LOCKS_EXCLUDED(mu_);
   void RecordFirstUpdate(absl::Time intended, absl::Time at) ABSL_LOCKS_EXCLUDED(mu_);
   void RecordOverloaded() ABSL_LOCKS_EXCLUDED(mu_);
   void SendOpenLoop();
@@ -93,7 +94,7 @@ class LoadRun::StreamReactor final : public grpc::ClientReadReactor<Update> {
       absl::MutexLock lock(&run_->mu_);
       run_->report_.plan_updates += updates_;
     }
-    run_->Record(intended_, status, absl::Now());
+    run_->Record(intended_, status, absl::Now(), context_);
     delete this;
   }
 
@@ -135,7 +136,7 @@ void LoadRun::IssueAsync(absl::Time intended) {
       SetTimeout(context, options_.timeout);
       stub_->async()->EvaluateRisk(context, &options_.eval_request, response,
                                    [this, context, response, intended](grpc::Status status) {
-                                     Record(intended, status, absl::Now());
+                                     Record(intended, status, absl::Now(), *context);
                                      delete response;
                                      delete context;
                                    });
@@ -149,7 +150,7 @@ void LoadRun::IssueAsync(absl::Time intended) {
       static const v1::PingRequest kPing;  // outlives every call
       stub_->async()->Ping(context, &kPing, response,
                            [this, context, response, intended](grpc::Status status) {
-                             Record(intended, status, absl::Now());
+                             Record(intended, status, absl::Now(), *context);
                              delete response;
                              delete context;
                            });
@@ -205,7 +206,7 @@ void LoadRun::CallSync(absl::Time intended) {
       break;
     }
   }
-  Record(intended, status, absl::Now());
+  Record(intended, status, absl::Now(), context);
 }
 
 // Latency counts from `intended`, not from the actual send, so the time a
@@ -213,11 +214,16 @@ void LoadRun::CallSync(absl::Time intended) {
 // of quietly lowering the offered load (no coordinated omission). Every
 // completed call is counted, whatever its code: a fast error is a result
 // too, and the codes tell them apart.
-void LoadRun::Record(absl::Time intended, const grpc::Status& status, absl::Time done) {
+void LoadRun::Record(absl::Time intended, const grpc::Status& status, absl::Time done,
+                     const grpc::ClientContext& context) {
   const double latency_s = absl::ToDoubleSeconds(done - intended);
+  std::string replica = context.peer();
+  if (replica.empty()) replica = kNoReplica;
   absl::MutexLock lock(&mu_);
   ++report_.completed;
-  ++report_.codes[StatusCodeName(status.error_code())];
+  const std::string code = StatusCodeName(status.error_code());
+  ++report_.codes[code];
+  ++report_.replicas[replica][code];
   report_.latency.Add(latency_s);
   interval_.Add(latency_s);
   last_done_ = std::max(last_done_, done);
@@ -346,6 +352,15 @@ nlohmann::json ReportJson(const LoadReport& r) {
       {"codes", r.codes},
       {"latency_ms", HistogramJson(r.latency)},
   };
+  // Each replica's calls and codes ("replicas": {"ipv4:127.0.0.1:50051":
+  // {"completed": 120, "codes": {"OK": 120}}, ...}).
+  nlohmann::json replicas = nlohmann::json::object();
+  for (const auto& [replica, codes] : r.replicas) {
+    int64_t completed = 0;
+    for (const auto& [code, n] : codes) completed += n;
+    replicas[replica] = {{"completed", completed}, {"codes", codes}};
+  }
+  j["replicas"] = std::move(replicas);
   if (r.options.mode == LoadMode::kClosed) {
     j["concurrency"] = r.options.concurrency;
   } else {
@@ -380,6 +395,16 @@ std::string PhaseText(const LoadReport& r) {
   out += "  codes:";
   for (const auto& [code, n] : r.codes) absl::StrAppendFormat(&out, " %s=%d", code, n);
   out += "\n";
+  // One line per replica that answered, when the target had several.
+  if (r.replicas.size() > 1) {
+    for (const auto& [replica, codes] : r.replicas) {
+      int64_t completed = 0;
+      for (const auto& [code, n] : codes) completed += n;
+      absl::StrAppendFormat(&out, "  replica %s: %d calls:", replica, completed);
+      for (const auto& [code, n] : codes) absl::StrAppendFormat(&out, " %s=%d", code, n);
+      out += "\n";
+    }
+  }
   return out;
 }
 

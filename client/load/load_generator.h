@@ -57,6 +57,8 @@ struct LoadOptions {
 
 // Calls that a code name counts but that never reached the server.
 inline constexpr char kClientOverloaded[] = "CLIENT_OVERLOADED";
+// The replica of a completed call that reached none (no peer).
+inline constexpr char kNoReplica[] = "(none)";
 
 struct LoadReport {
   LoadOptions options;
@@ -64,6 +66,10 @@ struct LoadReport {
   int64_t sent = 0;
   int64_t completed = 0;
   std::map<std::string, int64_t> codes;  // status code name -> calls
+  // By the replica that answered (the call's peer, "ipv4:127.0.0.1:50051";
+  // kNoReplica for a call that reached none), its calls by code: with a
+  // target of several addresses, how the load was shared.
+  std::map<std::string, std::map<std::string, int64_t>> replicas;
   LatencyHistogram latency;              // every completed call, whatever its code
   LatencyHistogram first_update;         // plans, fleets: time to the first streamed message
   int64_t plan_updates = 0;              // plans, fleets: messages received

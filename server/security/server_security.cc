@@ -62,8 +62,13 @@ absl::StatusOr<ServerSecurity> MakeServerSecurity(const ServerSecurityOptions& o
     }
     if (absl::Status s = net::CheckCrl({"tls_crl_dir", o.tls_crl_dir}); !s.ok()) return s;
   }
+  absl::StatusOr<std::unique_ptr<CertificateRotation>> rotation = CertificateRotation::Start(
+      {.cert = o.tls_cert, .key = o.tls_key, .client_ca = o.tls_client_ca}, o.tls_reload_s);
+  if (!rotation.ok()) return rotation.status();
+  security.rotation = *std::move(rotation);
   auto provider = std::make_shared<grpc::experimental::FileWatcherCertificateProvider>(
-      o.tls_key, o.tls_cert, o.tls_client_ca, static_cast<unsigned>(o.tls_reload_s));
+      security.rotation->key_path(), security.rotation->cert_path(),
+      security.rotation->client_ca_path(), static_cast<unsigned>(o.tls_reload_s));
   grpc::experimental::TlsServerCredentialsOptions options(provider);
   options.watch_identity_key_cert_pairs();
   if (!o.tls_client_ca.empty()) {

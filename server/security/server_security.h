@@ -4,7 +4,10 @@
 //
 // Certificates are read by gRPC's FileWatcherCertificateProvider, which
 // re-reads the key, the certificate chain and the client CA every
-// `reload_s` seconds. It reads the key and the chain together, so a rotation
+// `reload_s` seconds, from a private copy that CertificateRotation
+// (certificate_rotation.h) replaces only with files that pass the start-up
+// checks: a bad rotation is refused and the last good pair stays served.
+// It reads the key and the chain together, so a rotation
 // must replace them together: write the new files into a new directory and
 // rename it over the old one, or flip a symlink to it (Kubernetes Secret
 // volumes do the latter). Connections made before a rotation keep their
@@ -21,6 +24,7 @@
 #include "absl/status/statusor.h"
 #include "grpcpp/security/server_credentials.h"
 #include "server/security/auth.h"
+#include "server/security/certificate_rotation.h"
 
 namespace riskplan::server {
 
@@ -40,6 +44,8 @@ struct ServerSecurity {
   // allows every call and names callers by certificate only).
   std::shared_ptr<Authorizer> authorizer;
   bool tls = false;
+  // With TLS: the checked copies the credentials read (null without TLS).
+  std::shared_ptr<CertificateRotation> rotation;
   // "tls=mutual tokens=3 crl=on" for the log.
   std::string summary;
 };

@@ -1,4 +1,5 @@
 // `riskplan-tool import` end to end: the real binary on inputs GDAL wrote.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -147,6 +148,35 @@ TEST(ImportCommandTest, RefusalsExitTwoAndWriteNothing) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_THAT(r.output, HasSubstr("is a directory without manifest.json; not replacing it"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/precious/notes.txt"));
+}
+
+// What GDAL or the system says reaches the message, in their own words: a
+// missing file is NotFound (exit 1) with the system's reason, a truncated
+// GeoTIFF fails the warp (whose source is read on GDAL's own thread, -multi)
+// with libtiff's reason, not "no message from GDAL", and nothing of it goes
+// to stderr past the message.
+TEST(ImportCommandTest, MissingAndTruncatedInputsFailWithTheirOwnReasons) {
+  const std::string dir = FreshDir("command-gdal-reasons");
+  const std::string out = dir + "/maps/town";
+  const std::string missing = dir + "/no-such-dem.tif";
+  auto r = Tool(absl::StrFormat(
+      "import --out=%s --center=49.6,6.1 --size_m=2000 --res_m=10 --terrain=%s", out, missing));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "riskplan-tool: layer 'terrain', input '" + missing +
+                          "': cannot read it: No such file or directory\n");
+
+  const std::string dem = Dem(dir, 6.0, 49.5, 0.2);
+  const auto size = std::filesystem::file_size(dem);
+  std::filesystem::resize_file(dem, size / 2);
+  r = Tool(absl::StrFormat(
+      "import --out=%s --center=49.6,6.1 --size_m=2000 --res_m=10 --terrain=%s", out, dem));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("riskplan-tool: layer 'terrain', input '" + dem + "': "));
+  EXPECT_THAT(r.output, Not(HasSubstr("no message from GDAL")));
+  EXPECT_THAT(r.output, HasSubstr("TIFFRead"));
+  // One line: GDAL's words are in the message, none printed beside it.
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 // A disk that fills up during the write (here a file size limit, which root

@@ -386,9 +386,11 @@ TEST(ImportInputsTest, BadInputsAreRefusedNamingLayerAndInput) {
   const std::string dir = FreshDir("bad-inputs");
   ImportOptions o = MapOptions(dir);
   o.population = dir + "/missing.tif";
-  EXPECT_THAT(ImportMap(o).status().message(),
-              HasSubstr("layer 'population', input '" + dir +
-                        "/missing.tif': GDAL cannot open it as a raster"));
+  const absl::Status missing = ImportMap(o).status();
+  EXPECT_EQ(missing.code(), absl::StatusCode::kNotFound);
+  EXPECT_THAT(missing.message(), HasSubstr("layer 'population', input '" + dir +
+                                           "/missing.tif': cannot read it: No such file or "
+                                           "directory"));
   o.population = "";
   o.nofly = {dir + "/flat.tif|layername=zones"};
   EXPECT_THAT(ImportMap(o).status().message(), HasSubstr("layer 'no-fly', input '" + dir +

@@ -1,8 +1,10 @@
 // The `riskplan` CLI against the real server.
 #include <png.h>
+#include <signal.h>
 
 #include <fstream>
 #include <sstream>
+#include <thread>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -209,10 +211,35 @@ TEST_F(CliTest, FleetShowsEachMissionASummaryAndAPictureOfAll) {
       {"id": "north", "start": "300,375,240,0.785", "priority": 5},
       {"id": "west", "start": [400, 300, 245, 0.785]},
       {"id": "solo", "start": "300,600,245,0.785", "algorithm": "RRT", "iterations": 200}]})";
+  const std::string fleet_report = *dir_ + "/fleet-report.json";
   CommandResult r =
       Cli("fleet --missions=" + missions +
-          " --goal=1700,1625,250,0.785 --budget_ms=0 --iterations=300 --picture=" + svg);
+          " --goal=1700,1625,250,0.785 --budget_ms=0 --iterations=300 --picture=" + svg +
+          " --report_json=" + fleet_report);
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("report: " + fleet_report));
+  {
+    // --report_json: every mission, with the replica that planned it.
+    const nlohmann::json report = nlohmann::json::parse(Read(fleet_report));
+    EXPECT_EQ(report["status"], "OK");
+    EXPECT_EQ(report["resubmissions"], 0);
+    ASSERT_EQ(report["missions"].size(), 3u);
+    const std::string port = server_->address().substr(server_->address().rfind(':'));
+    std::vector<std::string> ids;
+    for (const nlohmann::json& m : report["missions"]) {
+      ids.push_back(m["id"].get<std::string>());
+      EXPECT_THAT(m["replica"].get<std::string>(), ::testing::EndsWith("127.0.0.1" + port));
+      EXPECT_EQ(m["resubmissions"], 0);
+      EXPECT_GT(m["risk"].get<double>(), 0.0);
+      EXPECT_GT(m["length_m"].get<double>(), 1000.0);
+      // Flight time: the length at the aircraft's speed (metres per second).
+      EXPECT_GT(m["flight_time_s"].get<double>(), 0.0);
+      EXPECT_LT(m["flight_time_s"].get<double>(), m["length_m"].get<double>());
+    }
+    EXPECT_THAT(ids, ::testing::ElementsAre("north", "west", "solo"));
+    EXPECT_EQ(report["missions"][2]["end"], "CONVERGED");
+    EXPECT_EQ(report["missions"][0]["end"], "BUDGET_EXHAUSTED");
+  }
   EXPECT_THAT(r.output, HasSubstr("fleet of 3 missions"));
   for (const char* id : {"north", "west"}) {
     EXPECT_THAT(r.output, ::testing::ContainsRegex(
@@ -289,6 +316,133 @@ TEST_F(CliTest, ServerTakesAListOfReplicasAndSaysWhichEntryIsWrong) {
   r = Cli("fleet --missions=" + missions + " --goal=1700,1625,250,0.785 --max_resubmits=11");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_THAT(r.output, HasSubstr("--max_resubmits=11: must be 0 to 10"));
+}
+
+// Two replicas behind one --server list.
+class CliReplicasTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    for (int i = 0; i < 2; ++i) {
+      // One plan slot each: a fleet's missions queue on its replica.
+      auto started = ServerProcess::Start({"--plan_threads=1", "--fleet_plan_slots=1",
+                                           "--grace_period_ms=1000",
+                                           "--metrics_listen=127.0.0.1:0"});
+      ASSERT_TRUE(started.ok()) << started.status();
+      servers_.push_back(*std::move(started));
+    }
+    char dir[] = "/tmp/riskplan-cli-replicas-XXXXXX";
+    ASSERT_NE(mkdtemp(dir), nullptr);
+    dir_ = dir;
+  }
+  void TearDown() override { RunCommand("rm -rf " + dir_); }
+
+  // The riskplan command line to both replicas (TLS as the suite's servers
+  // have it: a list has no one host, so the name is given).
+  std::string Riskplan(const std::string& args) const {
+    std::string flags = servers_[0]->CliServerFlags();
+    const std::string one = "--server=" + servers_[0]->address();
+    flags.replace(flags.find(one), one.size(),
+                  "--server=" + servers_[0]->address() + "," + servers_[1]->address());
+    if (flags.find("--tls_ca") != std::string::npos) flags += " --tls_server_name=localhost";
+    return std::string(RISKPLAN_BIN_DIR) + "/riskplan " + flags + " " + args;
+  }
+  static std::string Read(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  }
+  static std::string Port(const ServerProcess& s) {
+    return s.address().substr(s.address().rfind(':') + 1);
+  }
+
+  std::vector<std::unique_ptr<ServerProcess>> servers_;
+  std::string dir_;
+};
+
+// A replica that drains mid-fleet: the CLI says which replica, that it was
+// draining, which missions it sends again and to which replica they went;
+// the report names each mission's replica and re-submissions.
+TEST_F(CliReplicasTest, FleetSaysWhichReplicaDrainedAndWhereItsMissionsWent) {
+  const std::string missions = dir_ + "/fleet.json";
+  // Each its own goal: one plan slot takes one goal's group at a time, so
+  // three wait in the queue when the drain comes.
+  std::ofstream(missions) << R"({"missions": [
+      {"id": "a", "goal": "1700,1625,250,0.785"}, {"id": "b", "goal": "1600,1700,250,0.785"},
+      {"id": "c", "goal": "1750,1500,250,0.785"}, {"id": "d", "goal": "1650,1600,250,0.785"}]})";
+  const std::string report = dir_ + "/fleet-report.json";
+  CommandResult r;
+  std::thread cli([&] {
+    r = RunCommand(Riskplan("fleet --missions=" + missions +
+                            " --start=300,375,240,0.785 --budget_ms=3000 --report_json=" +
+                            report + " 2>&1"),
+                   absl::Minutes(3));
+  });
+  // The replica the fleet went to: the one whose metrics show its missions.
+  int busy = -1;
+  const absl::Time deadline = absl::Now() + absl::Seconds(60);
+  while (busy < 0 && absl::Now() < deadline) {
+    for (int i = 0; i < 2 && busy < 0; ++i) {
+      absl::StatusOr<std::string> text =
+          HttpGet(MetricsAddress(servers_[i]->Stderr()), "/metrics");
+      if (!text.ok()) continue;
+      const double held =
+          MetricValue(*text, "riskplan_fleet_missions{state=\"queued\"}").value_or(0) +
+          MetricValue(*text, "riskplan_fleet_missions{state=\"running\"}").value_or(0);
+      if (held >= 4) busy = i;
+    }
+    if (busy < 0) absl::SleepFor(absl::Milliseconds(20));
+  }
+  if (busy >= 0) servers_[busy]->Signal(SIGTERM);
+  cli.join();
+  ASSERT_GE(busy, 0) << "the fleet never reached a replica: " << r.output;
+  const std::string drained = Port(*servers_[busy]);
+  const std::string other = Port(*servers_[1 - busy]);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, ::testing::ContainsRegex(
+                            "riskplan: replica ipv4:127.0.0.1:" + drained +
+                            " was draining \\(shutting down\\): it ended PlanFleet OK with [1-4] "
+                            "missions unplanned \\([a-d](, [a-d])*\\); sending them again to "
+                            "another replica \\(re-submission 1\\)"));
+  EXPECT_THAT(r.output, ::testing::ContainsRegex("riskplan: re-submission 1 went to replica "
+                                                 "ipv4:127.0.0.1:" +
+                                                 other + ": [1-4] missions, [1-4] ended there "
+                                                         "\\(OK\\)"));
+  EXPECT_THAT(r.output, ::testing::Not(HasSubstr("()")));
+  const nlohmann::json j = nlohmann::json::parse(Read(report));
+  EXPECT_EQ(j["resubmissions"], 1);
+  int moved = 0;
+  for (const nlohmann::json& m : j["missions"]) {
+    const std::string replica = m["replica"].get<std::string>();
+    if (m["resubmissions"] == 1) {
+      ++moved;
+      EXPECT_EQ(replica, "ipv4:127.0.0.1:" + other) << m.dump();
+    } else {
+      EXPECT_EQ(replica, "ipv4:127.0.0.1:" + drained) << m.dump();
+    }
+    EXPECT_FALSE(m["risk"].is_null()) << m.dump();
+  }
+  EXPECT_GE(moved, 1);
+}
+
+// `riskplan load` over a list reports each replica's calls.
+TEST_F(CliReplicasTest, LoadReportsEachReplicasCalls) {
+  const std::string report = dir_ + "/load.json";
+  CommandResult r = RunCommand(
+      Riskplan("load --rpc=ping --concurrency=4 --duration_s=1 --report_json=" + report + " 2>&1"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(Read(report));
+  ASSERT_EQ(j["replicas"].size(), 2u) << j.dump();
+  int64_t total = 0;
+  for (const auto& server : servers_) {
+    const std::string peer = "ipv4:127.0.0.1:" + Port(*server);
+    ASSERT_TRUE(j["replicas"].contains(peer)) << j.dump();
+    EXPECT_GT(j["replicas"][peer]["completed"].get<int64_t>(), 0);
+    EXPECT_EQ(j["replicas"][peer]["codes"]["OK"], j["replicas"][peer]["completed"]);
+    total += j["replicas"][peer]["completed"].get<int64_t>();
+    EXPECT_THAT(r.output, ::testing::ContainsRegex("replica " + peer + ": [0-9]+ calls: OK="));
+  }
+  EXPECT_EQ(total, j["completed"].get<int64_t>());
 }
 
 }  // namespace

@@ -457,5 +457,38 @@ TEST(HardLimitsShutdownTest, DrainEndsLongWorkInFlight) {
   EXPECT_GE(stopped, 1);
 }
 
+// GetMapLayer waits in the evaluation queue too: when the queue is full it
+// is refused as EvaluateRisk is, naming the flag that sets the limit.
+TEST(EvaluationQueueTest, AFullQueueNamesTheFlagForGetMapLayer) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+      ServerProcess::Start({"--eval_threads=1", "--max_queued_evals=1"});
+  ASSERT_TRUE(server.ok()) << server.status();
+  client::RiskplanClient client((*server)->address());
+  v1::GetMapLayerRequest layer;
+  layer.set_map("demo-city");
+  layer.set_layer(v1::POPULATION_DENSITY);
+  layer.set_max_side_cells(4096);
+  std::mutex mu;
+  std::vector<grpc::Status> refused;
+  const absl::Time deadline = absl::Now() + absl::Seconds(60);
+  while (refused.empty() && absl::Now() < deadline) {
+    std::vector<std::thread> callers;
+    for (int i = 0; i < 16; ++i) {
+      callers.emplace_back([&] {
+        v1::GetMapLayerResponse response;
+        const grpc::Status status = client.GetMapLayer(layer, &response);
+        if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+          std::lock_guard<std::mutex> lock(mu);
+          refused.push_back(status);
+        }
+      });
+    }
+    for (std::thread& t : callers) t.join();
+  }
+  ASSERT_FALSE(refused.empty()) << "the queue of one never filled";
+  EXPECT_EQ(refused[0].error_message(),
+            "riskplan-server has 1 evaluations waiting (--max_queued_evals); retry later");
+}
+
 }  // namespace
 }  // namespace riskplan::testing

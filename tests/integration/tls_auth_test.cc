@@ -13,6 +13,7 @@
 #include "client/client.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "tests/integration/reflection_probe.h"
 #include "tests/integration/requests.h"
 #include "tests/integration/server_process.h"
 #include "tests/integration/tls_fixture.h"
@@ -23,6 +24,7 @@ namespace {
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::MatchesRegex;
+using ::testing::Not;
 
 // --- Tokens and roles.
 
@@ -162,6 +164,77 @@ TEST_F(TlsTest, HealthIsOpenOnItsPlaintextPortAndOnTheTlsPort) {
   client::RiskplanClient c = Client(*server, Mutual("client"));
   ASSERT_TRUE(c.CheckHealth("riskplan.v1.Planner", &status).ok());
   EXPECT_EQ(status, grpc::health::v1::HealthCheckResponse::SERVING);
+}
+
+// --- Server reflection: a viewer method, never open without a token where
+// tokens are asked for, and never on the health port.
+
+TEST_F(TlsTest, TheHealthPortServesNoReflection) {
+  std::unique_ptr<ServerProcess> server =
+      Start(MutualFlags({"--token_file=" + P("tokens.txt"), "--health_listen=127.0.0.1:0"}));
+  ASSERT_NE(server, nullptr);
+  std::smatch match;
+  const std::string log = server->Stderr();
+  ASSERT_TRUE(std::regex_search(
+      log, match, std::regex("\"event\":\"health_listening\",\"detail\":\"([0-9.:]+)\"")))
+      << log;
+  client::RiskplanClient probe(match[1].str());
+  const ReflectionAnswer listed = AskReflection(probe.channel());
+  EXPECT_EQ(listed.status.error_code(), grpc::StatusCode::UNIMPLEMENTED)
+      << listed.status.error_message();
+  EXPECT_THAT(listed.response, Not(HasSubstr("riskplan.v1.Planner")));
+  const ReflectionAnswer file = AskReflection(probe.channel(), "riskplan.v1.Planner");
+  EXPECT_EQ(file.status.error_code(), grpc::StatusCode::UNIMPLEMENTED);
+  EXPECT_THAT(file.response, Not(HasSubstr("PlanTrajectory")));
+}
+
+TEST_F(TlsTest, ReflectionOnTheTlsPortNeedsAToken) {
+  std::unique_ptr<ServerProcess> server = Start(TlsFlags({"--token_file=" + P("tokens.txt")}));
+  ASSERT_NE(server, nullptr);
+  const ReflectionAnswer refused = AskReflection(Client(*server, Tls()).channel());
+  EXPECT_EQ(refused.status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_THAT(refused.response, Not(HasSubstr("riskplan.v1.Planner")));
+  const ReflectionAnswer viewer = AskReflection(Client(*server, Tls("viewer")).channel());
+  EXPECT_TRUE(viewer.status.ok()) << viewer.status.error_message();
+  EXPECT_THAT(viewer.response, HasSubstr("riskplan.v1.Planner"));
+}
+
+TEST_F(TlsTest, ReflectionOnAPlaintextPortNeedsATokenToo) {
+  std::unique_ptr<ServerProcess> server = Start({"--token_file=" + P("tokens.txt")});
+  ASSERT_NE(server, nullptr);
+  client::ConnectionOptions no_token;
+  for (const ReflectionAnswer& answer :
+       {AskReflection(Client(*server, no_token).channel()),
+        AskReflection(Client(*server, no_token).channel(), "riskplan.v1.Planner")}) {
+    EXPECT_EQ(answer.status.error_code(), grpc::StatusCode::UNAUTHENTICATED)
+        << answer.status.error_message();
+    EXPECT_EQ(answer.status.error_message(),
+              "this server requires a bearer token (riskplan --token_file=FILE)");
+    EXPECT_THAT(answer.response, Not(HasSubstr("riskplan.v1.Planner")));
+  }
+  client::ConnectionOptions viewer;
+  viewer.token_file = P("viewer.token");
+  const ReflectionAnswer listed = AskReflection(Client(*server, viewer).channel());
+  EXPECT_TRUE(listed.status.ok()) << listed.status.error_message();
+  EXPECT_THAT(listed.response, HasSubstr("riskplan.v1.Planner"));
+  EXPECT_THAT(listed.response, HasSubstr("grpc.health.v1.Health"));
+  const ReflectionAnswer file =
+      AskReflection(Client(*server, viewer).channel(), "riskplan.v1.Planner");
+  EXPECT_TRUE(file.status.ok()) << file.status.error_message();
+  EXPECT_THAT(file.response, HasSubstr("riskplan/v1/planner.proto"));
+  EXPECT_THAT(file.response, HasSubstr("PlanTrajectory"));
+  // A token the file does not list is refused as for any method.
+  client::ConnectionOptions unknown;
+  unknown.token_file = P("unknown.token");
+  EXPECT_EQ(AskReflection(Client(*server, unknown).channel()).status.error_code(),
+            grpc::StatusCode::UNAUTHENTICATED);
+  // Without --token_file the plaintext loopback port is open to all, and
+  // reflection with it.
+  std::unique_ptr<ServerProcess> open = Start({});
+  ASSERT_NE(open, nullptr);
+  const ReflectionAnswer open_list = AskReflection(Client(*open, no_token).channel());
+  EXPECT_TRUE(open_list.status.ok()) << open_list.status.error_message();
+  EXPECT_THAT(open_list.response, HasSubstr("riskplan.v1.Planner"));
 }
 
 // --- The shim link, end to end: the real riskplan-fpga-shim and server.

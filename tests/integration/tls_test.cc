@@ -204,8 +204,14 @@ TEST_F(TlsTest, Tls11IsRefusedEvenFromAClientThatOffersIt) {
 // Certificates under DIR/live, a symlink flipped atomically (rename over it)
 // from one version directory to the next, as Kubernetes updates a Secret.
 TEST_F(TlsTest, CertificateRotatedByADirectorySwapWhileAStreamRuns) {
-  ASSERT_TRUE(pki_->Issue("old", "a", "old.riskplan.test", "DNS:old.riskplan.test", true).ok());
-  ASSERT_TRUE(pki_->Issue("new", "a", "new.riskplan.test", "DNS:new.riskplan.test", true).ok());
+  // Both are also for riskplan.test: a rotation must keep a name of the
+  // served certificate (BadRotationsAreRefusedAndTheLastGoodPairStaysServed).
+  ASSERT_TRUE(pki_->Issue("old", "a", "old.riskplan.test",
+                          "DNS:old.riskplan.test,DNS:riskplan.test", true)
+                  .ok());
+  ASSERT_TRUE(pki_->Issue("new", "a", "new.riskplan.test",
+                          "DNS:new.riskplan.test,DNS:riskplan.test", true)
+                  .ok());
   namespace fs = std::filesystem;
   const fs::path root = P("rotation");
   fs::create_directories(root / "v1");
@@ -267,17 +273,20 @@ TEST_F(TlsTest, CertificateRotatedByADirectorySwapWhileAStreamRuns) {
 
   // Once the old name's certificate has expired, it is refused even if it is
   // served again (a rotation rolled back too late). The rollback directory
-  // gets a certificate for the old name that expires 2 s after it is issued
-  // (OpenSSL's validity counts whole seconds), so the test waits seconds for
-  // the expiry instead of keeping a slot of the suite for the 40 s a
-  // certificate issued at the start had to stay valid.
-  const absl::Time stale_expiry = absl::Now() + absl::Seconds(2);
-  ASSERT_TRUE(pki_->Issue("stale", "a", "old.riskplan.test", "DNS:old.riskplan.test", true,
+  // gets a certificate for the old name that expires 4 s after it is issued
+  // (OpenSSL's validity counts whole seconds; the server takes it only while
+  // it is valid, checked within a second of the flip), so the test waits
+  // seconds for the expiry instead of keeping a slot of the suite for the
+  // 40 s a certificate issued at the start had to stay valid.
+  const absl::Time stale_expiry = absl::Now() + absl::Seconds(4);
+  ASSERT_TRUE(pki_->Issue("stale", "a", "old.riskplan.test",
+                          "DNS:old.riskplan.test,DNS:riskplan.test", true,
                           absl::Now() - absl::Hours(1), stale_expiry)
                   .ok());
   fs::copy_file(P("stale.pem"), root / "v1" / "tls.crt", fs::copy_options::overwrite_existing);
   fs::copy_file(P("stale.key"), root / "v1" / "tls.key", fs::copy_options::overwrite_existing);
   flip_to("v1");
+  EXPECT_THAT(WaitForLog(*server, "names=[old.riskplan.test"), HasSubstr("\"event\":\"tls_reloaded\""));
   absl::SleepFor(std::max(absl::ZeroDuration(), stale_expiry + absl::Seconds(1) - absl::Now()));
   grpc::Status expired;
   const absl::Time second_deadline = absl::Now() + absl::Seconds(60);
@@ -289,6 +298,74 @@ TEST_F(TlsTest, CertificateRotatedByADirectorySwapWhileAStreamRuns) {
   } while (absl::Now() < second_deadline);
   EXPECT_EQ(expired.error_code(), grpc::StatusCode::UNAVAILABLE);
   EXPECT_THAT(expired.error_message(), HasSubstr("certificate verify failed"));
+}
+
+// A rotation that would lock every client out (an expired certificate, one
+// for none of the served names, a key that does not match) is refused: the
+// last good pair stays served to new connections, and the refusal is logged
+// with its reason and counted.
+TEST_F(TlsTest, BadRotationsAreRefusedAndTheLastGoodPairStaysServed) {
+  ASSERT_TRUE(pki_->Issue("elsewhere", "a", "elsewhere.test", "DNS:elsewhere.test", true).ok());
+  namespace fs = std::filesystem;
+  const fs::path root = P("bad-rotation");
+  const auto version = [&](const std::string& name, const std::string& cert,
+                           const std::string& key) {
+    fs::create_directories(root / name);
+    fs::copy_file(P(cert), root / name / "tls.crt", fs::copy_options::overwrite_existing);
+    fs::copy_file(P(key), root / name / "tls.key", fs::copy_options::overwrite_existing);
+  };
+  version("good", "server.pem", "server.key");
+  fs::create_directory_symlink("good", root / "live");
+  const auto flip_to = [&](const std::string& name) {
+    std::error_code ignored;
+    fs::remove(root / "live.next", ignored);
+    fs::create_directory_symlink(name, root / "live.next");
+    fs::rename(root / "live.next", root / "live");
+  };
+  const std::string live_cert = (root / "live" / "tls.crt").string();
+  std::unique_ptr<ServerProcess> server =
+      Start({"--tls_cert=" + live_cert, "--tls_key=" + (root / "live" / "tls.key").string(),
+             "--tls_reload_s=1"});
+  ASSERT_NE(server, nullptr);
+  client::ConnectionOptions named = Tls();
+  named.tls_server_name = "riskplan.test";
+
+  struct Bad {
+    std::string name, cert, key, reason;
+  };
+  const std::vector<Bad> rotations = {
+      {"expired", "expired.pem", "expired.key",
+       "--tls_cert=" + live_cert + ": the certificate expired on"},
+      {"elsewhere", "elsewhere.pem", "elsewhere.key",
+       "--tls_cert=" + live_cert +
+           ": the new certificate is for [elsewhere.test], none of the names the served one is "
+           "for ([localhost,riskplan.test,127.0.0.1])"},
+      {"mismatch", "server.pem", "server-other.key",
+       "the certificate does not match the private key"},
+  };
+  int refused = 0;
+  for (const Bad& bad : rotations) {
+    SCOPED_TRACE(bad.name);
+    version(bad.name, bad.cert, bad.key);
+    flip_to(bad.name);
+    ++refused;
+    const std::string log =
+        WaitForLog(*server, absl::StrCat("\"event\":\"tls_reload_refused\",\"detail\":\"refused=", refused));
+    EXPECT_THAT(log, HasSubstr(absl::StrCat("refused=", refused)));
+    EXPECT_THAT(log, HasSubstr(bad.reason));
+    // Give gRPC's provider time to re-read (it would have taken the bad
+    // files by now), then a new connection still gets the good pair.
+    absl::SleepFor(absl::Seconds(2));
+    client::RiskplanClient c = Client(*server, named);
+    const grpc::Status ping = c.Ping(absl::Seconds(10));
+    EXPECT_TRUE(ping.ok()) << ping.error_message();
+  }
+  // A good rotation after the refused ones is taken.
+  ASSERT_TRUE(pki_->Issue("renewed", "a", "riskplan.test", "DNS:riskplan.test", true).ok());
+  version("renewed", "renewed.pem", "renewed.key");
+  flip_to("renewed");
+  EXPECT_THAT(WaitForLog(*server, "\"event\":\"tls_reloaded\""),
+              HasSubstr("names=[riskplan.test]"));
 }
 
 }  // namespace

@@ -32,6 +32,16 @@ In order, each step checking behaviour and numbers, never speed:
   9. on a gateway whose one viewer slot another viewer holds, the page shows
      the gateway's refusal (--max_viewers) when its plan's stream is refused.
 
+Also: no error in the browser's console on load (the favicon is there), the
+charts say what they will show before there is anything to plot, the legend
+explains the route, the start and the goal and folds, the improvement
+history stays on the map in grey beside the newest in red, end reasons in
+words, the target level of safety on the risk chart, an error box in view
+at 1400x900, and a start outside the map refused before the plan starts.
+The page's timings (the first map drawn after the page was opened, each map
+switch) are printed and written to OUT_DIR/browser_timings.json: reported,
+never asserted (docs/benchmarks.md).
+
 Usage: browser_test.py BIN_DIR OUT_DIR
 """
 
@@ -200,6 +210,17 @@ def main():
         wf.wait_for(lambda: js(driver, "window.rp && window.rp.ready === true"), 120,
                     "the page to load its map and layers")
         check(js(driver, "document.getElementById('error').hidden"), "the page loaded without error")
+        timings = {"first_map_ms": js(driver, "rp.timings.firstMapMs")}
+        print(f"timing: the first map drawn {timings['first_map_ms']:.0f} ms after the page was "
+              "opened", flush=True)
+        severe = [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        check(not severe, f"no error in the browser's console on load: {severe}")
+        check(js(driver, "document.getElementById('risk-chart-box').hidden && "
+                         "document.getElementById('profile-chart-box').hidden"),
+              "no empty chart before there is anything to plot")
+        placeholder = js(driver, "document.getElementById('risk-chart-empty').innerText")
+        check("best risk against planner time" in placeholder,
+              f"the risk chart's place says what it will show: {placeholder!r}")
         check(js(driver, "rp.map.name") == map_name and js(driver, "rp.crs") == "Simple" and
               js(driver, "rp.leaflet.options.crs === L.CRS.Simple"),
               f"the local map {map_name} is shown in Leaflet's CRS.Simple")
@@ -224,6 +245,17 @@ def main():
         legend = js(driver, "document.getElementById('legend').textContent")
         check("population density" in legend and "no-fly zone" in legend and "landing site" in legend,
               "the legend names density, no-fly zones and landing sites")
+        for item in ("start, its line the heading", "goal, its line the heading",
+                     "best trajectory so far", "earlier improvements"):
+            check(item in legend, f"the legend explains '{item}'")
+        open_height = js(driver, "document.getElementById('legend-box').getBoundingClientRect().height")
+        driver.find_element("css selector", "#legend-box > summary").click()
+        folded = js(driver, "[document.getElementById('legend-box').open, "
+                            "document.getElementById('legend-box').getBoundingClientRect().height]")
+        check(folded[0] is False and folded[1] < open_height / 3,
+              f"the legend folds: {open_height:.0f} px open, {folded[1]:.0f} px folded")
+        driver.find_element("css selector", "#legend-box > summary").click()
+        check(js(driver, "document.getElementById('legend-box').open"), "and opens again")
         scale = js(driver, "document.querySelector('.leaflet-control-scale-line').textContent")
         check(scale.endswith(" m") or scale.endswith(" km"), f"a scale bar of '{scale}'")
         bar_m_per_px, scale = scale_metres_per_px(driver)
@@ -271,6 +303,28 @@ def main():
               f"the iteration count reached {iterations}")
         check(js(driver, "document.querySelectorAll('path.best-trajectory').length") == 1,
               "the best trajectory is drawn on the map")
+        # The improvements before it stay on the map in grey (at most 30).
+        history = js(driver, "Array.from(document.querySelectorAll('path.history-trajectory'))"
+                             ".map((p) => p.getAttribute('stroke'))")
+        check(len(history) == min(len(risks) - 1, 30) and len(history) >= 1 and
+              all(c == "#888" for c in history),
+              f"{len(history)} earlier improvements drawn in grey beside the newest in red "
+              f"({len(risks)} improvements)")
+        state = js(driver, "document.getElementById('state').textContent")
+        check(state == f"finished: the budget was used up, {iterations} iterations",
+              f"the end reason in words: {state!r}")
+        side = js(driver, "document.getElementById('side').innerText")
+        check("BUDGET_EXHAUSTED" not in side and "RISK_RRT_STAR" not in side,
+              "no enum name in the side panel's text")
+        target = js(driver, "(() => { const c = Chart.getChart('risk-chart'); return {"
+                            " label: c.data.datasets[1].label, ys: c.data.datasets[1].data.map((p) => p.y),"
+                            " shown: !document.getElementById('risk-chart-box').hidden}; })()")
+        flight_s = js(driver, "rp.finalTrajectory.flight_time_s")
+        check(target["shown"] and len(target["ys"]) == points and
+              "target level of safety 1e-6 per flight hour" in target["label"] and
+              abs(target["ys"][-1] - 1e-6 * flight_s / 3600) <= 1e-9 * target["ys"][-1],
+              f"the risk chart draws the target level of safety for each trajectory's flight time "
+              f"(last: {target['ys'][-1]:.3e} for {flight_s:.1f} s)")
         final_risk = js(driver, "rp.finalTrajectory.risk")
         wf.wait_for(lambda: js(driver, "rp.profile !== null"), 120, "the final risk profile")
         profile = js(driver, "({risk: rp.profile.risk, n: rp.profile.samples.length,"
@@ -338,6 +392,22 @@ def main():
               "exactly what the server told the CLI")
         code = js(driver, "document.getElementById('error-code').textContent")
         check(code.startswith("INVALID_ARGUMENT"), f"with its code: {code}")
+        box = js(driver, "(() => { const r = document.getElementById('error').getBoundingClientRect();"
+                         " return [r.top, r.bottom, window.innerHeight, window.innerWidth]; })()")
+        check(box[0] >= 0 and box[1] <= box[2],
+              f"the error box is in view at {box[3]}x{box[2]} (top {box[0]:.0f}, bottom {box[1]:.0f})")
+        # A start outside the map: the gateway refuses it before any plan.
+        plans_before = js(driver, "rp.planId")
+        driver.execute_script("rp.setEndpoint('start', {x: 5000, y: 375, z: 240, theta: 0.785});")
+        click(driver, "plan")
+        wf.wait_for(lambda: js(driver, "rp.state") == "failed" and not js(
+            driver, "document.getElementById('error').hidden"), 60, "the refusal")
+        shown = js(driver, "document.getElementById('error-message').textContent")
+        check(shown.startswith("start (x, y) = (5000.0, 375.0) m is outside map") and
+              js(driver, "rp.planId") == plans_before and
+              js(driver, "document.getElementById('error-code').textContent") ==
+              "INVALID_ARGUMENT (gateway):",
+              f"a start outside the map is refused before a plan starts: {shown}")
 
         # 7. A screenshot that is not blank.
         shot = os.path.join(out_dir, "browser_test.png")
@@ -356,6 +426,10 @@ def main():
               f"{100 * non_white / total:.0f}% not white")
         # 8. The geo-referenced map, in WGS84: Leaflet's default CRS (EPSG:3857).
         select_map(driver, geo_name)
+        wf.wait_for(lambda: js(driver, "rp.timings.mapSwitchMs.length") >= 1, 60, "the switch's time")
+        timings["switch_to_geo_map_ms"] = js(driver, "rp.timings.mapSwitchMs[0]")
+        print(f"timing: the switch to {geo_name} drawn in {timings['switch_to_geo_map_ms']:.0f} ms",
+              flush=True)
         check(js(driver, "rp.crs") == "EPSG:3857" and
               js(driver, "rp.leaflet.options.crs === L.CRS.EPSG3857"),
               f"the geo-referenced map {geo_name} is shown in EPSG:3857, a new Leaflet map")
@@ -487,6 +561,10 @@ def main():
         check(js(driver, "rp.crs") == "Simple" and js(driver, "rp.leaflet.options.crs === L.CRS.Simple")
               and js(driver, "rp.endpoints.start") is None,
               f"the local map {map_name} is shown in CRS.Simple again, its start cleared")
+
+        with open(os.path.join(out_dir, "browser_timings.json"), "w") as f:
+            json.dump(timings, f, indent=2)
+        print(f"timings: {json.dumps(timings)}", flush=True)
 
         # 9. A gateway whose one viewer slot is taken: the page says so.
         full = wf.start_gateway(bin_dir, server.address, ["--max_viewers=1"])

@@ -6,6 +6,7 @@
 // server wrote them. Plans use iteration budgets (reproducible) or are
 // cancelled; deadlines are generous and nothing is timed.
 #include <signal.h>
+#include <zlib.h>
 
 #include <map>
 #include <memory>
@@ -339,15 +340,114 @@ TEST_F(GatewayTest, BadRequestsAreRefusedNamingWhatIsWrong) {
     EXPECT_EQ(r.status, c.status);
     EXPECT_THAT(Json::parse(r.body)["message"].get<std::string>(), HasSubstr(c.message_part));
   }
-  // A body larger than the gateway accepts (4 MiB) is refused before parsing.
+  // A body larger than the gateway accepts (4 MiB) is refused before
+  // parsing, with the {code, message} of every refusal.
   HttpResponse big = Call("POST", "/api/evaluate", std::string(5 << 20, ' '));
   EXPECT_EQ(big.status, 413);
-  // An unknown map in a plan: the server's NOT_FOUND as the "failed" event.
-  Json body = PlanBody(10);
-  body["map"] = "atlantis";
-  const std::vector<SseEvent> events = AllEvents(StartPlan(body));
-  ASSERT_EQ(events.size(), 1u);
-  EXPECT_EQ(Json::parse(events[0].data)["code"], "NOT_FOUND");
+  ASSERT_FALSE(big.body.empty());
+  const Json too_big = Json::parse(big.body);
+  EXPECT_EQ(too_big["code"], "RESOURCE_EXHAUSTED");
+  EXPECT_EQ(too_big["message"],
+            "the request body is larger than this gateway accepts (4194304 bytes at most)");
+  EXPECT_EQ(too_big["source"], "gateway");
+  // So does a path that is nothing.
+  HttpResponse nothing = Call("GET", "/no-such-page.html");
+  EXPECT_EQ(nothing.status, 404);
+  EXPECT_EQ(Json::parse(nothing.body)["message"],
+            "no page, file or route GET /no-such-page.html on this gateway");
+}
+
+// What the server would refuse at once is refused before the plan starts:
+// 400 (404 for a map the server does not have) with the message, never 201
+// and then a "failed" event.
+TEST_F(GatewayTest, APlanTheServerWouldRefuseIsRefusedBeforeItStarts) {
+  struct Case {
+    Json body;
+    int status;
+    std::string message;
+  };
+  Json outside = PlanBody(10);
+  outside["start"]["x"] = 5000;
+  Json goal_outside = PlanBody(10);
+  goal_outside["goal"]["y"] = -10;
+  Json long_budget = PlanBody(0, 700000);
+  Json negative = PlanBody(-5);
+  Json atlantis = PlanBody(10);
+  atlantis["map"] = "atlantis";
+  Json no_goal = PlanBody(10);
+  no_goal.erase("goal");
+  const std::vector<Case> cases = {
+      {outside, 400,
+       "start (x, y) = (5000.0, 375.0) m is outside map 'demo-city' (x 0.0 .. 2000.0 m, y 0.0 .. "
+       "2000.0 m)"},
+      {goal_outside, 400,
+       "goal (x, y) = (1700.0, -10.0) m is outside map 'demo-city' (x 0.0 .. 2000.0 m, y 0.0 .. "
+       "2000.0 m)"},
+      {long_budget, 400,
+       "budget.time_ms has value 700000; it must be in [0, 600000] (0: no time limit; this "
+       "gateway's --max_plan_time_ms)"},
+      {negative, 400, "budget.iterations has value -5; it must be >= 0 (0: no iteration limit)"},
+      {atlantis, 404, "map 'atlantis' is not on the server (it has: demo-city)"},
+      {no_goal, 400, "goal (or goal_wgs84) is required"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.body.dump());
+    HttpResponse r = Call("POST", "/api/plans", c.body.dump());
+    EXPECT_EQ(r.status, c.status) << r.body;
+    const Json error = Json::parse(r.body);
+    EXPECT_EQ(error["message"], c.message);
+    EXPECT_EQ(error["source"], "gateway");
+  }
+  // No plan was started for any of them.
+  EXPECT_EQ(Json::parse(Call("GET", "/api/status").body)["running_plans"], 0);
+}
+
+// The layers are gzipped by the gateway (cpp-httplib would answer a browser
+// that takes Brotli with Brotli at its slowest level, seconds a layer), and
+// a layer asked again is the same bytes, made once.
+TEST_F(GatewayTest, LayersAreGzippedNotBrotliAndTheSameWhenAskedAgain) {
+  ASSERT_EQ(Call("GET", "/api/maps").status, 200);
+  const std::string path = "/api/layer?map=demo-city&layer=POPULATION_DENSITY&max_side_cells=400";
+  const HttpResponse plain = Call("GET", path);
+  ASSERT_EQ(plain.status, 200) << plain.body;
+  EXPECT_EQ(plain.headers.count("content-encoding"), 0u);
+  const std::map<std::string, std::string> chromium = {
+      {"Accept-Encoding", "gzip, deflate, br"}};
+  const HttpResponse first = Call("GET", path, "", chromium);
+  const HttpResponse second = Call("GET", path, "", chromium);
+  ASSERT_EQ(first.status, 200);
+  EXPECT_EQ(first.headers.at("content-encoding"), "gzip");
+  EXPECT_EQ(first.headers.at("content-type"), "application/json");
+  EXPECT_EQ(second.body, first.body);
+  EXPECT_LT(first.body.size(), plain.body.size() / 2);
+  // It unzips to the plain answer, byte for byte.
+  z_stream z{};
+  ASSERT_EQ(inflateInit2(&z, 15 + 16), Z_OK);
+  std::string unzipped(plain.body.size() + 16, '\0');
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(first.body.data()));
+  z.avail_in = static_cast<uInt>(first.body.size());
+  z.next_out = reinterpret_cast<Bytef*>(unzipped.data());
+  z.avail_out = static_cast<uInt>(unzipped.size());
+  EXPECT_EQ(inflate(&z, Z_FINISH), Z_STREAM_END);
+  unzipped.resize(z.total_out);
+  inflateEnd(&z);
+  EXPECT_EQ(unzipped, plain.body);
+  // Nothing else is compressed by Brotli either (the page's scripts).
+  const HttpResponse script = Call("GET", "/app.js", "", chromium);
+  ASSERT_EQ(script.status, 200);
+  EXPECT_NE(script.headers.count("content-encoding") ? script.headers.at("content-encoding") : "",
+            "br");
+}
+
+TEST_F(GatewayTest, TheFaviconIsThePagesOwn) {
+  const HttpResponse ico = Call("GET", "/favicon.ico");
+  EXPECT_EQ(ico.status, 200);
+  EXPECT_EQ(ico.headers.at("content-type"), "image/svg+xml");
+  EXPECT_THAT(ico.body, ::testing::StartsWith("<svg"));
+  const HttpResponse svg = Call("GET", "/favicon.svg");
+  EXPECT_EQ(svg.status, 200);
+  EXPECT_EQ(svg.body, ico.body);
+  EXPECT_THAT(Call("GET", "/").body, HasSubstr("<link rel=\"icon\" href=\"/favicon.svg\""));
 }
 
 TEST_F(GatewayTest, APlanKeepsItsNewestEventsWithinItsBound) {

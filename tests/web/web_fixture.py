@@ -189,6 +189,8 @@ def chromium(download_dir=None, width=1400, height=900):
                 "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage",
                 f"--window-size={width},{height}"):
         options.add_argument(arg)
+    # The console's messages, for driver.get_log("browser").
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     profile = tempfile.mkdtemp(prefix="riskplan-chromium-")
     options.add_argument(f"--user-data-dir={profile}")
     options.binary_location = "/usr/bin/chromium"

@@ -19,6 +19,10 @@ const rp = window.rp = {
   bestPath: null,       // the newest trajectory as drawn: [lat, lng] per point
   lastPlanRequest: null,
   downloads: [],        // file names saved
+  // ms since the page's navigation began (performance.now()): the first
+  // map drawn (its layers on the map, the frame after), and each later
+  // map's switch (from the choice to its layers drawn).
+  timings: { firstMapMs: null, mapSwitchMs: [] },
 };
 
 const $ = (id) => document.getElementById(id);
@@ -53,7 +57,11 @@ function showError(err) {
   $('error-code').textContent = err.code ? err.code + (err.source ? ' (' + err.source + ')' : '') + ':' : 'error:';
   $('error-message').textContent = err.message;
   $('error').hidden = false;
+  // At the top of the side panel and sticky there: in view wherever the
+  // button that failed was.
+  $('error').scrollIntoView({ block: 'nearest' });
 }
+$('error-close').onclick = () => clearError();
 function clearError() { $('error').hidden = true; $('error-message').textContent = ''; }
 
 async function guarded(fn) {

@@ -12,7 +12,7 @@ const profileChart = new Chart($('profile-chart'), {
     interaction: { mode: 'nearest', axis: 'x', intersect: false },
     scales: {
       x: { type: 'linear', title: { display: true, text: 'arc length, m' } },
-      y: { ticks: { callback: (v) => Number(v).toExponential(1) } },
+      y: { title: { display: true, text: 'M, casualties per failure' }, ticks: { callback: (v) => Number(v).toExponential(1) } },
     },
     plugins: {
       legend: { labels: { boxWidth: 10 } },
@@ -37,6 +37,7 @@ async function evaluate(trajectory) {
   const r = await api('POST', '/api/evaluate', Object.assign({ map: rp.map.name, include_samples: true }, trajectory));
   rp.profile = r;
   profileChart.data.datasets[0].data = r.samples.map((s) => ({ x: s.arc_length_m, y: s.risk }));
+  showChart('profile', true);
   profileChart.update('none');
   let text = `risk ${r.risk.toExponential(4)} casualties per flight, ${r.length_m.toFixed(0)} m, ` +
     `${r.risk_per_flight_hour.toExponential(2)} per flight hour, ${r.sample_count} samples; ` +

@@ -22,8 +22,18 @@ function makeMap() {
   rp.crs = frame.crs;
   L.control.scale({ imperial: false, maxWidth: 160, position: 'bottomleft' }).addTo(map);
   layerControl = L.control.layers(null, null, { collapsed: false, position: 'topright' }).addTo(map);
+  // The legend folds (a <details>): open, it covers the map's corner.
   const legend = L.control({ position: 'bottomright' });
-  legend.onAdd = () => { const d = L.DomUtil.create('div', 'legend'); d.id = 'legend'; return d; };
+  legend.onAdd = () => {
+    const box = L.DomUtil.create('details', 'legend');
+    box.id = 'legend-box';
+    box.open = true;
+    box.innerHTML = '<summary>Legend</summary><div id="legend"></div>';
+    // Scrolling or clicking in it is not the map's.
+    L.DomEvent.disableClickPropagation(box);
+    L.DomEvent.disableScrollPropagation(box);
+    return box;
+  };
   legend.addTo(map);
   endpointLayers = { start: L.layerGroup().addTo(map), goal: L.layerGroup().addTo(map) };
   trajectories = L.layerGroup().addTo(map);   // earlier improvements, faded
@@ -37,12 +47,20 @@ function makeMap() {
   map.on('click', addPolylinePoint);
 }
 
+// What the page draws over the layers: the mission and the plan.
+const ROUTE_LEGEND =
+  '<div class="item"><span class="key" style="background:#06c;border-radius:6px"></span>start, its line the heading</div>' +
+  '<div class="item"><span class="key" style="background:#a0a;border-radius:6px"></span>goal, its line the heading</div>' +
+  '<div class="item"><span class="line" style="border-color:#d00"></span>best trajectory so far</div>' +
+  '<div class="item"><span class="line" style="border-color:#aaa"></span>earlier improvements (fainter: older)</div>' +
+  '<div class="item"><span class="line" style="border-color:#06f;border-top-style:dashed"></span>drawn polyline</div>';
+
 function drawLegend() {
-  const parts = [];
+  const parts = [ROUTE_LEGEND];
   for (const name of Object.keys(legends)) {
     if (overlays[name] && map.hasLayer(overlays[name])) parts.push(legends[name]);
   }
-  $('legend').innerHTML = parts.join('') || '<i>no layer shown</i>';
+  $('legend').innerHTML = parts.join('');
 }
 
 function scaleLegend(title, stops, ticks) {

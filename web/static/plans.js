@@ -8,33 +8,79 @@ let lastSeenId = 0;
 
 const riskChart = new Chart($('risk-chart'), {
   type: 'line',
-  data: { datasets: [{ label: 'best risk (casualties per flight)', data: [], stepped: 'after', borderColor: '#c33', pointRadius: 2 }] },
+  data: {
+    datasets: [
+      { label: 'best risk', data: [], stepped: 'after', borderColor: '#c33', pointRadius: 2 },
+      // What the best trajectory may carry to meet the target level of
+      // safety (a rate per flight hour) over its own flight time.
+      { label: 'target level of safety × flight time', data: [], stepped: 'after', borderColor: '#2a2', borderDash: [6, 4], pointRadius: 0, borderWidth: 1.5 },
+    ],
+  },
   options: {
     animation: false, maintainAspectRatio: false, parsing: false,
     scales: {
       x: { type: 'linear', title: { display: true, text: 'planner time, s' } },
-      y: { ticks: { callback: (v) => Number(v).toExponential(1) } },
+      y: { title: { display: true, text: 'casualties per flight' }, ticks: { callback: (v) => Number(v).toExponential(1) } },
     },
     plugins: { legend: { labels: { boxWidth: 10 } } },
   },
 });
 
+// The API's end reasons in words (the code stays in the tooltip).
+const END_REASONS = {
+  BUDGET_EXHAUSTED: 'the budget was used up',
+  CONVERGED: 'converged: no better trajectory can be found',
+  NO_SOLUTION: 'no admissible trajectory was found within the budget',
+  SHUTDOWN: 'the server shut down; its best trajectory so far',
+  CANCELLED: 'cancelled',
+};
+const endReasonText = (r) => END_REASONS[r] || String(r).toLowerCase().replace(/_/g, ' ');
+
+// A chart's box is shown once it has something to draw; until then a line
+// says what it will show.
+function showChart(name, shown) {
+  $(name + '-chart-box').hidden = !shown;
+  $(name + '-chart-empty').hidden = shown;
+}
+
+// The target level of safety of the page's field, per flight hour.
+function targetLevelOfSafety() {
+  const v = Number($('target-los').value);
+  if (!(v > 0) || !isFinite(v)) throw new ApiError('INVALID_ARGUMENT', `target level of safety has value '${$('target-los').value}'; it must be a number > 0 (casualties per flight hour, e.g. 1e-6)`, 'page');
+  return v;
+}
+
 function setState(s) {
   rp.state = s;
   $('state').textContent = s;
+  $('state').title = '';
   const active = s === 'starting' || s === 'running' || s === 'reconnecting';
   $('plan').disabled = active;
   $('cancel').disabled = !active;
 }
 
+// The most improvements kept on the map, the newest in red, the previous
+// ones in grey fading with age.
+const HISTORY_KEPT = 30;
+
 function drawTrajectory(t) {
   const path = frame.pathOf(t);
   rp.bestPath = path;
-  bestLayer.eachLayer((l) => { l.setStyle({ color: '#888', weight: 1, opacity: 0.5 }); trajectories.addLayer(l); });
+  // The previous best joins the history. It leaves bestLayer first: a
+  // group's clearLayers takes its layers off the map, wherever else they are.
+  const previous = bestLayer.getLayers();
   bestLayer.clearLayers();
-  // Keep the picture (and the page's memory) bounded.
+  for (const l of previous) {
+    l.setStyle({ color: '#888', weight: 1.5, opacity: 0.6 });
+    trajectories.addLayer(l);  // back on the map, in the history's group
+    const el = l.getElement();
+    if (el) { el.classList.remove('best-trajectory'); el.classList.add('history-trajectory'); }
+  }
+  // Keep the picture (and the page's memory) bounded; the older, the fainter.
   const old = trajectories.getLayers();
-  for (let k = 0; k + 30 < old.length; k++) trajectories.removeLayer(old[k]);
+  for (let k = 0; k + HISTORY_KEPT < old.length; k++) trajectories.removeLayer(old[k]);
+  const kept = trajectories.getLayers();
+  kept.forEach((l, k) => l.setStyle({ opacity: 0.15 + 0.5 * (k + 1) / kept.length }));
   L.polyline(path, { color: '#d00', weight: 3, className: 'best-trajectory' }).addTo(bestLayer);
 }
 
@@ -52,6 +98,8 @@ function onUpdate(e) {
     rp.bestWaypoints = t.waypoints;
     $('risk').textContent = `${t.risk.toExponential(4)} (${t.length_m.toFixed(0)} m, ${t.risk_per_flight_hour.toExponential(2)} per flight hour)`;
     riskChart.data.datasets[0].data.push({ x: u.elapsed_s, y: t.risk });
+    riskChart.data.datasets[1].data.push({ x: u.elapsed_s, y: rp.targetLevelOfSafety * t.flight_time_s / 3600 });
+    showChart('risk', true);
     riskChart.update('none');
     rp.improvements.push({ id, risk: t.risk, iterations: Number(u.iterations), elapsed_s: u.elapsed_s });
     for (const b of ['download-geojson', 'download-plan', 'download-kml']) $(b).disabled = false;
@@ -74,7 +122,8 @@ function watch(id) {
     closeSource();
     setState('finished');
     if (u) {
-      $('state').textContent = `finished: ${u.end_reason}, ${u.iterations} iterations`;
+      $('state').textContent = `finished: ${endReasonText(u.end_reason)}, ${u.iterations} iterations`;
+      $('state').title = u.end_reason;
       if (u.trajectory) {
         rp.finalTrajectory = u.trajectory;
         guarded(() => evaluate({ waypoints: { poses: u.trajectory.waypoints } }));
@@ -109,9 +158,14 @@ function watch(id) {
 
 async function startPlan() {
   if (!endpoints.start || !endpoints.goal) throw new ApiError('INVALID_ARGUMENT', 'set a start and a goal on the map first', 'page');
+  rp.targetLevelOfSafety = targetLevelOfSafety();
   closeSource();
   trajectories.clearLayers(); bestLayer.clearLayers();
-  riskChart.data.datasets[0].data = []; riskChart.update('none');
+  riskChart.data.datasets[0].label = 'best risk (casualties per flight)';
+  riskChart.data.datasets[1].label = `target level of safety ${rp.targetLevelOfSafety.toExponential(0)} per flight hour × flight time`;
+  for (const set of riskChart.data.datasets) set.data = [];
+  riskChart.update('none');
+  showChart('risk', false);
   rp.improvements = []; rp.finalTrajectory = null;
   $('iterations').textContent = '0'; $('improvements').textContent = '0'; $('risk').textContent = '–';
   setState('starting');

@@ -20,6 +20,7 @@
 #include "core/map/map_bundle.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "tests/core/map/test_dir_cleanup.h"
 
 namespace riskplan {
 namespace {
@@ -89,6 +90,14 @@ std::string WriteUnderFileSizeLimit(const RiskMap& map, const fs::path& dir,
   waitpid(pid, &status, 0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
   return message;
+}
+
+// Every test's folder is under TempDir()/riskplan_map_bundle_atomic_test, removed when
+// the program ends.
+const ::testing::Environment* const kCleanup = ::riskplan::testing::RemoveAtExit("riskplan_map_bundle_atomic_test");
+
+TEST(MapBundleAtomicTest, ARunLeavesNoFolderBehind) {
+  EXPECT_THAT(::riskplan::testing::LeftBehind("MapBundleAtomicTest.WritesACompleteBundleAndNothingElse"), ::testing::IsEmpty());
 }
 
 TEST(MapBundleAtomicTest, WritesACompleteBundleAndNothingElse) {

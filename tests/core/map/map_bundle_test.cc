@@ -13,6 +13,7 @@
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "tests/core/map/test_dir_cleanup.h"
 #include "nlohmann/json.hpp"
 
 namespace riskplan {
@@ -102,6 +103,14 @@ std::string LoadError(const std::string& dir, absl::StatusCode code) {
 
 std::string LoadError(const std::string& dir) {
   return LoadError(dir, absl::StatusCode::kInvalidArgument);
+}
+
+// Every test's folder is under TempDir()/riskplan_map_bundle_test, removed when
+// the program ends.
+const ::testing::Environment* const kCleanup = ::riskplan::testing::RemoveAtExit("riskplan_map_bundle_test");
+
+TEST(MapBundleTest, ARunLeavesNoFolderBehind) {
+  EXPECT_THAT(::riskplan::testing::LeftBehind("MapBundleTest.RoundTripIsBitExact"), ::testing::IsEmpty());
 }
 
 TEST(MapBundleTest, RoundTripIsBitExact) {

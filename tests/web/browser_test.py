@@ -303,10 +303,16 @@ def main():
         # 4b. The same polyline in a wind set on the page: the answer's wind
         # drawn as an arrow, each sample's ground speed, and a bad wind refused
         # with the server's message naming the field.
+        def evaluate_drawn_polyline():
+            click(driver, "draw-polyline")
+            for x, y in corners_m:
+                click_drag(driver, (y, x), (0, 0))
+            click(driver, "evaluate-polyline")
+
         set_value(driver, "wind-speed", 8)
         set_value(driver, "wind-from", 270)
         driver.execute_script("rp.profile = null;")
-        click(driver, "evaluate-polyline")
+        evaluate_drawn_polyline()
         wf.wait_for(lambda: js(driver, "rp.profile && rp.profile.wind && "
                                        "rp.profile.wind.speed_mps === 8"), 120,
                     "the polyline's evaluation in wind")
@@ -318,7 +324,7 @@ def main():
         check("flight time" in js(driver, "document.getElementById('evaluation').textContent"),
               "the evaluation gives its flight time in wind")
         set_value(driver, "wind-speed", 20)
-        click(driver, "evaluate-polyline")
+        evaluate_drawn_polyline()
         wf.wait_for(lambda: not js(driver, "document.getElementById('error').hidden"), 60,
                     "the too-strong wind to be refused")
         shown = js(driver, "document.getElementById('error-message').textContent")

@@ -16,21 +16,35 @@ function windFields() {
 }
 
 // The arrow: a Leaflet control in the map's top-right corner pointing where
-// the air moves to, with the speed and the direction it blows from.
+// the air moves to, with the speed and the direction it blows from. The map
+// is made anew for each map chosen (map.js, makeMap), so the control is put
+// on the current one whenever it is not there yet.
 const WindControl = L.Control.extend({
   options: { position: 'topright' },
   onAdd() {
     const div = L.DomUtil.create('div', 'legend wind-arrow');
     div.id = 'wind-arrow';
+    div.hidden = true;
     return div;
   },
 });
-const windControl = new WindControl();
-windControl.addTo(map);
+let windControlMap = null;
+let shownWind = null;
+
+function windArrow() {
+  if (!map) return null;
+  if (windControlMap !== map) {
+    new WindControl().addTo(map);
+    windControlMap = map;
+  }
+  return $('wind-arrow');
+}
 
 // Draws `w` (a WindReport, or the page's inputs as one): nothing in still air.
 function showWind(w) {
-  const div = $('wind-arrow');
+  shownWind = w;
+  const div = windArrow();
+  if (!div) return;
   const speed = Number(w && w.speed_mps) || 0;
   if (!(speed > 0)) { div.hidden = true; div.innerHTML = ''; return; }
   // The direction it blows FROM, clockwise from north; the arrow points
@@ -52,3 +66,5 @@ function showInputWind() {
 $('wind-speed').addEventListener('input', showInputWind);
 $('wind-from').addEventListener('input', showInputWind);
 showInputWind();
+// A map chosen in the selector is a new Leaflet map: the arrow follows it.
+setInterval(() => { if (map && windControlMap !== map) showWind(shownWind); }, 500);

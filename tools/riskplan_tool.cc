@@ -421,14 +421,15 @@ absl::StatusOr<LayerPlacement> PlacementOf(const RiskMap& map) {
 absl::StatusOr<bool> WriteLayerFiles(const RiskLayer& layer, const RiskMap& map,
                                      const LayerPlacement& placement,
                                      const RiskLayerOptions& options, const std::string& heading,
-                                     const std::string& out) {
+                                     const std::string& wind, const std::string& out) {
   if (absl::Status s = WriteHeatMapPng(layer, out + ".png"); !s.ok()) return s;
   if (absl::Status s = WriteAsciiGrid(layer, out + ".asc"); !s.ok()) return s;
   if (absl::Status s = geo::WriteRiskLayerGeoTiff(
           layer, placement.frame.has_value() ? &*placement.frame : nullptr,
           {map.name(), options.height_agl_m,
-           heading == "max" ? "max over heading bins"
-                            : heading + " deg counter-clockwise from east"},
+           (heading == "max" ? "max over heading bins"
+                             : heading + " deg counter-clockwise from east") +
+               wind},
           out + ".tif");
       !s.ok()) {
     return s;
@@ -498,7 +499,13 @@ int RiskLayerCommand() {
   auto layer = ComputeRiskLayer(**model, *options);
   if (!layer.ok()) return Fail(layer.status());
   const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
-  auto removed_stale_prj = WriteLayerFiles(*layer, **map, *placement, *options, heading, out);
+  // In wind the GeoTIFF's heading says which wind (still air: as before).
+  const std::string wind =
+      params->Calm() ? ""
+                     : absl::StrFormat(" (track), wind %g m/s from %g deg", params->wind_speed_mps,
+                                       params->wind_from_deg);
+  auto removed_stale_prj =
+      WriteLayerFiles(*layer, **map, *placement, *options, heading, wind, out);
   if (!removed_stale_prj.ok()) return Fail(removed_stale_prj.status());
   PrintLayerReport(*layer, **map, *options, heading, out, seconds, *removed_stale_prj);
   if (!params->Calm()) {

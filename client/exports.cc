@@ -59,6 +59,9 @@ absl::StatusOr<geo::ExportTrajectory> ExportTrajectoryOf(const v1::EvaluateRiskR
   t.flight_time_s = response.flight_time_s();
   t.risk_per_flight_hour = response.risk_per_flight_hour();
   t.airspeed_mps = response.airspeed_mps();
+  t.wind_speed_mps = response.wind().speed_mps();
+  t.wind_from_true_deg = response.wind().has_from_true_deg() ? response.wind().from_true_deg()
+                                                             : response.wind().from_deg();
   t.samples.reserve(response.path_size());
   for (const v1::PathSample& p : response.path()) {
     // The server sets every pose's WGS84 form on a geo-referenced map, and
@@ -109,6 +112,15 @@ absl::Status WriteExports(const ExportFiles& files, const geo::ExportTrajectory&
                 static_cast<int>(trajectory.samples.size()), trajectory.spacing_m);
   }
   return absl::OkStatus();
+}
+
+std::string WindText(const v1::WindReport& w) {
+  return absl::StrFormat(
+      "wind %g m/s from %.1f deg (grid north%s), the air moving to (%.2f, %.2f) m/s; airspeed %g "
+      "m/s",
+      w.speed_mps(), w.from_deg(),
+      w.has_from_true_deg() ? absl::StrFormat("; %.1f deg true", w.from_true_deg()) : "",
+      w.x_mps(), w.y_mps(), w.airspeed_mps());
 }
 
 std::string TargetLevelOfSafetyText(double risk_per_flight_hour, double flight_time_s,

@@ -56,6 +56,10 @@ absl::Status WriteExports(const ExportFiles& files, const geo::ExportTrajectory&
 // (expected casualties per flight hour), e.g. "risk per flight hour
 // 2.35e-07 (flight time 612.3 s at 18 m/s): meets the target level of
 // safety of 1e-06 per flight hour".
+// One line for an answer's wind: "wind 8 m/s from 270.0 deg (grid north;
+// 270.0 deg true), the air moving to (8.00, -0.00) m/s; airspeed 18 m/s".
+std::string WindText(const v1::WindReport& wind);
+
 std::string TargetLevelOfSafetyText(double risk_per_flight_hour, double flight_time_s,
                                     double airspeed_mps, double target_per_hour);
 

@@ -270,6 +270,42 @@ absl::StatusOr<std::map<std::string, double>> ParseNameValues(std::string_view t
 // By reflection rather than by a table of names, so that a parameter added
 // to ModelParameters works here without a change; the server checks the
 // ranges (docs/risk-model.md).
+absl::Status ParseWind(std::string_view text, std::string_view flag, v1::Wind* wind,
+                       v1::GeoWind* wind_wgs84, bool* is_wgs84) {
+  assert(wind != nullptr && wind_wgs84 != nullptr && is_wgs84 != nullptr);
+  std::string_view rest;
+  const bool geo = HasWgs84Prefix(text, &rest);
+  auto bad = [&](std::string_view why) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s='%s' is not %sSPEED@FROM_DEG (m/s @ degrees clockwise from %s north the wind "
+        "blows from, e.g. %s8@270 for a west wind of 8 m/s): %s",
+        flag, text, geo ? "wgs84:" : "", geo ? "true" : "the map's grid", geo ? "wgs84:" : "",
+        why));
+  };
+  const std::vector<std::string> parts =
+      absl::StrSplit(absl::string_view(rest.data(), rest.size()), '@');
+  if (parts.size() != 2) return bad("it needs one '@' between the speed and the direction");
+  double speed = 0.0;
+  double from = 0.0;
+  if (!absl::SimpleAtod(absl::StripAsciiWhitespace(parts[0]), &speed) || !std::isfinite(speed)) {
+    return bad(absl::StrFormat("the speed '%s' is not a finite number", parts[0]));
+  }
+  if (speed < 0.0) return bad(absl::StrFormat("the speed %g is negative", speed));
+  if (!absl::SimpleAtod(absl::StripAsciiWhitespace(parts[1]), &from) || !std::isfinite(from)) {
+    return bad(absl::StrFormat("the direction '%s' is not a finite number", parts[1]));
+  }
+  v1::WindFrom w;
+  w.set_speed_mps(speed);
+  w.set_from_deg(from);
+  *is_wgs84 = geo;
+  if (geo) {
+    *wind_wgs84->mutable_from() = w;
+  } else {
+    *wind->mutable_from() = w;
+  }
+  return absl::OkStatus();
+}
+
 absl::Status ParseModelParameters(std::string_view text, v1::ModelParameters* params) {
   assert(params != nullptr);
   absl::StatusOr<std::map<std::string, double>> values = ParseNameValues(text);

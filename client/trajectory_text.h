@@ -2,6 +2,9 @@
 // messages (the client does not depend on core/). Same forms as
 // riskplan-tool:
 //   pose:      "x,y,z,theta"                      (m, m, m AMSL, rad)
+//   wind:      "SPEED@FROM_DEG"                   (m/s, deg clockwise from
+//                                                 the map's grid north the
+//                                                 wind blows from)
 //   waypoints: "x,y,z,theta; x,y,z,theta; ..."
 //   polyline:  "x,y,z; x,y,z; ..."
 //   JSON file: {"waypoints": [[x, y, z, theta], ...]} or
@@ -13,6 +16,8 @@
 //   waypoints: "wgs84:lat,lon,alt,heading_deg; lat,lon,alt,heading_deg; ..."
 //   polyline:  "wgs84:lat,lon,alt; lat,lon,alt; ..."
 //   obstacles: "wgs84:lat,lon; lat,lon; ..."
+//   wind:      "wgs84:SPEED@FROM_DEG"              (m/s, deg clockwise
+//                                                 from true north)
 // (latitude first, as ground stations write it). Without the prefix a text is
 // in the map's local metres, as before: a bare list of numbers never changes
 // its meaning.
@@ -78,6 +83,16 @@ absl::Status ReadTrajectoryFile(const std::string& path, v1::EvaluateRiskRequest
 // JSON text {"waypoints": [[x, y, z, theta], ...]} of a trajectory, which
 // ReadTrajectoryFile reads back.
 std::string WaypointsToJson(const google::protobuf::RepeatedPtrField<v1::Pose>& poses);
+
+// A wind "SPEED@FROM_DEG" (e.g. "8@270", a west wind of 8 m/s): a speed
+// >= 0 and a finite direction (any; the server takes it modulo 360), both
+// plain numbers; with the prefix "wgs84:" the direction is from true north
+// and the wind goes into `wind_wgs84`. Sets exactly one of `*wind` and
+// `*wind_wgs84` (both left unchanged on error). Errors name `flag` and the
+// text, e.g. "--wind='8' is not SPEED@FROM_DEG (m/s @ degrees clockwise
+// from north the wind blows from, e.g. 8@270)". REQUIRES: non-null outputs.
+absl::Status ParseWind(std::string_view text, std::string_view flag, v1::Wind* wind,
+                       v1::GeoWind* wind_wgs84, bool* is_wgs84);
 
 // "name=value,name=value" into a map (values finite). Empty text: empty map.
 absl::StatusOr<std::map<std::string, double>> ParseNameValues(std::string_view text);

@@ -186,7 +186,7 @@ absl::Status AddPath(const RiskModel& model, const std::vector<TrajectoryPiece>&
       return s;
     }
   }
-  PathToProto(path, risks, *spec.map, spec.frame.get(), response);
+  PathToProto(path, risks, *spec.map, model.params(), spec.frame.get(), response);
   return absl::OkStatus();
 }
 
@@ -228,6 +228,7 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
         evaluation->risk, evaluation->length_m));
   }
   EvaluationToProto(*evaluation, params, spec.include_samples, spec.frame.get(), response);
+  *response->mutable_wind() = spec.wind;
   if (spec.two_tier.has_value()) {
     // Bounded like the evaluation: the cells visited grow with the length,
     // which CheckSampleCount has capped.
@@ -253,6 +254,7 @@ absl::Status ComputeLayer(RiskModelCache& models, const RiskLayerSpec& spec,
   absl::StatusOr<RiskLayer> layer = ComputeRiskLayer(**model, options);
   if (!layer.ok()) return layer.status();
   *response = RiskLayerToProto(*layer, *spec.map, options, spec.frame.get());
+  *response->mutable_wind() = spec.wind;
   return absl::OkStatus();
 }
 

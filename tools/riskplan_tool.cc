@@ -43,6 +43,11 @@ ABSL_FLAG(bool, json, false, "evaluate: print the result as JSON");
 ABSL_FLAG(std::string, params, "",
           "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
           "mass_kg=12,airspeed_mps=20)");
+ABSL_FLAG(std::string, wind, "",
+          "evaluate, risk-layer: the mean wind SPEED@FROM_DEG, m/s and the direction it blows "
+          "from in degrees clockwise from the map's grid north (any finite value, taken modulo "
+          "360; at most half the airspeed), e.g. 8@270; the same as --params="
+          "wind_speed_mps=8,wind_from_deg=270. Empty: still air");
 ABSL_FLAG(std::string, out, "",
           "the bundle's directory (write-map, import), or the output files' prefix (risk-layer)");
 ABSL_FLAG(uint64_t, seed, riskplan::kDemoCitySeed, "write-map: demo-city seed");
@@ -78,7 +83,7 @@ cmdline::ProgramHelp Help() {
        "Examples:\n"
        "  riskplan-tool evaluate --waypoints='1000,1000,250,0; 7000,7000,250,1.57'\n"
        "  riskplan-tool evaluate --map=maps/demo-city --polyline='0,0,200;100,0,200' --samples",
-       {"map", "waypoints", "polyline", "trajectory_file", "samples", "json", "params"}},
+       {"map", "waypoints", "polyline", "trajectory_file", "samples", "json", "params", "wind"}},
       {"write-map",
        "write the built-in demo-city as a map bundle (--out=DIR)",
        "  riskplan-tool write-map --out=DIR [--seed=N] [--size_m=M] [--res_m=R]\n"
@@ -95,7 +100,11 @@ cmdline::ProgramHelp Help() {
       {"risk-layer",
        "configuration risk of every cell at a height above ground",
        "  riskplan-tool risk-layer [--map=DIR] --out=PREFIX [--agl_m=100] [--heading_deg=0|max]\n"
-       "                           [--threads=N] [--stride=1]\n"
+       "                           [--threads=N] [--stride=1] [--wind=SPEED@FROM_DEG]\n"
+       "\n"
+       "In wind (risk model version 3) the risk depends on the direction flown:\n"
+       "--heading_deg is the track over the ground (the aircraft points at its air\n"
+       "heading), and 'max' the worst track heading bin.\n"
        "\n"
        "Writes a PNG heat map (PREFIX.png), an ESRI ASCII grid (PREFIX.asc), plus its\n"
        "projection (PREFIX.prj) when the map has a geo-reference, and a Cloud-Optimized\n"
@@ -104,7 +113,7 @@ cmdline::ProgramHelp Help() {
        "\n"
        "Example:\n"
        "  riskplan-tool risk-layer --out=out/risk-100m --agl_m=100 --heading_deg=max --threads=2",
-       {"map", "out", "agl_m", "heading_deg", "threads", "stride", "params"}},
+       {"map", "out", "agl_m", "heading_deg", "threads", "stride", "params", "wind"}},
       ImportCommandHelp(),
   };
   help.footer = "Exit codes: 0 success; 1 failure, or a flag unknown or malformed; 2 bad input.";
@@ -116,6 +125,44 @@ cmdline::ProgramHelp Help() {
 int Fail(const absl::Status& status) {
   std::fprintf(stderr, "riskplan-tool: %s\n", std::string(status.message()).c_str());
   return status.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
+}
+
+// --wind=SPEED@FROM_DEG onto `params` (nothing when empty); refused beside
+// --params' own wind fields.
+absl::Status WindFromFlag(ModelParams* params) {
+  const std::string text = absl::GetFlag(FLAGS_wind);
+  if (text.empty()) return absl::OkStatus();
+  const auto bad = [&](const std::string& why) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--wind='%s' is not SPEED@FROM_DEG (m/s @ degrees clockwise from the map's grid north "
+        "the wind blows from, e.g. 8@270 for a west wind of 8 m/s): %s",
+        text, why));
+  };
+  const std::vector<std::string> parts = absl::StrSplit(text, '@');
+  if (parts.size() != 2) return bad("it needs one '@' between the speed and the direction");
+  double speed = 0.0;
+  double from = 0.0;
+  if (!absl::SimpleAtod(parts[0], &speed) || !std::isfinite(speed)) {
+    return bad(absl::StrFormat("the speed '%s' is not a finite number", parts[0]));
+  }
+  if (speed < 0.0) return bad(absl::StrFormat("the speed %g is negative", speed));
+  if (!absl::SimpleAtod(parts[1], &from) || !std::isfinite(from)) {
+    return bad(absl::StrFormat("the direction '%s' is not a finite number", parts[1]));
+  }
+  const std::string given = absl::GetFlag(FLAGS_params);
+  if (given.find("wind_speed_mps") != std::string::npos ||
+      given.find("wind_from_deg") != std::string::npos) {
+    return absl::InvalidArgumentError(
+        "--wind and --params' wind_speed_mps / wind_from_deg both give the wind; give it once");
+  }
+  if (speed > kMaxWindFraction * params->airspeed_mps) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--wind: the speed %g m/s is more than %g times the airspeed (%g m/s), i.e. %g m/s",
+        speed, kMaxWindFraction, params->airspeed_mps, kMaxWindFraction * params->airspeed_mps));
+  }
+  params->wind_speed_mps = speed;
+  params->wind_from_deg = from;
+  return absl::OkStatus();
 }
 
 absl::StatusOr<ModelParams> ParamsFromFlag() {
@@ -134,6 +181,7 @@ absl::StatusOr<ModelParams> ParamsFromFlag() {
       return absl::InvalidArgumentError(absl::StrFormat("--params: %s", s.message()));
     }
   }
+  if (absl::Status s = WindFromFlag(&params); !s.ok()) return s;
   if (absl::Status s = ValidateModelParams(params); !s.ok()) return s;
   return params;
 }
@@ -167,8 +215,8 @@ absl::StatusOr<TrajectoryInput> TrajectoryFromFlags() {
   return input;
 }
 
-void PrintText(const RiskMap& map, const TrajectoryInput& input, const TrajectoryEvaluation& e,
-               bool samples) {
+void PrintText(const RiskMap& map, const ModelParams& params, const TrajectoryInput& input,
+               const TrajectoryEvaluation& e, bool samples) {
   std::printf("map         %s (%d x %d cells of %g m, origin (%g, %g))\n", map.name().c_str(),
               map.nx(), map.ny(), map.res(), map.x0(), map.y0());
   if (input.is_polyline()) {
@@ -180,6 +228,14 @@ void PrintText(const RiskMap& map, const TrajectoryInput& input, const Trajector
   }
   std::printf("risk        %.6e expected casualties per flight\n", e.risk);
   std::printf("length      %.1f m\n", e.length_m);
+  if (!params.Calm()) {
+    // Still air prints what it always did; in wind the time is the sum of
+    // ds / ground speed (spec version 3, section 4).
+    std::printf("wind        %g m/s from %g deg (grid north)\n", params.wind_speed_mps,
+                params.wind_from_deg);
+    std::printf("flight time %.2f s (%.2f s in still air)\n", e.flight_time_s,
+                e.length_m / params.airspeed_mps);
+  }
   std::printf("admissible  %s\n", e.admissible ? "yes" : "no");
   if (e.first_violation.has_value()) {
     std::printf("violation   %s\n", e.first_violation->ToString().c_str());
@@ -200,11 +256,17 @@ void PrintText(const RiskMap& map, const TrajectoryInput& input, const Trajector
   }
 }
 
-void PrintJson(const RiskMap& map, const TrajectoryEvaluation& e, bool samples) {
+void PrintJson(const RiskMap& map, const ModelParams& params, const TrajectoryEvaluation& e,
+               bool samples) {
   nlohmann::json out;
   out["map"] = map.name();
   out["risk"] = e.risk;
   out["length_m"] = e.length_m;
+  if (!params.Calm()) {
+    out["flight_time_s"] = e.flight_time_s;
+    out["wind_speed_mps"] = params.wind_speed_mps;
+    out["wind_from_deg"] = params.wind_from_deg;
+  }
   out["admissible"] = e.admissible;
   if (e.first_violation.has_value()) {
     const Violation& v = *e.first_violation;
@@ -257,9 +319,9 @@ int Evaluate() {
   auto eval = EvaluateTrajectory(**model, *pieces, {.keep_samples = samples});
   if (!eval.ok()) return Fail(eval.status());
   if (absl::GetFlag(FLAGS_json)) {
-    PrintJson(**map, *eval, samples);
+    PrintJson(**map, *params, *eval, samples);
   } else {
-    PrintText(**map, *input, *eval, samples);
+    PrintText(**map, *params, *input, *eval, samples);
   }
   return 0;
 }
@@ -359,14 +421,15 @@ absl::StatusOr<LayerPlacement> PlacementOf(const RiskMap& map) {
 absl::StatusOr<bool> WriteLayerFiles(const RiskLayer& layer, const RiskMap& map,
                                      const LayerPlacement& placement,
                                      const RiskLayerOptions& options, const std::string& heading,
-                                     const std::string& out) {
+                                     const std::string& wind, const std::string& out) {
   if (absl::Status s = WriteHeatMapPng(layer, out + ".png"); !s.ok()) return s;
   if (absl::Status s = WriteAsciiGrid(layer, out + ".asc"); !s.ok()) return s;
   if (absl::Status s = geo::WriteRiskLayerGeoTiff(
           layer, placement.frame.has_value() ? &*placement.frame : nullptr,
           {map.name(), options.height_agl_m,
-           heading == "max" ? "max over heading bins"
-                            : heading + " deg counter-clockwise from east"},
+           (heading == "max" ? "max over heading bins"
+                             : heading + " deg counter-clockwise from east") +
+               wind},
           out + ".tif");
       !s.ok()) {
     return s;
@@ -436,9 +499,22 @@ int RiskLayerCommand() {
   auto layer = ComputeRiskLayer(**model, *options);
   if (!layer.ok()) return Fail(layer.status());
   const double seconds = absl::ToDoubleSeconds(absl::Now() - start);
-  auto removed_stale_prj = WriteLayerFiles(*layer, **map, *placement, *options, heading, out);
+  // In wind the GeoTIFF's heading says which wind (still air: as before).
+  const std::string wind =
+      params->Calm() ? ""
+                     : absl::StrFormat(" (track), wind %g m/s from %g deg", params->wind_speed_mps,
+                                       params->wind_from_deg);
+  auto removed_stale_prj =
+      WriteLayerFiles(*layer, **map, *placement, *options, heading, wind, out);
   if (!removed_stale_prj.ok()) return Fail(removed_stale_prj.status());
   PrintLayerReport(*layer, **map, *options, heading, out, seconds, *removed_stale_prj);
+  if (!params->Calm()) {
+    const double from = std::fmod(std::fmod(params->wind_from_deg, 360.0) + 360.0, 360.0);
+    std::printf("in a wind of %g m/s from %.1f deg (clockwise from grid north)%s\n",
+                params->wind_speed_mps, from,
+                heading == "max" ? ": the worst track heading bin of each cell"
+                                 : ": the heading is the track over the ground");
+  }
   return 0;
 }
 

@@ -27,6 +27,7 @@ struct CliOptions {
   std::string trajectory_file;
   bool samples = false;
   std::string params;  // model parameters "name=value,..."
+  std::string wind;    // "SPEED@FROM_DEG" or "wgs84:SPEED@FROM_DEG"; empty: none (eval, plan)
   // Two-tier feasibility check (eval).
   bool two_tier = false;
   std::string two_tier_rule = "FLIGHT_BAND";  // FLIGHT_BAND | TERRAIN_ONLY

@@ -55,6 +55,7 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
     std::printf("  piece %d: risk %.9g, length %.1f m, %d parts, %s\n", i, p.risk(), p.length_m(),
                 p.parts(), p.admissible() ? "admissible" : "not admissible");
   }
+  if (r.wind().speed_mps() > 0.0) std::printf("%s\n", WindText(r.wind()).c_str());
   std::printf("%s\n", TargetLevelOfSafetyText(r.risk_per_flight_hour(), r.flight_time_s(),
                                               r.airspeed_mps(), o.target_level_of_safety)
                           .c_str());
@@ -63,12 +64,17 @@ int RunEval(const CliOptions& o, RiskplanClient& client) {
   }
   if (r.has_two_tier()) std::printf("%s\n", TwoTierText(r.two_tier()).c_str());
   if (o.samples) {
-    std::printf("%10s %10s %8s %6s %10s %5s %12s %12s %8s %8s\n", "x", "y", "z", "theta", "arc_m",
-                "piece", "M", "I", "S", "p_cas");
+    // In wind two more columns: the air heading (where the aircraft points)
+    // and the ground speed of each sample.
+    const bool wind = r.wind().speed_mps() > 0.0;
+    std::printf("%10s %10s %8s %6s %10s %5s %12s %12s %8s %8s%s\n", "x", "y", "z", "theta", "arc_m",
+                "piece", "M", "I", "S", "p_cas", wind ? "    psi  gs_mps" : "");
     for (const v1::Sample& s : r.samples()) {
-      std::printf("%10.1f %10.1f %8.1f %6.3f %10.1f %5d %12.5g %12.5g %8.3f %8.5f\n", s.x(), s.y(),
+      std::printf("%10.1f %10.1f %8.1f %6.3f %10.1f %5d %12.5g %12.5g %8.3f %8.5f", s.x(), s.y(),
                   s.z(), s.theta(), s.arc_length_m(), s.piece(), s.risk(), s.impact_factor(),
                   s.expected_shelter(), s.casualty_probability());
+      if (wind) std::printf(" %6.3f %7.2f", s.air_heading_rad(), s.ground_speed_mps());
+      std::printf("\n");
     }
   }
   if (exports->any()) return Export(*exports, r, o.map, "riskplan eval on " + o.map);

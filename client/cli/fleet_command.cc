@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "nlohmann/json.hpp"
@@ -15,6 +16,7 @@
 #include "client/cli/commands.h"
 #include "client/cli/fleet_file.h"
 #include "client/picture/picture.h"
+#include "client/trajectory_text.h"
 
 namespace riskplan::client {
 namespace {
@@ -34,6 +36,7 @@ struct MissionRow {
   int call = 0;   // the call (0: the first) that ended it
   std::string replica;  // that call's replica
   int resubmits = 0;    // times it was sent again
+  v1::WindReport wind;  // the wind it was planned in
 };
 
 // The report of --report_json: the call's outcome and every mission.
@@ -113,7 +116,11 @@ int WriteFleetPicture(const CliOptions& o, const std::vector<MissionRow>& rows,
     picture.fleet.push_back(r.best);
     picture.fleet_labels.push_back(r.id);
     picture.fleet_starts.push_back(r.best.waypoints(0));
+    // The arrow shows the first wind among the missions drawn.
+    if (picture.wind.speed_mps() == 0.0) picture.wind = r.wind;
   }
+  // A few routes each get their colour and a key of their ids.
+  picture.fleet_key = picture.fleet.size() <= 6;
   if (!picture.fleet.empty()) {
     // The local endpoints are the trajectories' own ends (a mission may be
     // given in WGS84); the goal drawn is the first mission's.
@@ -129,6 +136,24 @@ int WriteFleetPicture(const CliOptions& o, const std::vector<MissionRow>& rows,
     return 1;
   }
   std::printf("picture: %s\n", o.picture.c_str());
+  return 0;
+}
+
+// --trajectory_out=F.json: each mission's final waypoints in F-ID.json
+// (plan's trajectory JSON), for `riskplan eval --trajectory_file`.
+int WriteFleetTrajectories(const CliOptions& o, const std::vector<MissionRow>& rows) {
+  if (o.trajectory_out.empty()) return 0;
+  std::string stem = o.trajectory_out;
+  if (absl::EndsWith(stem, ".json")) stem.resize(stem.size() - 5);
+  for (const MissionRow& r : rows) {
+    if (!r.has_best) continue;
+    const std::string path = absl::StrFormat("%s-%s.json", stem, r.id);
+    std::ofstream out(path);
+    out << WaypointsToJson(r.best.waypoints());
+    out.close();
+    if (!out) return Usage(absl::StrFormat("cannot write --trajectory_out: %s", path));
+    std::printf("trajectory of %s: %s\n", r.id.c_str(), path.c_str());
+  }
   return 0;
 }
 
@@ -184,6 +209,7 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
           row.end = v1::EndReason_Name(u.update().end_reason());
           row.has_best = u.update().has_trajectory();
           row.best = u.update().trajectory();
+          row.wind = u.update().wind();
           row.iterations = u.update().iterations();
           row.elapsed_s = u.update().elapsed_s();
           row.order = ++order;
@@ -260,6 +286,7 @@ int RunFleet(const CliOptions& o, RiskplanClient& client) {
     }
     std::printf("report: %s\n", o.report_json.c_str());
   }
+  if (int code = WriteFleetTrajectories(o, rows); code != 0) return code;
   if (!status.ok()) return RpcError(o, "PlanFleet", status);
   // 3: the call succeeded but some mission has no trajectory (its own
   // error, NO_SOLUTION), as `plan` says of its one plan.

@@ -54,6 +54,7 @@ absl::Status SetOption(const std::string& key, const Json& value, const std::str
   if (key == "map") return text(&o->map);
   if (key == "algorithm") return text(&o->algorithm);
   if (key == "params") return text(&o->params);
+  if (key == "wind") return text(&o->wind);
   if (key == "planner_params") return text(&o->planner_params);
   if (key == "obstacles") return text(&o->obstacles);
   if (key == "budget_ms") return integer(&o->budget_ms);
@@ -82,7 +83,7 @@ absl::Status SetOption(const std::string& key, const Json& value, const std::str
   }
   return absl::InvalidArgumentError(absl::StrFormat(
       "%s: unknown key; a mission has id, priority, start, goal, map, algorithm, budget_ms, "
-      "iterations, seed, params, planner_params, obstacles, min_update_interval_ms, "
+      "iterations, seed, params, wind, planner_params, obstacles, min_update_interval_ms, "
       "display_step_m, tree",
       where));
 }

@@ -18,6 +18,22 @@ absl::Status InFlag(const char* flag, const absl::Status& status) {
   return absl::Status(status.code(), absl::StrFormat("%s: %s", flag, status.message()));
 }
 
+// --wind into the request's wind or wind_wgs84 (nothing when empty).
+template <typename Request>
+absl::Status SetWind(const std::string& text, Request* request) {
+  if (text.empty()) return absl::OkStatus();
+  v1::Wind wind;
+  v1::GeoWind wind_wgs84;
+  bool is_wgs84 = false;
+  if (absl::Status s = ParseWind(text, "--wind", &wind, &wind_wgs84, &is_wgs84); !s.ok()) return s;
+  if (is_wgs84) {
+    *request->mutable_wind_wgs84() = wind_wgs84;
+  } else {
+    *request->mutable_wind() = wind;
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<v1::EvaluateRiskRequest> EvalRequestFromOptions(const CliOptions& o) {
@@ -54,6 +70,7 @@ absl::StatusOr<v1::EvaluateRiskRequest> EvalRequestFromOptions(const CliOptions&
   if (absl::Status s = ParseModelParameters(o.params, request.mutable_model_params()); !s.ok()) {
     return s;
   }
+  if (absl::Status s = SetWind(o.wind, &request); !s.ok()) return s;
   if (o.two_tier) {
     v1::TwoTierOptions* two_tier = request.mutable_two_tier();
     two_tier->set_enabled(true);
@@ -127,6 +144,7 @@ absl::StatusOr<v1::PlanRequest> PlanRequestFromOptions(const CliOptions& o) {
   if (absl::Status s = ParseModelParameters(o.params, request.mutable_model_params()); !s.ok()) {
     return s;
   }
+  if (absl::Status s = SetWind(o.wind, &request); !s.ok()) return s;
   std::string_view rest;
   if (HasWgs84Prefix(o.obstacles, &rest)) {
     absl::StatusOr<std::vector<v1::GeoPoint2>> obstacles = ParseGeoPoints2(rest);

@@ -98,6 +98,7 @@ int WriteTrajectoryOut(const CliOptions& o, const v1::Trajectory& best) {
 int WritePlanPicture(const CliOptions& o, RiskplanClient& client, const v1::PlanRequest& request,
                      const v1::PlanUpdate& final_update, PictureInput& picture) {
   picture.tree.assign(final_update.tree_edges().begin(), final_update.tree_edges().end());
+  picture.wind = final_update.wind();
   picture.start = request.start();
   picture.goal = request.goal();
   if (request.has_start_wgs84() || request.has_goal_wgs84()) {
@@ -250,6 +251,9 @@ void PrintPlanEnd(const CliOptions& o, const v1::PlanUpdate& final_update, size_
   const v1::Trajectory& best = final_update.trajectory();
   std::printf("best: risk %.9g expected casualties per flight, length %.1f m, %d waypoints\n",
               best.risk(), best.length_m(), best.waypoints_size());
+  if (final_update.wind().speed_mps() > 0.0) {
+    std::printf("%s\n", WindText(final_update.wind()).c_str());
+  }
   std::printf("%s\n", TargetLevelOfSafetyText(
                           best.risk_per_flight_hour(), best.flight_time_s(),
                           best.flight_time_s() > 0 ? best.length_m() / best.flight_time_s() : 0,
@@ -268,6 +272,9 @@ int ExportPlan(const CliOptions& o, RiskplanClient& client, const v1::PlanReques
   eval.set_map(o.map);
   eval.mutable_waypoints()->mutable_poses()->CopyFrom(final_update.trajectory().waypoints());
   *eval.mutable_model_params() = request.model_params();
+  // The same wind, so that the ground track flown and its times match.
+  if (request.has_wind()) *eval.mutable_wind() = request.wind();
+  if (request.has_wind_wgs84()) *eval.mutable_wind_wgs84() = request.wind_wgs84();
   eval.set_path_spacing_m(exports.spacing_m);
   v1::EvaluateRiskResponse path;
   if (grpc::Status s = client.EvaluateRisk(eval, &path, TimeoutOr(o, absl::Seconds(30))); !s.ok()) {

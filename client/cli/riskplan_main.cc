@@ -45,6 +45,12 @@ ABSL_FLAG(bool, two_tier_bresenham, false,
 ABSL_FLAG(std::string, params, "",
           "Model parameter overrides 'name=value,...' (names as in docs/risk-model.md, e.g. "
           "mass_kg=12,airspeed_mps=20)");
+ABSL_FLAG(std::string, wind, "",
+          "plan, eval, fleet: the mean wind, SPEED@FROM_DEG: m/s and the direction it blows "
+          "from, degrees clockwise from the map's grid north (any finite value, taken modulo "
+          "360; at most half the airspeed), e.g. 8@270 for a west wind; 'wgs84:SPEED@FROM_DEG' "
+          "takes the direction from true north (a geo-referenced map). Empty: still air (or "
+          "--params' wind_speed_mps, wind_from_deg)");
 ABSL_FLAG(std::string, start, "",
           "plan: start pose 'x,y,z,theta' (m, m, m AMSL, rad from east), or "
           "'wgs84:lat,lon,alt,heading_deg' (deg, deg, m AMSL, deg clockwise from true north) on a "
@@ -67,7 +73,8 @@ ABSL_FLAG(bool, tree, false, "plan: draw the planner's final tree in the picture
 ABSL_FLAG(std::string, picture, "", "plan: write a picture of the plan (.svg or .png)");
 ABSL_FLAG(int, picture_size, 800, "plan: largest side of the picture, pixels");
 ABSL_FLAG(std::string, trajectory_out, "",
-          "plan: write the best trajectory as JSON waypoints (readable by --trajectory_file)");
+          "plan: write the best trajectory as JSON waypoints (readable by --trajectory_file); "
+          "fleet: each mission's, F.json giving F-ID.json");
 ABSL_FLAG(std::string, plan_out, "",
           "plan, eval: write the trajectory as a QGroundControl mission (.plan; a geo-referenced "
           "map only)");
@@ -125,7 +132,7 @@ riskplan::cmdline::ProgramHelp Help() {
       "start",          "goal",       "algorithm",
       "budget_ms",      "iterations", "seed",
       "planner_params", "obstacles",  "min_update_interval_ms",
-      "display_step_m", "tree"};
+      "display_step_m", "tree",       "wind"};
   const std::vector<std::string> exports = {"plan_out",      "geojson_out",
                                             "kml_out",       "export_spacing_m",
                                             "plan_firmware", "target_level_of_safety"};
@@ -149,7 +156,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "Example:\n"
        "  riskplan eval --waypoints='1200,1500,250,0.785; 6800,6500,250,0.785'",
        join(join(join(connection, {"map", "json"}), trajectory),
-            join(join({"samples", "params"}, two_tier), exports))},
+            join(join({"samples", "params", "wind"}, two_tier), exports))},
       {"plan", "plan a trajectory, showing each improvement as it streams",
        "  riskplan plan --start=X,Y,Z,THETA --goal=X,Y,Z,THETA [flags]\n"
        "  riskplan plan --start=wgs84:LAT,LON,ALT,HEADING_DEG --goal=wgs84:... [flags]\n"
@@ -182,7 +189,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "FILE.json: {\"missions\": [{\"id\": \"m1\", \"start\": \"x,y,z,theta\", ...}, ...],\n"
        "\"tenant\": \"...\", \"send_improvements\": true} (docs/api.md, \"Missions files\").\n"
        "A mission's keys are the plan flags' names (start, goal, map, algorithm,\n"
-       "budget_ms, iterations, seed, params, planner_params, obstacles,\n"
+       "budget_ms, iterations, seed, params, wind, planner_params, obstacles,\n"
        "min_update_interval_ms, display_step_m, tree) plus id and priority; what a\n"
        "mission does not give, the flag gives (e.g. one --goal for all).\n"
        "Prints each mission's end as it comes, then a summary table; --picture draws\n"
@@ -197,7 +204,7 @@ riskplan::cmdline::ProgramHelp Help() {
        "  riskplan fleet --missions=fleet.json --goal=6800,6500,250,0.785 --iterations=2000 "
        "--picture=fleet.svg",
        join(join(join(connection, {"map", "missions", "max_resubmits"}), planning),
-            {"params", "picture", "picture_size", "report_json"})},
+            {"params", "picture", "picture_size", "report_json", "trajectory_out"})},
       {"load", "load test of one RPC (eval, plan, fleet or ping), closed or open loop",
        "  riskplan load [--rpc=eval|plan|fleet|ping] [--mode=closed|open] [flags]\n"
        "\n"
@@ -247,6 +254,7 @@ int main(int argc, char** argv) {
   o.two_tier_block_cells = absl::GetFlag(FLAGS_two_tier_block_cells);
   o.two_tier_bresenham = absl::GetFlag(FLAGS_two_tier_bresenham);
   o.params = absl::GetFlag(FLAGS_params);
+  o.wind = absl::GetFlag(FLAGS_wind);
   o.start = absl::GetFlag(FLAGS_start);
   o.goal = absl::GetFlag(FLAGS_goal);
   o.algorithm = absl::GetFlag(FLAGS_algorithm);

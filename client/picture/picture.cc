@@ -9,6 +9,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
+#include "client/picture/bitmap_font.h"
 #include "client/picture/picture_draw.h"
 #include "client/picture/picture_layout.h"
 #include "client/picture/picture_legend.h"
@@ -68,6 +69,108 @@ void DrawPath(RgbaImage* img, const Projection& pr, const v1::Trajectory& t, dou
   }
 }
 
+// The wind arrow: where it sits on the map (its centre), its half length,
+// and its direction in image coordinates (x right, y down) where the air
+// moves to. Empty when the wind is calm.
+struct WindArrow {
+  bool drawn = false;
+  double cx = 0, cy = 0, half = 0, dx = 0, dy = 0;
+  std::string speed_text, from_text;
+};
+
+WindArrow WindArrowOf(const PictureInput& in, int map_width) {
+  WindArrow a;
+  const double speed = in.wind.speed_mps();
+  if (!(speed > 0.0)) return a;
+  a.drawn = true;
+  a.half = 18;
+  a.cx = map_width - 42;
+  a.cy = 34;
+  const double norm = std::hypot(in.wind.x_mps(), in.wind.y_mps());
+  a.dx = norm > 0 ? in.wind.x_mps() / norm : 0;
+  a.dy = norm > 0 ? -in.wind.y_mps() / norm : 0;  // north is up
+  a.speed_text = absl::StrFormat("wind %g m/s", speed);
+  a.from_text = absl::StrFormat("from %.0f deg", in.wind.from_deg());
+  return a;
+}
+
+Rgb FleetTrajectoryColour(const PictureInput& in, size_t k) {
+  return in.fleet_key ? FleetColour(k) : ImprovementColour(1, 2);
+}
+
+// The PNG's wind arrow and the key of the fleet's labels, drawn last.
+void DrawWindAndKey(RgbaImage* img, const PictureInput& in) {
+  const auto text = [&](const std::string& t, int x, int y) {
+    ForEachTextPixel(t, 1, [&](int px, int py) { Stamp(img, x + px, y + py, 1, kTextColour, 1.0); });
+  };
+  const WindArrow a = WindArrowOf(in, img->width);
+  if (a.drawn) {
+    const int w = std::max(TextWidth(a.speed_text, 1), TextWidth(a.from_text, 1)) + 8;
+    for (int y = 6; y < 6 + 2 * static_cast<int>(a.half) + 26; ++y) {
+      DrawLine(img, a.cx - w / 2.0, y, a.cx + w / 2.0, y, 1, {255, 255, 255}, 0.8);
+    }
+    const double x0 = a.cx - a.dx * a.half, y0 = a.cy - a.dy * a.half;
+    const double x1 = a.cx + a.dx * a.half, y1 = a.cy + a.dy * a.half;
+    DrawLine(img, x0, y0, x1, y1, 2, kWindColour, 1.0);
+    // The head: two strokes back from the tip at +-30 degrees.
+    for (double s : {0.5, -0.5}) {
+      const double c = std::cos(s), sn = std::sin(s);
+      const double bx = -(a.dx * c - a.dy * sn), by = -(a.dx * sn + a.dy * c);
+      DrawLine(img, x1, y1, x1 + 8 * bx, y1 + 8 * by, 2, kWindColour, 1.0);
+    }
+    text(a.speed_text, static_cast<int>(a.cx) - TextWidth(a.speed_text, 1) / 2,
+         static_cast<int>(a.cy + a.half) + 4);
+    text(a.from_text, static_cast<int>(a.cx) - TextWidth(a.from_text, 1) / 2,
+         static_cast<int>(a.cy + a.half) + 14);
+  }
+  if (in.fleet_key) {
+    for (size_t k = 0; k < in.fleet.size() && k < in.fleet_labels.size(); ++k) {
+      const int y = 10 + 12 * static_cast<int>(k);
+      DrawLine(img, 8, y + 3, 28, y + 3, 3, FleetColour(k), 1.0);
+      text(in.fleet_labels[k], 34, y);
+    }
+  }
+}
+
+std::string SvgWindAndKey(const PictureInput& in, int map_width) {
+  std::string svg;
+  const WindArrow a = WindArrowOf(in, map_width);
+  if (a.drawn) {
+    const double x0 = a.cx - a.dx * a.half, y0 = a.cy - a.dy * a.half;
+    const double x1 = a.cx + a.dx * a.half, y1 = a.cy + a.dy * a.half;
+    absl::StrAppendFormat(
+        &svg,
+        "<g class=\"wind\"><title>%s, %s (grid north)</title>"
+        "<rect x=\"%.1f\" y=\"4\" width=\"76\" height=\"%.1f\" rx=\"4\" fill=\"white\" "
+        "fill-opacity=\"0.8\"/>"
+        "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" stroke-width=\"2.5\"/>"
+        "<polygon points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f\" fill=\"%s\"/>"
+        "<text x=\"%.1f\" y=\"%.1f\" font-family=\"sans-serif\" font-size=\"10\" "
+        "text-anchor=\"middle\" fill=\"%s\">%s</text>"
+        "<text x=\"%.1f\" y=\"%.1f\" font-family=\"sans-serif\" font-size=\"10\" "
+        "text-anchor=\"middle\" fill=\"%s\">%s</text></g>\n",
+        a.speed_text, a.from_text, a.cx - 38, 2 * a.half + 46, x0, y0, x1 - 6 * a.dx,
+        y1 - 6 * a.dy, SvgColour(kWindColour), x1, y1, x1 - 9 * a.dx - 5 * a.dy,
+        y1 - 9 * a.dy + 5 * a.dx, x1 - 9 * a.dx + 5 * a.dy, y1 - 9 * a.dy - 5 * a.dx,
+        SvgColour(kWindColour), a.cx, a.cy + a.half + 12, SvgColour(kTextColour), a.speed_text,
+        a.cx, a.cy + a.half + 24, SvgColour(kTextColour), a.from_text);
+  }
+  if (in.fleet_key) {
+    for (size_t k = 0; k < in.fleet.size() && k < in.fleet_labels.size(); ++k) {
+      const double y = 14 + 16 * static_cast<double>(k);
+      absl::StrAppendFormat(
+          &svg,
+          "<rect x=\"4\" y=\"%.1f\" width=\"%d\" height=\"15\" fill=\"white\" "
+          "fill-opacity=\"0.8\"/><line x1=\"8\" y1=\"%.1f\" x2=\"30\" y2=\"%.1f\" "
+          "stroke=\"%s\" stroke-width=\"3\"/><text x=\"36\" y=\"%.1f\" "
+          "font-family=\"sans-serif\" font-size=\"11\" fill=\"%s\">%s</text>\n",
+          y - 10, 40 + 7 * static_cast<int>(in.fleet_labels[k].size()), y - 3, y - 3,
+          SvgColour(FleetColour(k)), y, SvgColour(kTextColour), geo::XmlEscape(in.fleet_labels[k]));
+    }
+  }
+  return svg;
+}
+
 // The map's raster with the tree, the improvements, the landing sites and
 // the start and goal drawn on it, bottom to top. Drawn on the map alone, so
 // that a trajectory leaving the map is cut at its edge.
@@ -84,8 +187,8 @@ RgbaImage RenderMap(const PictureInput& in) {
     DrawPath(&img, pr, in.improvements[k], final ? kFinalWidth : kImprovementWidth,
              ImprovementColour(k, n), final ? 1.0 : kImprovementAlpha);
   }
-  for (const v1::Trajectory& t : in.fleet) {
-    DrawPath(&img, pr, t, kFinalWidth, ImprovementColour(1, 2), 1.0);
+  for (size_t k = 0; k < in.fleet.size(); ++k) {
+    DrawPath(&img, pr, in.fleet[k], kFinalWidth, FleetTrajectoryColour(in, k), 1.0);
   }
   for (const v1::LandingSite& site : in.map.landing_sites()) {
     DrawDisc(&img, pr.X(site.x()), pr.Y(site.y()), kLandingSiteRadius, kLandingSiteColour);
@@ -95,6 +198,7 @@ RgbaImage RenderMap(const PictureInput& in) {
   }
   DrawDisc(&img, pr.X(in.start.x()), pr.Y(in.start.y()), kEndpointRadius, kStartColour);
   DrawDisc(&img, pr.X(in.goal.x()), pr.Y(in.goal.y()), kEndpointRadius, kGoalColour);
+  DrawWindAndKey(&img, in);
   return img;
 }
 
@@ -248,7 +352,7 @@ std::string RenderSvg(const PictureInput& in) {
         &svg,
         "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"3.0\" points=\"%s\"><title>%s: "
         "risk %.6g, length %.0f m</title></polyline>\n",
-        SvgColour(ImprovementColour(1, 2)), SvgPoints(pr, in.fleet[k]),
+        SvgColour(FleetTrajectoryColour(in, k)), SvgPoints(pr, in.fleet[k]),
         k < in.fleet_labels.size() ? geo::XmlEscape(in.fleet_labels[k]) : "", in.fleet[k].risk(),
         in.fleet[k].length_m());
   }
@@ -265,6 +369,7 @@ std::string RenderSvg(const PictureInput& in) {
                         "stroke=\"white\" stroke-width=\"2\"><title>goal</title></circle>\n",
                         pr.X(in.start.x()), pr.Y(in.start.y()), SvgColour(kStartColour),
                         pr.X(in.goal.x()), pr.Y(in.goal.y()), SvgColour(kGoalColour));
+  svg += SvgWindAndKey(in, w);
   svg += "</g>\n";
   svg += SvgCaptionAndLegend(layout, n);
   svg += "</svg>\n";

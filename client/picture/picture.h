@@ -36,6 +36,14 @@ struct PictureInput {
   std::vector<std::string> fleet_labels;  // one per fleet trajectory
   std::vector<v1::Pose> fleet_starts;
   std::string caption;  // text above the map, word-wrapped to the picture's width
+  // The mean wind (the answer's echo): when its speed is above 0, an arrow
+  // in the map's top-right corner points where the air moves to, with the
+  // speed and the direction it blows from written under it.
+  v1::WindReport wind;
+  // Draw each fleet trajectory in its own colour (FleetColour) with a key of
+  // their labels in the map's top-left corner, rather than all alike: for a
+  // few routes to compare (scripts/wind-demo.sh).
+  bool fleet_key = false;
 };
 
 // An RGBA image, row 0 at the top.

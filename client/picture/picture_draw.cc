@@ -89,4 +89,10 @@ std::string SvgColour(Rgb c) {
                          static_cast<int>(c.b));
 }
 
+Rgb FleetColour(size_t k) {
+  static constexpr Rgb kColours[] = {
+      {30, 80, 220}, {230, 120, 0}, {0, 150, 150}, {150, 60, 200}, {120, 120, 120}, {0, 0, 0}};
+  return kColours[k % (sizeof(kColours) / sizeof(kColours[0]))];
+}
+
 }  // namespace riskplan::client

@@ -50,6 +50,12 @@ Rgb NoFlyTint(Rgb c);
 // the final trajectory).
 Rgb ImprovementColour(size_t k, size_t n);
 
+// The wind arrow's colour, and fleet trajectory `k`'s when the picture has a
+// fleet key (PictureInput::fleet_key): a few hues the density scale and the
+// improvements do not use, repeating after the sixth.
+inline constexpr Rgb kWindColour = {20, 20, 20};
+Rgb FleetColour(size_t k);
+
 // Blends a square brush of side `width` pixels centred on (x, y) with `c`
 // at `alpha`. Pixels off the image are skipped. Alpha stays 255: what is
 // drawn on is opaque.

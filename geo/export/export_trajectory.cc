@@ -33,6 +33,8 @@ absl::Status CheckExportTrajectory(const ExportTrajectory& t) {
                              {"flight_time_s", t.flight_time_s},
                              {"risk_per_flight_hour", t.risk_per_flight_hour},
                              {"airspeed_mps", t.airspeed_mps},
+                             {"wind_speed_mps", t.wind_speed_mps},
+                             {"wind_from_true_deg", t.wind_from_true_deg},
                              {"spacing_m", t.spacing_m}}) {
     if (!std::isfinite(value)) {
       return absl::InvalidArgumentError(

@@ -34,9 +34,19 @@ struct ExportTrajectory {
   double spacing_m = 0.0;             // arc length between samples (the last gap may be shorter)
   double risk = 0.0;                  // expected casualties per flight
   double length_m = 0.0;              // 3-D length, m
-  double flight_time_s = 0.0;         // length_m / airspeed_mps
+  // The evaluation's time: length_m / airspeed_mps in still air, the sum of
+  // ds / ground speed in wind.
+  double flight_time_s = 0.0;
   double risk_per_flight_hour = 0.0;  // risk / flight hours
+  // The cruise airspeed, the speed a ground station flies at (QGroundControl's
+  // cruiseSpeed); in wind the ground speed varies along the track, which the
+  // samples follow (they are the ground track, headings over the ground).
   double airspeed_mps = 0.0;
+  // The mean wind it was planned and evaluated in: speed, m/s (0: still air,
+  // and the writers then write no wind), and the direction it blows from,
+  // degrees clockwise from true north.
+  double wind_speed_mps = 0.0;
+  double wind_from_true_deg = 0.0;
 };
 
 // OK when the trajectory can be written: at least 2 samples, every latitude

@@ -52,6 +52,11 @@ absl::StatusOr<std::string> TrajectoryGeoJson(const ExportTrajectory& t) {
            {"sample_risk", std::move(risk)},
        }},
   });
+  if (t.wind_speed_mps > 0.0) {
+    Json& properties = features.back()["properties"];
+    properties["wind_speed_mps"] = t.wind_speed_mps;
+    properties["wind_from_true_deg"] = t.wind_from_true_deg;
+  }
   for (size_t k = 0; k < t.samples.size(); ++k) {
     const ExportSample& s = t.samples[k];
     features.push_back({

@@ -4,7 +4,8 @@
 //   - one Feature with a LineString geometry (the whole path, in order) and
 //     the flight's properties: "kind": "trajectory", "map", "description",
 //     "risk" (expected casualties per flight), "length_m", "flight_time_s",
-//     "risk_per_flight_hour", "airspeed_mps", "spacing_m", and one array per
+//     "risk_per_flight_hour", "airspeed_mps", "spacing_m" (in wind also
+//     "wind_speed_mps", "wind_from_true_deg"), and one array per
 //     sample quantity, index for index with the coordinates: "alt_amsl_m",
 //     "heading_deg", "arc_length_m", "sample_risk" (M, null where undefined);
 //   - one Feature per sample with a Point geometry and "kind": "sample",

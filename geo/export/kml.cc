@@ -46,6 +46,10 @@ absl::StatusOr<std::string> TrajectoryKml(const ExportTrajectory& t) {
   AppendData(&out, "flight_time_s", Number(t.flight_time_s));
   AppendData(&out, "risk_per_flight_hour", Number(t.risk_per_flight_hour));
   AppendData(&out, "airspeed_mps", Number(t.airspeed_mps));
+  if (t.wind_speed_mps > 0.0) {
+    AppendData(&out, "wind_speed_mps", Number(t.wind_speed_mps));
+    AppendData(&out, "wind_from_true_deg", Number(t.wind_from_true_deg));
+  }
   AppendData(&out, "spacing_m", Number(t.spacing_m));
   absl::StrAppend(&out, "</ExtendedData>\n<LineString>\n<altitudeMode>absolute</altitudeMode>\n",
                   "<coordinates>\n");

@@ -3,7 +3,8 @@
 // A Document holding a Placemark "trajectory" with a LineString (altitudeMode
 // absolute: KML's absolute altitudes are above sea level, as riskplan's are)
 // and ExtendedData with the flight's totals (risk, length_m, flight_time_s,
-// risk_per_flight_hour, airspeed_mps, spacing_m), then a Folder "samples"
+// risk_per_flight_hour, airspeed_mps, spacing_m; in wind also wind_speed_mps and
+// wind_from_true_deg), then a Folder "samples"
 // with one Placemark per sample: a Point (altitudeMode absolute) and
 // ExtendedData index, heading_deg, arc_length_m, risk (M; empty where
 // undefined), terrain_m. Coordinates are "longitude,latitude,altitude" with

@@ -8,6 +8,8 @@
 
 #include "absl/strings/str_format.h"
 #include "core/base/check.h"
+#include "core/base/wind.h"
+#include "core/flight/piece_risk.h"
 
 namespace riskplan::server {
 
@@ -45,9 +47,23 @@ std::vector<std::optional<geo::GeoPose>> ToWgs84Where(const geo::GeoFrame& frame
   return out;
 }
 
-FlightHours FlightHoursOf(double risk, double length_m, const ModelParams& params) {
-  const double seconds = FlightTimeS(length_m, params.airspeed_mps);
-  return FlightHours{seconds, RiskPerFlightHour(risk, seconds)};
+FlightHours FlightHoursOf(double risk, double flight_time_s) {
+  return FlightHours{flight_time_s, RiskPerFlightHour(risk, flight_time_s)};
+}
+
+double PiecesFlightTimeS(std::span<const TrajectoryPiece> pieces, const ModelParams& params) {
+  double length_m = 0.0;
+  for (const TrajectoryPiece& piece : pieces) length_m += piece.Length();
+  if (params.Calm()) return FlightTimeS(length_m, params.airspeed_mps);
+  // EvaluateTrajectory's sum: each piece's PieceRisk time, in order (an
+  // undefined M adds the time and no risk).
+  double seconds = 0.0;
+  for (const TrajectoryPiece& piece : pieces) {
+    PieceRisk rule(piece, params.sample_step_m, params);
+    for (int64_t k = 0; k < rule.parts(); ++k) rule.Add(ConfigurationRisk{}, rule.Midpoint(k));
+    seconds += rule.FlightTimeS();
+  }
+  return seconds;
 }
 
 v1::ViolationKind ViolationKindToProto(ViolationKind kind) {
@@ -77,7 +93,7 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, const ModelParams
   out->set_risk(evaluation.risk);
   out->set_length_m(evaluation.length_m);
   out->set_admissible(evaluation.admissible);
-  const FlightHours hours = FlightHoursOf(evaluation.risk, evaluation.length_m, params);
+  const FlightHours hours = FlightHoursOf(evaluation.risk, evaluation.flight_time_s);
   out->set_flight_time_s(hours.flight_time_s);
   out->set_risk_per_flight_hour(hours.risk_per_flight_hour);
   out->set_airspeed_mps(params.airspeed_mps);
@@ -103,6 +119,7 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, const ModelParams
     p->set_length_m(piece.length_m);
     p->set_parts(static_cast<int32_t>(piece.parts));  // bounded by --max_eval_samples
     p->set_admissible(piece.admissible);
+    p->set_flight_time_s(piece.flight_time_s);
     samples += piece.parts;
   }
   out->set_sample_count(samples);
@@ -110,6 +127,7 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, const ModelParams
   // The caller evaluated with keep_samples; the count was bounded by
   // --max_response_samples before the evaluation (CheckSampleCount).
   out->mutable_samples()->Reserve(static_cast<int>(evaluation.samples.size()));
+  const WindTriangle wind(params);
   std::vector<std::optional<geo::GeoPose>> geo;
   if (frame != nullptr) {
     std::vector<Pose> poses;
@@ -132,11 +150,15 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, const ModelParams
     s->set_expected_shelter(sample.risk.expected_shelter);
     s->set_casualty_probability(sample.risk.casualty_probability);
     s->set_defined(sample.risk.defined);
+    s->set_air_heading_rad(wind.AirHeading(sample.pose.theta));
+    s->set_ground_speed_mps(wind.GroundSpeed(sample.pose.theta));
   }
 }
 
 void PathToProto(std::span<const PathPose> path, std::span<const ConfigurationRisk> risks,
-                 const RiskMap& map, const geo::GeoFrame* frame, v1::EvaluateRiskResponse* out) {
+                 const RiskMap& map, const ModelParams& params, const geo::GeoFrame* frame,
+                 v1::EvaluateRiskResponse* out) {
+  const WindTriangle wind(params);
   RISKPLAN_DCHECK(risks.size() == path.size());
   std::vector<std::optional<geo::GeoPose>> geo;
   if (frame != nullptr) {
@@ -154,6 +176,8 @@ void PathToProto(std::span<const PathPose> path, std::span<const ConfigurationRi
     s->set_piece(path[k].piece);
     s->set_defined(risks[k].defined);
     s->set_risk(risks[k].defined ? risks[k].risk : 0.0);
+    s->set_air_heading_rad(wind.AirHeading(path[k].pose.theta));
+    s->set_ground_speed_mps(wind.GroundSpeed(path[k].pose.theta));
     int i = 0, j = 0;
     s->set_terrain_m(map.CellOf(path[k].pose.x, path[k].pose.y, &i, &j)
                          ? static_cast<double>(map.terrain(i, j))
@@ -211,13 +235,17 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   out->set_found_at_iteration(improvement.iterations);
   out->set_found_at_s(improvement.elapsed_s);
   out->set_replanned(improvement.replanned);
-  const FlightHours hours = FlightHoursOf(improvement.risk, improvement.length_m, params);
-  out->set_flight_time_s(hours.flight_time_s);
-  out->set_risk_per_flight_hour(hours.risk_per_flight_hour);
 
   absl::StatusOr<std::vector<TrajectoryPiece>> pieces =
       PiecesFromWaypoints(improvement.waypoints, params);
   if (!pieces.ok()) return pieces.status();
+  // Still air: length / v from the planner's length, as before; in wind the
+  // evaluation's sum over the same midpoints.
+  const FlightHours hours = FlightHoursOf(
+      improvement.risk, params.Calm() ? FlightTimeS(improvement.length_m, params.airspeed_mps)
+                                      : PiecesFlightTimeS(*pieces, params));
+  out->set_flight_time_s(hours.flight_time_s);
+  out->set_risk_per_flight_hour(hours.risk_per_flight_hour);
   double total_m = 0.0;
   for (const TrajectoryPiece& piece : *pieces) total_m += piece.Length();
   // The step grows with the path so that a long trajectory still fits in
@@ -226,7 +254,14 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   const double step_m = std::max(display_step_m, total_m / (kMaxDisplayPathPoses - 1));
   const std::vector<PathPose> path = SamplePath(*pieces, step_m, kMaxDisplayPathPoses);
   out->mutable_path()->Reserve(static_cast<int>(path.size()));
-  for (const PathPose& p : path) PoseToProto(p.pose, out->add_path());
+  const WindTriangle wind(params);
+  out->mutable_path_air_heading_rad()->Reserve(static_cast<int>(path.size()));
+  out->mutable_path_ground_speed_mps()->Reserve(static_cast<int>(path.size()));
+  for (const PathPose& p : path) {
+    PoseToProto(p.pose, out->add_path());
+    out->add_path_air_heading_rad(wind.AirHeading(p.pose.theta));
+    out->add_path_ground_speed_mps(wind.GroundSpeed(p.pose.theta));
+  }
   if (frame != nullptr) {
     // Both lists in one batch, so that the PROJ set-up is paid once.
     std::vector<Pose> poses(improvement.waypoints.begin(), improvement.waypoints.end());

@@ -41,7 +41,14 @@ struct FlightHours {
   double flight_time_s = 0.0;
   double risk_per_flight_hour = 0.0;
 };
-FlightHours FlightHoursOf(double risk, double length_m, const ModelParams& params);
+// `flight_time_s` is the evaluation's (TrajectoryEvaluation::flight_time_s:
+// length / v in still air, the sum of ds / ground speed in wind).
+FlightHours FlightHoursOf(double risk, double flight_time_s);
+
+// The flight time of `pieces` exactly as EvaluateTrajectory sums it: the
+// length over the airspeed in still air; in wind each piece's midpoints'
+// ds / gs(theta), in order (PieceRisk::FlightTimeS).
+double PiecesFlightTimeS(std::span<const TrajectoryPiece> pieces, const ModelParams& params);
 
 v1::ViolationKind ViolationKindToProto(ViolationKind kind);
 
@@ -56,8 +63,10 @@ void EvaluationToProto(const TrajectoryEvaluation& evaluation, const ModelParams
 // EvaluateRiskResponse.path: each path pose with its configuration risk
 // (`risks[i]` of `path[i]`), the terrain under it, and with `frame` its WGS84
 // pose. REQUIRES: risks.size() == path.size().
+// Each pose's air heading and ground speed come from the wind of `params`.
 void PathToProto(std::span<const PathPose> path, std::span<const ConfigurationRisk> risks,
-                 const RiskMap& map, const geo::GeoFrame* frame, v1::EvaluateRiskResponse* out);
+                 const RiskMap& map, const ModelParams& params, const geo::GeoFrame* frame,
+                 v1::EvaluateRiskResponse* out);
 
 // The two-tier feasibility result; the collision fields only when
 // infeasible (with `frame`, its position in WGS84 too).

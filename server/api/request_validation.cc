@@ -10,6 +10,7 @@
 #include "google/protobuf/descriptor.h"
 #include "google/protobuf/reflection.h"
 #include "server/api/wgs84_fields.h"
+#include "server/api/wind_fields.h"
 
 namespace riskplan::server {
 namespace {
@@ -87,11 +88,16 @@ absl::Status PlanBudget(const v1::PlanRequest& request, const RequestLimits& lim
 // The model and planner parameters, and the work they ask for (the impact
 // table's bytes, the samples of one edge), bounded before the plan is queued.
 // Needs the start and goal (PlanEndpoints).
-absl::Status PlanParams(const v1::PlanRequest& request, const RequestLimits& limits,
-                        PlanSpec* spec) {
+absl::Status PlanParams(const v1::PlanRequest& request, const MapRegistry& registry,
+                        const RequestLimits& limits, PlanSpec* spec) {
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
   if (!params.ok()) return params.status();
   spec->params = *params;
+  if (absl::Status s = ApplyRequestWind(RequestWindOf(request), registry, *spec->map, &spec->params);
+      !s.ok()) {
+    return s;
+  }
+  spec->wind = WindReportOf(spec->params, *spec->map, spec->frame.get());
   if (absl::Status s = CheckModelWork(spec->params, limits); !s.ok()) return s;
 
   if (absl::Status s = CheckPlannerParams(spec->algorithm, request.planner_params()); !s.ok()) {
@@ -492,7 +498,7 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   if (absl::Status s = PlanBudget(request, limits, &spec.options); !s.ok()) return s;
   spec.options.seed = request.seed();
   spec.options.record_tree = request.include_tree();
-  if (absl::Status s = PlanParams(request, limits, &spec); !s.ok()) return s;
+  if (absl::Status s = PlanParams(request, registry, limits, &spec); !s.ok()) return s;
   if (absl::Status s = PlanUpdates(request, limits, &spec); !s.ok()) return s;
   if (absl::Status s = PlanObstacles(request, registry, limits, &spec); !s.ok()) return s;
   return spec;
@@ -542,6 +548,11 @@ absl::StatusOr<EvaluateSpec> ValidateEvaluateRequest(const v1::EvaluateRiskReque
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
   if (!params.ok()) return params.status();
   spec.params = *params;
+  if (absl::Status s = ApplyRequestWind(RequestWindOf(request), registry, *spec.map, &spec.params);
+      !s.ok()) {
+    return s;
+  }
+  spec.wind = WindReportOf(spec.params, *spec.map, spec.frame.get());
   if (absl::Status s = CheckModelWork(spec.params, limits); !s.ok()) return s;
   spec.include_samples = request.include_samples();
   // Checked even when disabled, so that a client learns of a bad option

@@ -92,6 +92,8 @@ struct PlanSpec {
   PlanOptions options;  // budget (capped), seed, planner params, record_tree, obstacles
   absl::Duration min_update_interval;
   double display_step_m = 25.0;
+  // The wind of params, as every PlanUpdate echoes it.
+  v1::WindReport wind;
 };
 
 absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
@@ -116,6 +118,8 @@ struct EvaluateSpec {
   std::optional<TwoTierOptions> two_tier;
   // Spacing of EvaluateRiskResponse.path, m, in [1, 100000]; 0: no path.
   double path_spacing_m = 0.0;
+  // The wind of params, as EvaluateRiskResponse echoes it.
+  v1::WindReport wind;
 };
 
 // The options of EvaluateRiskRequest.two_tier (unset fields take their

@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_format.h"
 #include "server/api/wgs84_fields.h"
+#include "server/api/wind_fields.h"
 
 namespace riskplan::server {
 namespace {
@@ -169,6 +170,11 @@ absl::StatusOr<RiskLayerSpec> ValidateRiskLayerRequest(const v1::GetRiskLayerReq
   absl::StatusOr<ModelParams> params = ModelParamsFromProto(request.model_params());
   if (!params.ok()) return params.status();
   spec.params = *params;
+  if (absl::Status s = ApplyRequestWind(RequestWindOf(request), registry, *spec.map, &spec.params);
+      !s.ok()) {
+    return s;
+  }
+  spec.wind = WindReportOf(spec.params, *spec.map, spec.frame.get());
   if (absl::Status s = CheckModelWork(spec.params, limits); !s.ok()) return s;
   if (absl::Status s = CheckLayerWork(request, limits, &spec); !s.ok()) return s;
   return spec;

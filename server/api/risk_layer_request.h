@@ -31,6 +31,8 @@ struct RiskLayerSpec {
   RiskLayerOptions options;
   int64_t cells = 0;
   int64_t evaluations = 0;
+  // The wind of params, as GetRiskLayerResponse echoes it.
+  v1::WindReport wind;
 };
 
 // Checks every field of a GetRiskLayerRequest and counts the layer's cells

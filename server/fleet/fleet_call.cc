@@ -99,6 +99,7 @@ void FleetCall::OfferImprovement(size_t mission, const PlanImprovement& improvem
     absl::MutexLock lock(&mu_);
     if (!state_.takes_offers()) return;
     update->set_improvements(++mission_improvements_[mission]);
+    *update->mutable_wind() = m.plan->wind;
     v1::FleetUpdate u;
     u.set_mission_id(m.id);
     u.set_mission_index(static_cast<int>(mission));
@@ -130,6 +131,7 @@ void FleetCall::OfferResult(size_t mission, const absl::StatusOr<PlanResult>& re
                            m.plan->options.record_tree, m.plan->frame.get());
     if (final_update.ok()) {
       final_update->set_improvements(improvements);
+      *final_update->mutable_wind() = m.plan->wind;
       *u.mutable_update() = *std::move(final_update);
     } else {
       error = MissionError(mission, final_update.status());

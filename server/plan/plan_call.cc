@@ -233,6 +233,7 @@ void PlanCall::OfferFinal(const PlanResult& result) {
         result.best.has_value() ? result.best->risk : -1.0, result.elapsed_s);
     if (final_update.ok()) {
       final_update->set_improvements(improvements_);
+      *final_update->mutable_wind() = spec_.wind;
       step = state_.EndPlan(*std::move(final_update), absl::Now());
       TakeWriteLocked(&step);
     } else {
@@ -256,6 +257,7 @@ void PlanCall::OnImprovement(const PlanImprovement& improvement) {
     ++improvements_;
     if (update.ok()) {
       update->set_improvements(improvements_);
+      *update->mutable_wind() = spec_.wind;
       step = state_.Offer(*std::move(update), absl::Now());
       TakeWriteLocked(&step);
     }

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "client/picture/bitmap_font.h"
+#include "client/picture/picture_draw.h"
 #include "client/picture/picture_layout.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -319,6 +320,57 @@ TEST(PictureTest, SvgHasTheLegendAndTheScaleBar) {
   EXPECT_THAT(svg, HasSubstr(">500 m</text>"));
   EXPECT_THAT(svg, HasSubstr("width=\"100\" height=\"4\" fill=\"rgb(0,0,0)\""));  // the bar
   EXPECT_THAT(svg, HasSubstr("clip-path=\"url(#map)\""));
+}
+
+TEST(PictureTest, TheWindIsAnArrowDownwindWithItsSpeedOnlyWhenThereIsWind) {
+  PictureInput in = EmptyMap(200, 200, 10);  // 2 km square
+  in.improvements.clear();  // nothing else crosses the arrow's corner
+  EXPECT_THAT(RenderSvg(in), ::testing::Not(::testing::HasSubstr("class=\"wind\"")));
+  const RgbaImage calm = RenderPicture(in);
+  // A west wind of 8 m/s: the air moves east, the arrow points right.
+  in.wind.set_speed_mps(8);
+  in.wind.set_from_deg(270);
+  in.wind.set_x_mps(8);
+  in.wind.set_y_mps(0);
+  const std::string svg = RenderSvg(in);
+  EXPECT_THAT(svg, ::testing::HasSubstr("<title>wind 8 m/s, from 270 deg (grid north)</title>"));
+  EXPECT_THAT(svg, ::testing::HasSubstr(">wind 8 m/s</text>"));
+  // The shaft runs from left to right at one height, its head on the right.
+  EXPECT_THAT(svg, ::testing::HasSubstr("<line x1=\"140.0\" y1=\"34.0\" x2=\"170.0\" "
+                                        "y2=\"34.0\""));
+  const PictureLayout layout = LayoutPicture(in);
+  const RgbaImage windy = RenderPicture(in);
+  // The PNG's shaft: dark pixels along y = 34 of the map where the calm
+  // picture had none.
+  int dark = 0;
+  for (int x = 142; x <= 170; ++x) {
+    const Pixel c = At(windy, layout.map.x + x, layout.map.y + 34);
+    dark += c.r < 60 && c.g < 60 && c.b < 60;
+    EXPECT_FALSE(At(calm, layout.map.x + x, layout.map.y + 34).r < 60) << x;
+  }
+  EXPECT_GT(dark, 20);
+}
+
+TEST(PictureTest, AFleetKeyGivesEachRouteItsColourAndLabel) {
+  PictureInput in = EmptyMap(200, 200, 10);
+  in.improvements.clear();
+  for (double y : {500.0, 1500.0}) {
+    v1::Trajectory t;
+    for (double x : {100.0, 1900.0}) {
+      v1::Pose* p = t.add_path();
+      p->set_x(x);
+      p->set_y(y);
+    }
+    in.fleet.push_back(t);
+  }
+  in.fleet_labels = {"still-air", "wind"};
+  in.fleet_key = true;
+  const std::string svg = RenderSvg(in);
+  EXPECT_THAT(svg, ::testing::HasSubstr(">still-air</text>"));
+  EXPECT_THAT(svg, ::testing::HasSubstr(">wind</text>"));
+  EXPECT_THAT(svg, ::testing::HasSubstr(SvgColour(FleetColour(0))));
+  EXPECT_THAT(svg, ::testing::HasSubstr(SvgColour(FleetColour(1))));
+  EXPECT_NE(SvgColour(FleetColour(0)), SvgColour(FleetColour(1)));
 }
 
 }  // namespace

@@ -174,5 +174,49 @@ TEST(TrajectoryTextTest, JsonFilesFollowTheSharedTable) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(ParseWind, SpeedAtDirectionLocalOrFromTrueNorth) {
+  v1::Wind wind;
+  v1::GeoWind geo;
+  bool is_wgs84 = true;
+  ASSERT_TRUE(ParseWind("8@270", "--wind", &wind, &geo, &is_wgs84).ok());
+  EXPECT_FALSE(is_wgs84);
+  EXPECT_EQ(wind.from().speed_mps(), 8.0);
+  EXPECT_EQ(wind.from().from_deg(), 270.0);
+  EXPECT_FALSE(geo.has_from());
+  // Any finite direction: the server takes it modulo 360.
+  ASSERT_TRUE(ParseWind(" 4.5 @ -450 ", "--wind", &wind, &geo, &is_wgs84).ok());
+  EXPECT_EQ(wind.from().speed_mps(), 4.5);
+  EXPECT_EQ(wind.from().from_deg(), -450.0);
+  ASSERT_TRUE(ParseWind("wgs84:6@10", "--wind", &wind, &geo, &is_wgs84).ok());
+  EXPECT_TRUE(is_wgs84);
+  EXPECT_EQ(geo.from().speed_mps(), 6.0);
+  EXPECT_EQ(geo.from().from_deg(), 10.0);
+}
+
+TEST(ParseWind, BadFormsAreRefusedNamingTheFlagAndWhy) {
+  v1::Wind wind;
+  v1::GeoWind geo;
+  bool is_wgs84 = false;
+  for (const auto& [text, why] : std::vector<std::pair<std::string, std::string>>{
+           {"8", "it needs one '@' between the speed and the direction"},
+           {"8@270@3", "it needs one '@'"},
+           {"@270", "the speed '' is not a finite number"},
+           {"fast@270", "the speed 'fast' is not a finite number"},
+           {"nan@270", "the speed 'nan' is not a finite number"},
+           {"inf@270", "the speed 'inf' is not a finite number"},
+           {"-2@270", "the speed -2 is negative"},
+           {"8@", "the direction '' is not a finite number"},
+           {"8@west", "the direction 'west' is not a finite number"},
+           {"8@inf", "the direction 'inf' is not a finite number"},
+           {"wgs84:8", "it needs one '@'"}}) {
+    const absl::Status s = ParseWind(text, "--wind", &wind, &geo, &is_wgs84);
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << text;
+    EXPECT_THAT(s.message(), HasSubstr("--wind='" + text + "' is not ")) << text;
+    EXPECT_THAT(s.message(), HasSubstr("SPEED@FROM_DEG")) << text;
+    EXPECT_THAT(s.message(), HasSubstr(why)) << text;
+  }
+  EXPECT_FALSE(wind.has_from());  // left unchanged
+}
+
 }  // namespace
 }  // namespace riskplan::client

@@ -110,6 +110,53 @@ TEST_F(CliTest, EvalErrors) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+TEST_F(CliTest, WindFlag) {
+  const std::string leg = " --polyline='300,1000,250; 1700,1000,250'";
+  // Bad forms never reach the server: exit 2 and the flag named.
+  for (const char* bad : {"8", "8@west", "-1@270", "nan@0"}) {
+    CommandResult r = Cli(std::string("eval --wind='") + bad + "'" + leg);
+    EXPECT_EQ(r.exit_code, 2) << bad << r.output;
+    EXPECT_THAT(r.output, HasSubstr(std::string("--wind='") + bad + "' is not SPEED@FROM_DEG"));
+  }
+  // Too strong for the airspeed: the server's error names the field.
+  CommandResult r = Cli("eval --wind=10@270" + leg);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("wind.from.speed_mps has value 10; it must be at most"));
+  // A west wind on a leg east: the answer's wind, and its flight time.
+  r = Cli("eval --wind=8@270" + leg);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("wind 8 m/s from 270.0 deg (grid north)"));
+  EXPECT_THAT(r.output, HasSubstr("flight time 53.8 s"));  // 1400 m at 26 m/s
+  CommandResult calm = Cli("eval" + leg);
+  EXPECT_THAT(calm.output, HasSubstr("flight time 77.8 s"));  // 1400 m at 18 m/s
+  EXPECT_THAT(calm.output, ::testing::Not(HasSubstr("wind ")));
+  // plan and fleet send it too; a plan prints the wind it was planned in.
+  r = Cli("plan --wind=5@0 --start=300,375,240,0.785 --goal=1700,1625,250,0.785 --budget_ms=0 "
+          "--iterations=200");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("wind 5 m/s from 0.0 deg"));
+  const std::string missions = *dir_ + "/wind-fleet.json";
+  std::ofstream(missions) << R"({"missions": [
+      {"id": "calm", "start": "300,375,240,0.785"},
+      {"id": "windy", "start": "300,375,240,0.785", "wind": "4@90"},
+      {"id": "gale", "start": "300,375,240,0.785", "wind": "40@90"}]})";
+  const std::string svg = *dir_ + "/wind-fleet.svg";
+  r = Cli("fleet --missions=" + missions +
+          " --goal=1700,1625,250,0.785 --budget_ms=0 --iterations=200 --picture=" + svg +
+          " --trajectory_out=" + *dir_ + "/wind-fleet.json");
+  EXPECT_EQ(r.exit_code, 3) << r.output;  // the gale is refused, the others fly
+  EXPECT_THAT(r.output, HasSubstr("gale: INVALID_ARGUMENT"));
+  EXPECT_THAT(r.output, HasSubstr("wind.from.speed_mps has value 40"));
+  EXPECT_THAT(r.output, HasSubstr("trajectory of windy: " + *dir_ + "/wind-fleet-windy.json"));
+  const std::string picture = Read(svg);
+  EXPECT_THAT(picture, HasSubstr("<g class=\"wind\"><title>wind 4 m/s, from 90 deg"));
+  EXPECT_THAT(picture, HasSubstr(">windy</text>"));  // the key
+  // The written waypoints evaluate in the wind they were planned in.
+  r = Cli("eval --wind=4@90 --trajectory_file=" + *dir_ + "/wind-fleet-windy.json");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("wind 4 m/s from 90.0 deg"));
+}
+
 TEST_F(CliTest, PlanShowsProgressAndWritesPictures) {
   const std::string svg = *dir_ + "/plan.svg";
   const std::string png = *dir_ + "/plan.png";

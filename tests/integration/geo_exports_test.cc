@@ -371,5 +371,69 @@ TEST_F(GeoExportsTest, GetRiskLayerIsTheToolsLayerAndTooLargeALayerIsRefused) {
                         "configuration risks (72 heading bins each)"));
 }
 
+// In wind: GetRiskLayer for a track heading is riskplan-tool's layer in the
+// same wind bit for bit, and an evaluation's exports carry the wind and its
+// flight time while their samples stay the ground track.
+TEST_F(GeoExportsTest, InWindTheLayerIsTheToolsAndExportsCarryTheWind) {
+  const std::string prefix = *dir_ + "/tool-layer-wind";
+  CommandResult tool = RunCommand(std::string(RISKPLAN_BIN_DIR) +
+                                  "/riskplan-tool risk-layer --map=" + *dir_ +
+                                  "/maps/lux-demo --out=" + prefix +
+                                  " --agl_m=80 --heading_deg=30 --stride=10 --wind=8@270 2>&1");
+  ASSERT_EQ(tool.exit_code, 0) << tool.output;
+  EXPECT_THAT(tool.output, HasSubstr("in a wind of 8 m/s from 270.0 deg"));
+  v1::GetRiskLayerRequest request;
+  request.set_map("lux-demo");
+  request.set_stride(10);
+  request.set_height_agl_m(80.0);
+  request.set_heading_rad(30.0 * M_PI / 180.0);
+  request.mutable_wind()->mutable_from()->set_speed_mps(8);
+  request.mutable_wind()->mutable_from()->set_from_deg(270);
+  v1::GetRiskLayerResponse layer;
+  grpc::Status s = client_->GetRiskLayer(request, &layer);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_EQ(layer.wind().speed_mps(), 8.0);
+  ASSERT_TRUE(layer.wind().has_from_true_deg());  // lux-demo has a geo-reference
+  EXPECT_NEAR(layer.wind().from_true_deg(), 270.0, 0.1);
+  GDALAllRegister();
+  std::unique_ptr<void, Closer> ds(GDALOpen((prefix + ".tif").c_str(), GA_ReadOnly));
+  ASSERT_NE(ds, nullptr);
+  std::vector<double> tif(40 * 40);
+  ASSERT_EQ(GDALRasterIO(GDALGetRasterBand(ds.get(), 1), GF_Read, 0, 0, 40, 40, tif.data(), 40, 40,
+                         GDT_Float64, 0, 0),
+            CE_None);
+  int defined = 0;
+  for (int row = 0; row < 40; ++row) {
+    for (int c = 0; c < 40; ++c) {
+      const double rpc = layer.risk((39 - row) * 40 + c);
+      const double file = tif[row * 40 + c];
+      if (std::isnan(file)) {
+        EXPECT_TRUE(std::isnan(rpc)) << row << ", " << c;
+      } else {
+        EXPECT_EQ(rpc, file) << row << ", " << c;
+        ++defined;
+      }
+    }
+  }
+  EXPECT_GT(defined, 100);
+
+  const std::string geojson = *dir_ + "/wind.geojson";
+  CommandResult r = Cli(
+      "eval --map=lux-demo --wind=wgs84:6@90 --waypoints='300,375,240,0.785; "
+      "1700,1625,250,0.785' --geojson_out=" +
+      geojson);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("wind 6 m/s from "));
+  EXPECT_THAT(r.output, HasSubstr("deg true)"));
+  std::ifstream in(geojson);
+  const Json j = Json::parse(in);
+  const Json& properties = j["features"][0]["properties"];
+  EXPECT_EQ(properties["wind_speed_mps"].get<double>(), 6.0);
+  EXPECT_NEAR(properties["wind_from_true_deg"].get<double>(), 90.0, 1e-9);
+  EXPECT_EQ(properties["airspeed_mps"].get<double>(), 18.0);
+  EXPECT_NE(properties["flight_time_s"].get<double>(),
+            properties["length_m"].get<double>() / 18.0);
+}
+
 }  // namespace
 }  // namespace riskplan::testing

@@ -474,6 +474,9 @@ TEST_F(Wgs84ApiTest, EvaluationsCarryBothFramesWhereTheyCan) {
   TrajectoryEvaluation evaluation;
   evaluation.risk = 1e-7;
   evaluation.length_m = 900.0;
+  // The answer reports the evaluation's own time (EvaluateTrajectory's: length / v
+  // in still air, as here), not one recomputed from the length.
+  evaluation.flight_time_s = FlightTimeS(900.0, 20.0);
   evaluation.admissible = false;
   evaluation.first_violation =
       Violation{ViolationKind::kOutsideMap, {1e9, 0, 200, 0}, 10.0, 0, std::nan("")};
@@ -520,6 +523,51 @@ TEST_F(Wgs84ApiTest, RiskLayerResponse) {
   ASSERT_EQ(r.bounds_wgs84().corners_size(), 4);
   const geo::GeoPose sw = Geo(1010, -500, 0, 0);
   EXPECT_DOUBLE_EQ(r.bounds_wgs84().corners(0).lon_deg(), sw.lon_deg);
+}
+
+// A wind from true north becomes the grid direction with the convergence at
+// the map's centre, and the answer echoes both; a map without geo-reference
+// takes only the local form.
+TEST_F(Wgs84ApiTest, AWindFromTrueNorthTurnsByTheGridConvergence) {
+  absl::StatusOr<double> gamma = frame_->GridConvergenceRad({2000.0, 500.0});  // the centre
+  ASSERT_TRUE(gamma.ok()) << gamma.status();
+  const double gamma_deg = *gamma / kDeg;
+  EXPECT_GT(std::fabs(gamma_deg), 1e-3);  // east of the origin's meridian: it matters
+  v1::EvaluateRiskRequest e;
+  e.set_map("geo-city");
+  v1::Point3* p = e.mutable_polyline()->add_points();
+  p->set_x(1200);
+  p->set_y(500);
+  p->set_z(200);
+  p = e.mutable_polyline()->add_points();
+  p->set_x(2800);
+  p->set_y(500);
+  p->set_z(200);
+  e.mutable_wind_wgs84()->mutable_from()->set_speed_mps(6);
+  e.mutable_wind_wgs84()->mutable_from()->set_from_deg(450);  // 90: modulo 360
+  absl::StatusOr<EvaluateSpec> spec = ValidateEvaluateRequest(e, *registry_, limits_);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->params.wind_speed_mps, 6.0);
+  EXPECT_NEAR(spec->params.wind_from_deg, 90.0 - gamma_deg, 1e-12);
+  EXPECT_NEAR(spec->wind.from_deg(), 90.0 - gamma_deg, 1e-12);
+  ASSERT_TRUE(spec->wind.has_from_true_deg());
+  EXPECT_NEAR(spec->wind.from_true_deg(), 90.0, 1e-12);
+  // An east wind blows west: the vector is (-6, 0) turned by the convergence.
+  EXPECT_NEAR(spec->wind.x_mps(), -6.0 * std::cos(*gamma), 1e-9);
+  EXPECT_NEAR(spec->wind.y_mps(), -6.0 * std::sin(*gamma), 1e-9);
+
+  // The same in local terms needs no frame; on the map without one the
+  // WGS84 form is refused naming the field and the map.
+  e.set_map("flat");
+  absl::StatusOr<EvaluateSpec> refused = ValidateEvaluateRequest(e, *registry_, limits_);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(refused.status().message(), HasSubstr("wind_wgs84: map 'flat' has no geo-reference"));
+  e.mutable_wind()->mutable_from()->set_speed_mps(6);
+  e.mutable_wind()->mutable_from()->set_from_deg(90);
+  absl::StatusOr<EvaluateSpec> local = ValidateEvaluateRequest(e, *registry_, limits_);
+  ASSERT_TRUE(local.ok()) << local.status();
+  EXPECT_EQ(local->params.wind_from_deg, 90.0);
+  EXPECT_FALSE(local->wind.has_from_true_deg());
 }
 
 }  // namespace

@@ -354,6 +354,38 @@ def main():
         check(abs(length - want) < 4 * 2 * metres_per_px,
               f"a 3-point polyline evaluated: {evaluation}")
 
+        # 4b. The same polyline in a wind set on the page: the answer's wind
+        # drawn as an arrow, each sample's ground speed, and a bad wind refused
+        # with the server's message naming the field.
+        def evaluate_drawn_polyline():
+            click(driver, "draw-polyline")
+            for x, y in corners_m:
+                click_drag(driver, (y, x), (0, 0))
+            click(driver, "evaluate-polyline")
+
+        set_value(driver, "wind-speed", 8)
+        set_value(driver, "wind-from", 270)
+        driver.execute_script("rp.profile = null;")
+        evaluate_drawn_polyline()
+        wf.wait_for(lambda: js(driver, "rp.profile && rp.profile.wind && "
+                                       "rp.profile.wind.speed_mps === 8"), 120,
+                    "the polyline's evaluation in wind")
+        arrow = js(driver, "document.getElementById('wind-arrow').textContent")
+        check("wind 8.0 m/s" in arrow and "from 270" in arrow, f"the wind's arrow: {arrow!r}")
+        speeds = js(driver, "rp.profile.samples.map(s => s.ground_speed_mps)")
+        check(min(speeds) >= 18 - 8 - 1e-9 and max(speeds) <= 18 + 8 + 1e-9 and
+              max(speeds) > 18, f"samples' ground speeds {min(speeds):.2f} .. {max(speeds):.2f} m/s")
+        check("flight time" in js(driver, "document.getElementById('evaluation').textContent"),
+              "the evaluation gives its flight time in wind")
+        set_value(driver, "wind-speed", 20)
+        evaluate_drawn_polyline()
+        wf.wait_for(lambda: not js(driver, "document.getElementById('error').hidden"), 60,
+                    "the too-strong wind to be refused")
+        shown = js(driver, "document.getElementById('error-message').textContent")
+        check("wind.from.speed_mps has value 20" in shown, f"the server's message: {shown!r}")
+        set_value(driver, "wind-speed", 0)
+        driver.execute_script("document.getElementById('error').hidden = true;")
+
         # 5. Cancel a long plan; the server's running-plans gauge drops.
         wf.wait_for(lambda: wf.metric(metrics, "riskplan_running_plans") == 0, 60,
                     "the first plan to leave the server's gauge")

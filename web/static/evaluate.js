@@ -30,11 +30,13 @@ const profileChart = new Chart($('profile-chart'), {
 function sampleText(s) {
   return `${Number(s.arc_length_m).toFixed(0)} m, piece ${s.piece}: (${s.x.toFixed(0)}, ${s.y.toFixed(0)}, ${s.z.toFixed(0)}) m, ` +
     `M ${s.defined ? Number(s.risk).toExponential(3) : 'not defined'}, I ${Number(s.impact_factor).toExponential(2)} /m², ` +
-    `S̃ ${Number(s.expected_shelter).toFixed(2)}, p_cas ${Number(s.casualty_probability).toFixed(3)}`;
+    `S̃ ${Number(s.expected_shelter).toFixed(2)}, p_cas ${Number(s.casualty_probability).toFixed(3)}` +
+    (s.ground_speed_mps !== undefined ? `, ground speed ${Number(s.ground_speed_mps).toFixed(1)} m/s` : '');
 }
 
 async function evaluate(trajectory) {
-  const r = await api('POST', '/api/evaluate', Object.assign({ map: rp.map.name, include_samples: true }, trajectory));
+  const r = await api('POST', '/api/evaluate', Object.assign({ map: rp.map.name, include_samples: true }, windFields(), trajectory));
+  if (r.wind) showWind(r.wind);
   rp.profile = r;
   profileChart.data.datasets[0].data = r.samples.map((s) => ({ x: s.arc_length_m, y: s.risk }));
   showChart('profile', true);
@@ -42,6 +44,7 @@ async function evaluate(trajectory) {
   let text = `risk ${r.risk.toExponential(4)} casualties per flight, ${r.length_m.toFixed(0)} m, ` +
     `${r.risk_per_flight_hour.toExponential(2)} per flight hour, ${r.sample_count} samples; ` +
     (r.admissible ? 'admissible' : 'NOT admissible');
+  if (r.wind && r.wind.speed_mps > 0) text += `; flight time ${r.flight_time_s.toFixed(0)} s in a wind of ${r.wind.speed_mps} m/s`;
   if (!r.admissible && r.first_violation) text += ': ' + r.first_violation.message;
   $('evaluation').textContent = text;
   return r;
@@ -83,7 +86,9 @@ async function download(format) {
   if (!waypoints) throw new ApiError('FAILED_PRECONDITION', 'plan a trajectory first', 'page');
   const res = await fetch(`/api/export?format=${format}`, {
     method: 'POST', headers: { 'Content-Type': 'application/json' },
-    body: JSON.stringify({ map: rp.map.name, waypoints: { poses: waypoints }, path_spacing_m: 25 }),
+    // In the plan's wind, so that the exported times are the plan's.
+    body: JSON.stringify({ map: rp.map.name, waypoints: { poses: waypoints }, path_spacing_m: 25,
+      wind: rp.lastPlanRequest && rp.lastPlanRequest.wind, wind_wgs84: rp.lastPlanRequest && rp.lastPlanRequest.wind_wgs84 }),
   });
   if (!res.ok) {
     const j = await res.json().catch(() => ({ code: 'HTTP_' + res.status, message: res.statusText }));

@@ -170,7 +170,11 @@ async function showRiskLayer() {
   const stride = Math.max(1, Math.ceil(Math.max(info.nx, info.ny) / side));
   const layer = await api('POST', '/api/risk_layer', {
     map: info.name, stride, height_agl_m: Number($('risk-height').value), max_over_headings: maxOver,
+    // The track as the API's theta: counter-clockwise from east (grid).
+    heading_rad: maxOver ? 0 : (90 - Number($('risk-heading').value)) * Math.PI / 180,
+    ...windFields(),
   });
+  if (layer.wind) showWind(layer.wind);
   const values = layer.risk.map(Number);  // "NaN" where M is not defined
   const [lo, hi] = decades(values);
   const url = gridImage(layer.nx, layer.ny, values, (v) => {
@@ -180,7 +184,7 @@ async function showRiskLayer() {
     return [c[0], c[1], c[2], 190];
   });
   addOverlay('risk layer', rasterOverlay(layer, url), true,
-    scaleLegend(`risk M at ${layer.height_agl_m} m above ground${layer.max_over_headings ? ' (max over headings)' : ''}, casualties per failure`,
+    scaleLegend(`risk M at ${layer.height_agl_m} m above ground${layer.max_over_headings ? ' (max over headings)' : ''}${layer.wind && layer.wind.speed_mps > 0 ? ` in a wind of ${layer.wind.speed_mps} m/s` : ''}, casualties per failure`,
       HOT, Array.from({ length: hi - lo + 1 }, (_, k) => `1e${lo + k}`)) +
     '<div class="item"><span class="key" style="background:rgba(120,120,120,0.5)"></span>M not defined (impact outside the map)</div>');
 }

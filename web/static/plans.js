@@ -90,6 +90,7 @@ function onUpdate(e) {
   lastSeenId = id;
   const d = JSON.parse(e.data);
   const u = d.update;
+  if (u.wind) showWind(u.wind);
   $('iterations').textContent = u.iterations;
   $('improvements').textContent = u.improvements;
   const t = u.trajectory;
@@ -180,6 +181,7 @@ async function startPlan() {
       // than about 20 pictures a second is more than anyone can follow.
       min_update_interval_ms: String(Number($('update-interval').value)),
     };
+    Object.assign(request, windFields());
     rp.lastPlanRequest = request;
     const r = await api('POST', '/api/plans', request);
     rp.planId = r.id;

@@ -156,5 +156,53 @@ TEST(WindGuideTest, RouteOverUniformGroundStaysStraightInAWind) {
   }
 }
 
+
+// The air heading's bin that RiskModel reads from its table of track-heading
+// intervals is the wind triangle's, bit for bit: every heading of a fine
+// sweep, the bin boundaries' own track headings and their neighbours, for
+// winds from several directions and speeds up to the bound.
+TEST(WindAirBinTest, TheBinOfEveryTrackHeadingIsTheWindTrianglesBin) {
+  const auto calm = testing_maps::SyntheticModel("uniform", 200, 200, 10.0, nullptr);
+  const Pose centre{1000.0, 1000.0, testing_maps::kFlightZM, 0.0};
+  for (const double speed : {0.5, 8.0, 9.0}) {
+    for (const double from : {0.0, 33.0, 90.0, 271.5}) {
+      ModelParams p = calm->params();
+      p.wind_speed_mps = speed;
+      p.wind_from_deg = from;
+      auto model = RiskModel::Create(calm->map_ptr(), p, calm->table_ptr());
+      ASSERT_TRUE(model.ok()) << model.status();
+      const ImpactTable& t = (*model)->table();
+      const WindTriangle& w = (*model)->wind();
+      std::vector<double> thetas;
+      for (int k = 0; k < 200000; ++k) thetas.push_back(kTwoPi * k / 200000.0);
+      // Where the air heading crosses a bin boundary: bisect each interval
+      // whose ends differ, down to adjacent doubles.
+      const int n = 4096;
+      for (int c = 0; c < n; ++c) {
+        double a = kTwoPi * c / n;
+        double b = kTwoPi * (c + 1) / n;
+        if (t.HeadingBinOf(w.AirHeading(a)) == t.HeadingBinOf(w.AirHeading(b))) continue;
+        for (int it = 0; it < 80 && std::nextafter(a, b) < b; ++it) {
+          const double m = 0.5 * (a + b);
+          (t.HeadingBinOf(w.AirHeading(m)) == t.HeadingBinOf(w.AirHeading(a)) ? a : b) = m;
+        }
+        for (double x = a, k = 0; k < 4; ++k, x = std::nextafter(x, 0.0)) thetas.push_back(x);
+        for (double x = b, k = 0; k < 4; ++k, x = std::nextafter(x, 10.0)) thetas.push_back(x);
+      }
+      int64_t checked = 0;
+      for (const double theta : thetas) {
+        Pose q = centre;
+        q.theta = theta;
+        KernelSite site;
+        ASSERT_TRUE((*model)->Locate(q, &site));
+        ASSERT_EQ(site.heading_bin, t.HeadingBinOf(w.AirHeading(theta)))
+            << "theta " << theta << " wind " << speed << " from " << from;
+        ++checked;
+      }
+      EXPECT_GT(checked, 200000);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace riskplan

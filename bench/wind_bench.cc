@@ -201,6 +201,7 @@ void Build(const std::shared_ptr<const RiskModel>& calm) {
 
 struct Evaluated {
   double risk = 0.0;
+  double length_m = 0.0;
   bool admissible = false;
   std::string violation;
 };
@@ -212,8 +213,35 @@ Evaluated Evaluate(const RiskModel& model, const std::vector<Pose>& waypoints) {
   auto eval = EvaluateTrajectory(model, *pieces);
   if (!eval.ok()) return e;
   e.risk = eval->risk;
+  e.length_m = eval->length_m;
   e.admissible = eval->admissible;
   if (eval->first_violation.has_value()) e.violation = eval->first_violation->ToString();
+  return e;
+}
+
+// `waypoints` flown with `flown_in`'s manoeuvres, as the polyline of its
+// path every 5 m, evaluated in `model`: the same ground track in another air
+// (the turns are not re-flown with that air's radius).
+Evaluated SameTrack(const RiskModel& flown_in, const RiskModel& model,
+                    const std::vector<Pose>& waypoints) {
+  Evaluated e;
+  auto pieces = PiecesFromWaypoints(waypoints, flown_in.params());
+  if (!pieces.ok()) return e;
+  std::vector<Point3> points;
+  for (const TrajectoryPiece& piece : *pieces) {
+    const int n = std::max(1, static_cast<int>(std::ceil(piece.Length() / 5.0)));
+    for (int k = points.empty() ? 0 : 1; k <= n; ++k) {
+      const Pose q = piece.PoseAt(piece.Length() * k / n);
+      points.push_back({q.x, q.y, q.z});
+    }
+  }
+  auto line = PiecesFromPolyline(points, points.size() + 1);
+  if (!line.ok()) return e;
+  auto eval = EvaluateTrajectory(model, *line);
+  if (!eval.ok()) return e;
+  e.risk = eval->risk;
+  e.length_m = eval->length_m;
+  e.admissible = eval->admissible;
   return e;
 }
 
@@ -266,6 +294,16 @@ void Blind(const std::shared_ptr<const RiskModel>& calm,
                   still && !blind.admissible ? "*" : " ", windy ? windy->risk : NAN,
                   still && windy ? blind.risk / windy->risk : NAN, windy ? back.risk : NAN,
                   windy ? (back.admissible ? "yes" : "no") : "-");
+      const Evaluated track = still ? SameTrack(*calm, *wind, still->waypoints) : Evaluated{};
+      const Evaluated track_calm = still ? SameTrack(*calm, *calm, still->waypoints) : Evaluated{};
+      std::printf("    the still plan's ground track (R manoeuvres, a 5 m polyline): %.4e in still "
+                  "air, %.4e in the wind (x %.2f)%s\n",
+                  track_calm.risk, track.risk, track.risk / track_calm.risk,
+                  track.admissible ? "" : ", not admissible");
+      std::printf("    lengths: the still plan %.0f m in still air, %.0f m flown in the wind (R_w); "
+                  "the wind plan %.0f m in the wind, %.0f m in still air\n",
+                  still ? still->length_m : NAN, still ? blind.length_m : NAN,
+                  windy ? windy->length_m : NAN, windy ? back.length_m : NAN);
       if (still && !blind.admissible) {
         std::printf("    * the still-air plan is not admissible in this wind: %s\n",
                     blind.violation.c_str());

@@ -55,7 +55,9 @@ TEST(ModelCacheWindTest, AWindsModelBorrowsTheDefaultKernelWeights) {
   EXPECT_EQ(RiskModelCache::ChargedBytes(**wind, &calm->table()), charged);
   const RiskModelCache::Stats s = (*cache)->stats();
   EXPECT_EQ(s.overridden_bytes, charged);
-  EXPECT_EQ(charged, (*wind)->GlideBytes() + (b.MemoryBytes() - b.WeightBytes()));
+  // The glide layer, the kernel headers and the air-heading bins (4096
+  // entries of 2 bytes).
+  EXPECT_EQ(charged, (*wind)->GlideBytes() + (b.MemoryBytes() - b.WeightBytes()) + 4096 * 2);
   EXPECT_LT(charged, a.WeightBytes());
 }
 

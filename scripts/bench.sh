@@ -2,7 +2,7 @@
 # Runs riskplan's benchmark programs and prints their reports. Results and the
 # commands that produced them are recorded in docs/benchmarks.md.
 #
-#   bash scripts/bench.sh [planner|shared|kernel|rtl|all]   (default: all)
+#   bash scripts/bench.sh [planner|shared|wind|kernel|rtl|all]   (default: all)
 #
 # Benchmarks are measurements, not tests: run them on a quiet machine and quote
 # medians. Extra variables: SEEDS (planner seeds, default 5), BUDGET_S (3).
@@ -29,6 +29,10 @@ if [ "$what" = shared ] || [ "$what" = all ]; then
   "$BIN/riskplan-bench-shared-tree"
   echo "== the same from one area: 32 starts within 1.2 km of (2000, 6000) =="
   "$BIN/riskplan-bench-shared-tree" --start_area=2000,6000,1200
+fi
+if [ "$what" = wind ] || [ "$what" = all ]; then
+  echo "== planning in a wind: node rate, a new wind's model, wind-blind plans (bench/wind_bench.cc) =="
+  "$BIN/riskplan-bench-wind" --seeds="${SEEDS:-3}" --budget_s=2
 fi
 if [ "$what" = rtl ] || [ "$what" = all ]; then
   echo "== the component's RTL under Verilator: cycles by lane count (bench/rtl_bench.cc) =="

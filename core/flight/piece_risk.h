@@ -29,6 +29,7 @@
 #define RISKPLAN_CORE_FLIGHT_PIECE_RISK_H_
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/base/check.h"
@@ -90,7 +91,13 @@ class PieceRisk {
     if (wind_.calm()) {
       if (m.defined) sum_ += m.risk;
     } else {
-      const double inv_speed = 1.0 / wind_.GroundSpeed(q.theta);
+      // The straight parts of a manoeuvre repeat their heading: their ground
+      // speed is computed once (the same number).
+      if (!(q.theta == last_theta_)) {
+        last_theta_ = q.theta;
+        last_inv_speed_ = 1.0 / wind_.GroundSpeed(q.theta);
+      }
+      const double inv_speed = last_inv_speed_;
       if (m.defined) sum_ += m.risk * inv_speed;
       inv_speed_sum_ += inv_speed;
     }
@@ -133,6 +140,9 @@ class PieceRisk {
   double sum_ = 0.0;        // sum of M (M / gs in wind) over midpoints [0, added_), in order
   double inv_speed_sum_ = 0.0;  // sum of 1 / gs over midpoints [0, added_), in wind
   int64_t added_ = 0;
+  // The last midpoint's track heading and 1 / gs of it (in wind).
+  double last_theta_ = std::numeric_limits<double>::quiet_NaN();
+  double last_inv_speed_ = 0.0;
 };
 
 // Appends every midpoint of `piece` sampled every `step_m` to `out`

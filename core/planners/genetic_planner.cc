@@ -362,7 +362,9 @@ absl::StatusOr<PlanResult> Run::Execute() {
     }
     for (size_t k = 0; k < risks.size(); ++k) line.Add(risks[k], samples[k]);
     // A floor of 1e-12 per metre keeps the weight finite on an empty map.
-    const double per_metre = mp.failure_rate_per_s / mp.airspeed_mps;
+    // (lambda / gs of the line's track: lambda / v in still air.)
+    const double per_metre =
+        mp.failure_rate_per_s / model_.wind().GroundSpeed(std::atan2(g.y - s.y, g.x - s.x));
     risk_ref_ = std::max(line.Risk(), per_metre * length_ref_m_ * 1e-12);
     if (!(risk_ref_ > 0.0)) risk_ref_ = 1.0;  // lambda = 0: no risk anywhere
   }

@@ -207,10 +207,14 @@ absl::Status CheckEdgeSampleBound(PlannerAlgorithm algorithm, const RiskMap& map
   if (b.samples <= max_edge_samples) return absl::OkStatus();
   return absl::InvalidArgumentError(absl::StrFormat(
       "an edge of a %s plan on map '%s' may need %d samples: up to %.1f m long (the map's "
-      "diagonal %.1f m, turn_radius_m %g, climbs of up to %.1f m at max_climb_rad %g) sampled "
+      "diagonal %.1f m, %s %g, climbs of up to %.1f m at %s %g) sampled "
       "every %g m (sample_step_m%s); the limit is %d samples per edge%s",
       PlannerAlgorithmName(algorithm), map.name(), b.samples, b.length_m, b.map_diagonal_m,
-      params.GroundTurnRadius(), b.climb_m, params.GroundClimbAngle(), b.step_m,
+      // In a wind the manoeuvres use R_w and gamma_w (spec section 5).
+      params.Calm() ? "turn_radius_m" : "turn_radius_m widened by the wind to",
+      params.GroundTurnRadius(), b.climb_m,
+      params.Calm() ? "max_climb_rad" : "max_climb_rad flattened by the wind to",
+      params.GroundClimbAngle(), b.step_m,
       algorithm == PlannerAlgorithm::kGenetic ? " or risk_step_m" : "", max_edge_samples,
       limit_source.empty() ? std::string() : absl::StrFormat(" (%s)", std::string(limit_source))));
 }

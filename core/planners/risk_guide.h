@@ -11,7 +11,10 @@
 // 8-connected path from the start's cell to the goal's under
 // cost = length x (lambda / v) x M (plus a small cost per metre, so that it
 // does not wander over empty ground), resampled every `spacing_m` as
-// waypoints heading along it.
+// waypoints heading along it. In a wind (spec version 3) the time over a
+// step is length / gs(theta) of its direction theta, so a step costs
+// length x lambda x M / gs(theta): the route prefers to cross dense ground
+// with the wind behind it, as the exact risk does.
 //
 // The grid depends only on the model and the cell size, so a tree that serves
 // several starts (core/planners/shared_goal_tree.h) builds it once
@@ -38,6 +41,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/base/geometry.h"
+#include "core/base/wind.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
 
@@ -79,7 +83,13 @@ class CoarseRiskGrid {
       if (absl::Status s = evaluator->EvaluateBatch(model, poses, risks); !s.ok()) return s;
     }
     g.density_.assign(static_cast<size_t>(g.nx_) * g.ny_, kClosed);  // risk per metre
-    const double per_metre = mp.failure_rate_per_s / mp.airspeed_mps;
+    // Still air: risk per metre, lambda / v x M. In a wind the time over a
+    // metre depends on the direction of travel (spec section 4), so the
+    // density is lambda x M per second and Route divides it by the ground
+    // speed of each step's direction.
+    g.calm_ = model.wind().calm();
+    const double per_metre =
+        g.calm_ ? mp.failure_rate_per_s / mp.airspeed_mps : mp.failure_rate_per_s;
     double total = 0.0;
     size_t priced = 0;
     for (size_t c = 0; c < open_cells.size(); ++c) {
@@ -98,6 +108,17 @@ class CoarseRiskGrid {
     }
     // A cost per metre of 1 % of the mean: shortest among routes of equal risk.
     g.floor_cost_ = priced == 0 ? 0.0 : 0.01 * total / priced;
+    if (!g.calm_) {
+      g.floor_cost_ /= mp.airspeed_mps;
+      // 1 / gs of the eight steps of the grid, (di, dj) in Route's order.
+      const WindTriangle& wind = model.wind();
+      for (int dj = -1; dj <= 1; ++dj) {
+        for (int di = -1; di <= 1; ++di) {
+          g.inverse_ground_speed_[(dj + 1) * 3 + (di + 1)] =
+              (di == 0 && dj == 0) ? 0.0 : 1.0 / wind.GroundSpeed(std::atan2(dj, di));
+        }
+      }
+    }
     return g;
   }
 
@@ -151,7 +172,11 @@ class CoarseRiskGrid {
           const int n = nj * nx + ni;
           if (density[n] == kClosed) continue;
           const double length = cell_m * ((di != 0 && dj != 0) ? std::sqrt(2.0) : 1.0);
-          const double nd = d + length * (0.5 * (density[c] + density[n]) + floor_cost);
+          // In a wind: the step's time, length / gs of its direction.
+          const double mean = calm_ ? 0.5 * (density[c] + density[n])
+                                    : 0.5 * (density[c] + density[n]) *
+                                          inverse_ground_speed_[(dj + 1) * 3 + (di + 1)];
+          const double nd = d + length * (mean + floor_cost);
           if (nd < dist[n]) {
             dist[n] = nd;
             prev[n] = c;
@@ -259,8 +284,12 @@ class CoarseRiskGrid {
   double cell_m_ = 0.0;
   int nx_ = 1;
   int ny_ = 1;
-  std::vector<double> density_;  // risk per metre of each cell; kClosed: not flown
+  // Still air: risk per metre of each cell; in a wind risk per second
+  // (lambda x mean M). kClosed: not flown.
+  std::vector<double> density_;
   double floor_cost_ = 0.0;
+  bool calm_ = true;
+  double inverse_ground_speed_[9] = {};  // 1 / gs of the step (di, dj), in a wind
 };
 
 // Interior waypoints of the guide route from `start` to `goal` (neither

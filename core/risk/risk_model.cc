@@ -18,11 +18,11 @@ namespace {
 // its terrain by h > 0, with a finite heading: the bins (the heading bin of
 // the air heading, version 3) and the impact cell, whether or not the window
 // lies inside the map.
-KernelSite SiteOf(const RiskMap& map, const ImpactTable& table, const WindTriangle& wind,
-                  const Pose& q, double h) {
+KernelSite SiteOf(const RiskMap& map, const ImpactTable& table, int heading_bin, const Pose& q,
+                  double h) {
   KernelSite site;
   site.height_bin = table.HeightBinOf(h);
-  site.heading_bin = table.HeadingBinOf(wind.AirHeading(q.theta));
+  site.heading_bin = heading_bin;
   const ImpactKernel& kernel = table.kernel(site.height_bin, site.heading_bin);
   site.impact_i = static_cast<int>(std::floor((q.x + kernel.offset_x_m - map.x0()) / map.res()));
   site.impact_j = static_cast<int>(std::floor((q.y + kernel.offset_y_m - map.y0()) / map.res()));
@@ -135,6 +135,7 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
     model->glide_ = model->own_glide_.get();
   }
   const ImpactTable& t = *model->table_;
+  if (!params.Calm()) model->BuildAirBins();
   model->first_band_bin_ = t.HeightBinOf(params.min_agl_m);
   CellMargins upto;
   for (int b = model->first_band_bin_; b <= t.HeightBinOf(params.max_agl_m); ++b) {
@@ -143,6 +144,38 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
   }
   model->band_margins_ = upto;
   return std::shared_ptr<const RiskModel>(std::move(model));
+}
+
+void RiskModel::BuildAirBins() {
+  // Each interval [a, b) of track headings gets the bin of its ends' air
+  // headings when both are the same bin and lie more than kGuardRad inside
+  // it: psi(theta) is increasing (W < v), so every track heading of the
+  // interval has its air heading between those of the ends, and the
+  // rounding of AirHeading (a few 1e-16 rad) cannot reach a bin boundary.
+  // Otherwise -1: the bin is computed exactly.
+  constexpr double kGuardRad = 1e-9;
+  const ImpactTable& t = *table_;
+  const double width = kTwoPi / t.heading_bins();
+  const auto inside = [&](double psi) {  // distance to the nearest bin boundary, rad
+    const double u = psi / width + 0.5;
+    const double f = u - std::floor(u);
+    return std::min(f, 1.0 - f) * width;
+  };
+  air_bins_.assign(kAirBinCells, -1);
+  for (int c = 0; c < kAirBinCells; ++c) {
+    const double a = kTwoPi * c / kAirBinCells;
+    const double b = kTwoPi * (c + 1) / kAirBinCells;
+    const double psi_a = wind_.AirHeading(a);
+    const double psi_b = wind_.AirHeading(b);
+    const int bin_a = t.HeadingBinOf(psi_a);
+    if (bin_a != t.HeadingBinOf(psi_b)) continue;
+    if (!(inside(psi_a) > kGuardRad && inside(psi_b) > kGuardRad)) continue;
+    // Less than half a bin apart (around the circle): no boundary between.
+    double span = std::fabs(psi_b - psi_a);
+    span = std::min(span, kTwoPi - span);
+    if (!(span < 0.5 * width)) continue;
+    air_bins_[c] = static_cast<int16_t>(bin_a);
+  }
 }
 
 double RiskModel::WindowCeilingAgl(int i, int j) const {
@@ -200,7 +233,7 @@ ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) cons
   const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h);
   if (kind != ViolationKind::kNone) return kind;
   // Last, as it needs the height bin: the impact window inside the map.
-  if (!WindowInsideMap(SiteOf(*map_, *table_, wind_, q, h))) return ViolationKind::kImpactOutsideMap;
+  if (!WindowInsideMap(SiteOf(*map_, *table_, AirHeadingBin(q.theta), q, h))) return ViolationKind::kImpactOutsideMap;
   return ViolationKind::kNone;
 }
 
@@ -324,7 +357,7 @@ bool RiskModel::Locate(const Pose& q, KernelSite* site) const {
   }
   const double h = q.z - static_cast<double>(map_->terrain(i, j));
   if (!(h > 0.0)) return false;
-  *site = SiteOf(*map_, *table_, wind_, q, h);
+  *site = SiteOf(*map_, *table_, AirHeadingBin(q.theta), q, h);
   return WindowInsideMap(*site);
 }
 
@@ -378,7 +411,8 @@ size_t RiskModel::GlideBytes() const {
 }
 
 size_t RiskModel::MemoryBytes() const {
-  return table_->MemoryBytes() + (own_glide_ ? own_glide_->size() * sizeof(double) : 0);
+  return table_->MemoryBytes() + (own_glide_ ? own_glide_->size() * sizeof(double) : 0) +
+         air_bins_.capacity() * sizeof(int16_t);
 }
 
 }  // namespace riskplan

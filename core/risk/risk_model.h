@@ -7,6 +7,7 @@
 #ifndef RISKPLAN_CORE_RISK_RISK_MODEL_H_
 #define RISKPLAN_CORE_RISK_RISK_MODEL_H_
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -181,10 +182,30 @@ class RiskModel {
   // q.z - terrain when they all hold.
   ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m) const;
 
+  // The heading bin of the air heading of track heading `theta` (spec
+  // section 3 step 2): table().HeadingBinOf(wind().AirHeading(theta)), bit
+  // for bit, from air_bins_ where it can be read there.
+  int AirHeadingBin(double theta) const {
+    if (air_bins_.empty()) return table_->HeadingBinOf(wind_.AirHeading(theta));
+    if (theta >= 0.0 && theta < kTwoPi) {
+      const int c = static_cast<int>(theta * (kAirBinCells / kTwoPi));
+      if (c < kAirBinCells && air_bins_[c] >= 0) return air_bins_[c];
+    }
+    return table_->HeadingBinOf(wind_.AirHeading(theta));
+  }
+  // Fills air_bins_ (in a wind).
+  void BuildAirBins();
+
   std::shared_ptr<const RiskMap> map_;
   std::shared_ptr<const ImpactTable> table_;
   ModelParams params_;
   WindTriangle wind_{ModelParams{}};
+  // In a wind: the air heading's bin of every track heading in each of
+  // kAirBinCells equal intervals of [0, 2 pi), or -1 where an interval comes
+  // near a bin boundary (BuildAirBins). Spares the wind triangle's sin, cos,
+  // asin and fmod per configuration. Empty in still air.
+  static constexpr int kAirBinCells = 4096;
+  std::vector<int16_t> air_bins_;
   // Points at the map's own layer or at own_glide_ below.
   const std::vector<double>* glide_ = nullptr;
   std::shared_ptr<const std::vector<double>> own_glide_;

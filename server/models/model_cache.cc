@@ -73,10 +73,16 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModelCache::Get(const RiskM
 absl::StatusOr<BoundedCache<std::string, RiskModel>::Built> RiskModelCache::Build(
     const RiskMap& map, const ModelParams& params) {
   // Share the default model's impact table when the table parameters match
-  // (only the flight band, sampling step or failure rate differ, say).
+  // (only the flight band, sampling step or failure rate differ, say), and
+  // its kernel weights when only the wind differs: RiskModel::Create then
+  // makes the wind's table from it (ImpactTable::InWind: the offsets and
+  // energies of its kernel headers, a few milliseconds).
   std::shared_ptr<const RiskModel> base = Default(map);
   std::shared_ptr<const ImpactTable> table;
-  if (base != nullptr && SameImpactTableParams(base->params(), params)) table = base->table_ptr();
+  if (base != nullptr && SameKernelParams(base->params(), params) &&
+      base->table().res_m() == map.res()) {
+    table = base->table_ptr();
+  }
   std::shared_ptr<const RiskMap> map_ptr = registry_.Find(map.name());
   if (map_ptr == nullptr) {
     return absl::NotFoundError(absl::StrFormat("map '%s' is not served", map.name()));
@@ -84,8 +90,17 @@ absl::StatusOr<BoundedCache<std::string, RiskModel>::Built> RiskModelCache::Buil
   absl::StatusOr<std::shared_ptr<const RiskModel>> model =
       RiskModel::Create(map_ptr, params, table, limits_);
   if (!model.ok()) return model.status();
-  const size_t bytes = (*model)->MemoryBytes() - (table != nullptr ? table->MemoryBytes() : 0);
-  return BoundedCache<std::string, RiskModel>::Built{*std::move(model), bytes};
+  return BoundedCache<std::string, RiskModel>::Built{*model, ChargedBytes(**model, table.get())};
+}
+
+size_t RiskModelCache::ChargedBytes(const RiskModel& model, const ImpactTable* shared) {
+  // What the model holds beyond the default model's: nothing of the table
+  // when it is that table, its kernel headers when it shares the weights (a
+  // table in another wind), and its own glide layer if any.
+  size_t bytes = model.MemoryBytes();
+  if (shared == nullptr) return bytes;
+  if (&model.table() == shared) return bytes - shared->MemoryBytes();
+  return bytes - model.table().WeightBytes();
 }
 
 RiskModelCache::Stats RiskModelCache::stats() const {

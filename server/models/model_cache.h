@@ -2,7 +2,11 @@
 //
 // Building a RiskModel costs an impact table (about 50 ms) and, when the glide
 // parameters differ from the map's, a glide layer (about 0.5 s on an 8 km
-// map). The default-parameter model of every map is built once at start-up
+// map). A model that differs from the default only in its wind (or in
+// parameters that do not shape the kernels) borrows the default model's
+// kernel weights (RiskModel::Create with the default table: ImpactTable::
+// InWind) and is charged only what it holds beyond them: its kernel headers
+// and its glide layer (the wind's, spec version 3 section 6). The default-parameter model of every map is built once at start-up
 // and kept for ever; models for overridden parameters are kept in a bounded
 // LRU. Models are immutable and shared: a plan keeps its model alive even
 // after the cache evicts it.
@@ -72,6 +76,12 @@ class RiskModelCache {
 
   // A string that is equal exactly when every parameter is equal, bit for bit.
   static std::string Fingerprint(const ModelParams& params);
+
+  // The bytes a cached `model` is charged: MemoryBytes() less what it shares
+  // with `shared` (the default model's table it was made from, or null):
+  // the whole table when it is `shared` itself, else the kernel weights (a
+  // table in another wind shares them).
+  static size_t ChargedBytes(const RiskModel& model, const ImpactTable* shared);
 
  private:
   RiskModelCache(const MapRegistry& registry, size_t max_overridden, const ModelBuildLimits& limits)

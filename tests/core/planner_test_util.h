@@ -69,7 +69,8 @@ inline double ReEvaluate(const RiskModel& model, const std::vector<Pose>& waypoi
 
 // Spec version 2: every admissibility sample of every piece of `waypoints`
 // has its impact window wholly inside the map, computed here from the impact
-// table and the map alone. Adds the number of samples checked to `*samples`.
+// table and the map alone (version 3: at the air heading's bin, with the
+// wind's offset). Adds the number of samples checked to `*samples`.
 inline void ExpectImpactWindowsInside(const RiskModel& model, const std::vector<Pose>& waypoints,
                                       int64_t* samples) {
   auto pieces = PiecesFromWaypoints(waypoints, model.params());
@@ -84,7 +85,7 @@ inline void ExpectImpactWindowsInside(const RiskModel& model, const std::vector<
       ASSERT_TRUE(map.CellOf(q.x, q.y, &i, &j));
       const double h = q.z - map.terrain(i, j);
       ASSERT_GT(h, 0.0);
-      const ImpactKernel& k = t.kernel(t.HeightBinOf(h), t.HeadingBinOf(q.theta));
+      const ImpactKernel& k = t.kernel(t.HeightBinOf(h), t.HeadingBinOf(model.wind().AirHeading(q.theta)));
       const int ci = static_cast<int>(std::floor((q.x + k.offset_x_m - map.x0()) / map.res()));
       const int cj = static_cast<int>(std::floor((q.y + k.offset_y_m - map.y0()) / map.res()));
       ASSERT_GE(ci - k.half_width, 0) << "sample at " << q.x << ", " << q.y;

@@ -4,6 +4,7 @@
 # SIGTERM. Prints each phase's time and the image's size. Not part of CI (a
 # cold build takes about half an hour on 2 cores). docs/deploy.md.
 set -euo pipefail
+export LC_ALL=C
 
 usage() {
   cat <<'EOF'
@@ -129,14 +130,24 @@ phase_start "the image: size, user, contents, --help"
 SIZE_MB=$(image_mb "$TAG")
 USER_OF=$(podman image inspect --format '{{.Config.User}}' "$TAG")
 [ -n "$USER_OF" ] && [ "$USER_OF" != root ] && [ "$USER_OF" != 0 ] || die "the image runs as '${USER_OF:-root}'"
-RUN=(podman run --rm --network=host --read-only)
+RUN=(podman run --rm --network=host --read-only --read-only-tmpfs=false)
 ids=$("${RUN[@]}" --entrypoint /usr/bin/id "$TAG")
 say "runs as: $ids"
 [[ "$ids" == uid=10001* ]] || die "the image's user is not uid 10001: $ids"
 tools=$("${RUN[@]}" --entrypoint /bin/sh "$TAG" -c \
-  'for t in gcc g++ cc c++ cpp ld ld.lld make cmake ninja ccache protoc strip as apt-get-build-dep; do command -v $t || true; done')
+  'for t in gcc g++ cc c++ cpp ld ld.lld make cmake ninja ccache protoc strip as; do command -v $t || true; done')
 # Debian 12's minbase has no compiler; `as`, `ld`, `strip` come with binutils.
 [ -z "$tools" ] || die "build tools in the runtime image: $(tr '\n' ' ' <<<"$tools")"
+devs=$("${RUN[@]}" --entrypoint /usr/bin/dpkg-query "$TAG" -W -f='${Package}\n' | grep -E -- '-dev(:|$)' || true)
+[ -z "$devs" ] || die "development packages in the runtime image: $(tr '\n' ' ' <<<"$devs")"
+# What the runtime stage adds to debian:12-slim: every package with its
+# installed size (KiB), largest first.
+"${RUN[@]}" --entrypoint /usr/bin/dpkg-query docker.io/library/debian:12-slim -W -f='${Package}\n' \
+  | sort >"$WORKDIR/slim-packages.txt"
+"${RUN[@]}" --entrypoint /usr/bin/dpkg-query "$TAG" -W -f='${Package} ${Installed-Size}\n' \
+  | sort | join -v 1 - "$WORKDIR/slim-packages.txt" | sort -k2,2nr >"$WORKDIR/runtime-packages.txt"
+say "the runtime stage adds $(wc -l <"$WORKDIR/runtime-packages.txt") packages to debian:12-slim, $(awk '{ s += $2 } END { printf "%.0f", s / 1024 }' "$WORKDIR/runtime-packages.txt") MiB installed (list: $WORKDIR/runtime-packages.txt); the largest:"
+head -n 12 "$WORKDIR/runtime-packages.txt" | awk '{ printf "    %-36s %7.1f MiB\n", $1, $2 / 1024 }' >&2
 lacking=$("${RUN[@]}" --entrypoint /bin/sh "$TAG" -c \
   'for b in /usr/local/bin/*; do m=$(ldd "$b" | grep "not found"); [ -z "$m" ] || echo "${b##*/}: $m"; done')
 [ -z "$lacking" ] || die "programs lack shared libraries in the image: $lacking"
@@ -152,7 +163,7 @@ phase_start "serve: podman run to SERVING (read-only root, host network, loopbac
 GRPC_PORT=$(free_port); HEALTH_PORT=$(free_port); METRICS_PORT=$(free_port)
 # The ENTRYPOINT as it is (--listen=0.0.0.0:50051), then the flags the
 # Kubernetes manifest would add; the last --listen wins: loopback only.
-podman run -d --name "$CONTAINER" --network=host --read-only --stop-timeout=30 "$TAG" \
+podman run -d --name "$CONTAINER" --network=host --read-only --read-only-tmpfs=false --stop-timeout=30 "$TAG" \
   --listen=127.0.0.1:"$GRPC_PORT" --health_listen=127.0.0.1:"$HEALTH_PORT" \
   --metrics_listen=127.0.0.1:"$METRICS_PORT" --grace_period_ms=5000 >/dev/null \
   || die "podman run failed"

@@ -92,7 +92,7 @@ trap 'exit 130' INT
 trap 'exit 143' TERM
 
 # ---------------------------------------------------------------- 1, 2
-phase_start "packages (install-deps.sh podman buildah runc debootstrap python3-grpcio)"
+phase_start "packages (install-deps.sh + podman, runc, catatonit, debootstrap, ...)"
 install_podman_deps
 say "$(podman --version), $(runc --version | head -1), CONTAINERS_CONF=$CONTAINERS_CONF"
 phase_end

@@ -177,15 +177,19 @@ for line in text.splitlines():
         print(line.rsplit(" ", 1)[1]); break
 EOF
 }
-# Three fleets of six missions to three goals (three groups each: two plan,
-# one waits, on a replica of --plan_threads=2), 3 s budgets.
-goals=("6800,6500,250,0.785" "1000,6500,250,2.356" "6500,1200,250,-0.785")
-starts=("1200,1500,250,0.785" "5200,1400,260,1.571" "2000,3000,250,0" "3000,5000,250,0.5" "4500,2500,250,1.0" "1500,4200,250,0")
+# Three fleets of six missions between points of demo-city that the docs
+# plan between, 3 s budgets: four goals, so four groups (missions to one
+# goal share a tree); a replica of --plan_threads=2 plans two groups at once
+# and queues the others.
+pairs=("1200,1500,250,0.785 6800,6500,250,0.785" "5200,1400,260,1.571 2600,3900,250,0"
+  "2000,3000,250,0 5200,1400,260,1.571" "6800,6500,250,0.785 1200,1500,250,0.785"
+  "2600,3900,250,0 6800,6500,250,0.785" "1200,1500,250,0.785 2600,3900,250,0")
 for ((f = 0; f < REPLICAS; f++)); do
   {
     echo "{\"tenant\": \"fleet-$f\", \"missions\": ["
     for ((m = 0; m < MISSIONS; m++)); do
-      echo "  {\"id\": \"f$f-m$m\", \"start\": \"${starts[$m]}\", \"goal\": \"${goals[$((m % 3))]}\", \"budget_ms\": 3000}$([ "$m" -lt $((MISSIONS - 1)) ] && echo ,)"
+      read -r s g <<<"${pairs[$m]}"
+      echo "  {\"id\": \"f$f-m$m\", \"start\": \"$s\", \"goal\": \"$g\", \"budget_ms\": 3000}$([ "$m" -lt $((MISSIONS - 1)) ] && echo ,)"
     done
     echo "]}"
   } >"$WORKDIR/fleet-$f.json"
@@ -219,6 +223,12 @@ for _ in $(seq 1 100); do
   sleep 0.1
 done
 say "missions in flight per replica before the signals:$busy"
+EVAL_OK='riskplan_rpcs_total{code="OK",method="EvaluateRisk"}'
+spread=""
+for ((i = 0; i < REPLICAS; i++)); do
+  spread+=" replica $i: $(metric "${METRICS[$i]}" riskplan_fleet_missions_admitted_total) missions admitted, $(metric "${METRICS[$i]}" "$EVAL_OK") EvaluateRisk OK;"
+done
+say "before the signals:$spread"
 [ "$all" -eq 1 ] || die "not every replica had missions in flight (the fleets did not spread)"
 t_sig=$(now)
 podman kill --signal KILL "${CONTAINERS[0]}" >/dev/null || die "podman kill of replica 0 failed"
@@ -268,6 +278,7 @@ fi
 drained_exit=$(podman inspect --format '{{.State.ExitCode}}' "${CONTAINERS[1]}" 2>/dev/null || echo '?')
 podman logs "${CONTAINERS[1]}" >"$WORKDIR/replica-1.log" 2>&1 || true
 [ "$stop_rc" -eq 0 ] && [ "$drained_exit" = 0 ] || { say "replica 1 did not exit 0 after SIGTERM (exit $drained_exit)"; failed=1; }
+say "after the signals: replica 2 answered $(metric "${METRICS[2]}" "$EVAL_OK") EvaluateRisk calls OK in all, $(metric "${METRICS[2]}" riskplan_fleet_missions_admitted_total) fleet missions admitted in all"
 killed_state=$(podman inspect --format '{{.State.Status}} exit {{.State.ExitCode}}, restarts {{.RestartCount}}' "${CONTAINERS[0]}" 2>/dev/null || echo '?')
 say "replica 0 after SIGKILL: $killed_state; replica 1 after the drain: exit $drained_exit; replica 2: $(health_status 127.0.0.1:"${HEALTH[2]}")"
 say "fleets done ${fleets_s} s after the signals"

@@ -88,11 +88,15 @@ def main(argv):
         args.append(f"--listen=127.0.0.1:{grpc_port}")
         c["args"] = args
         changes.append(f"listening on 127.0.0.1 only: gRPC {grpc_port}, health {health_port}, metrics {metrics_port}")
-        by_name = {"grpc": grpc_port, "health": health_port, "metrics": metrics_port}
-        for p in c.get("ports", []):
-            if p.get("name") not in by_name:
-                fail(f"container port {p} has no known name (grpc, health, metrics)")
-            p["containerPort"] = by_name[p["name"]]
+        names = sorted(p.get("name", "") for p in c.get("ports", []))
+        if names != ["grpc", "health", "metrics"]:
+            fail(f"want the container ports grpc, health and metrics, found {names}")
+        # podman 4.3 makes port mappings of a container's ports, which a pod
+        # on the host network cannot have ("PortMappings can only be used
+        # with Bridge or slirp4netns networking"): they are dropped; the
+        # server listens on the ports of its flags above.
+        del c["ports"]
+        changes.append("container ports dropped (podman: no port mappings on the host network)")
         for probe in ("startupProbe", "readinessProbe", "livenessProbe"):
             if probe in c:
                 for kind in ("grpc", "tcpSocket", "httpGet"):

@@ -30,8 +30,8 @@ phase_end() {
 summary() {
   local i
   echo "${PROG}: phase times (s)"
-  for i in "${!PHASES[@]}"; do printf '  %-64s %8s\n' "${PHASES[$i]}" "${TIMES[$i]}"; done
-  printf '  %-64s %8s\n' "total" "$(awk -v a="$T_START" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }')"
+  for i in "${!PHASES[@]}"; do printf '  %-72s %8s\n' "${PHASES[$i]}" "${TIMES[$i]}"; done
+  printf '  %-72s %8s\n' "total" "$(awk -v a="$T_START" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }')"
 }
 
 # The packages these scripts need, through the project's installer (which

@@ -23,11 +23,12 @@ Usage: bash scripts/kube-drill.sh [--image=NAME] [--client=PATH] [--workdir=DIR]
   4. the overlay (scripts/kube-overlay.py; validated too) played: three
      Deployments of one replica each, host network, loopback ports; time to
      every replica's health port SERVING (what the gRPC probes ask);
-  5. three fleets of six missions (one `riskplan fleet` each, the three
-     replicas as one --server list, rotated per fleet) and an open-loop
-     EvaluateRisk load over the same list; when every replica has missions
-     in flight, replica 0's container is killed (SIGKILL) and replica 1's
-     stopped (SIGTERM: its drain);
+  5. an open-loop EvaluateRisk load and fleets of six missions (one
+     `riskplan fleet` each, started one at a time until every replica holds
+     one: 3 to 9 fleets), every client given the three replicas as one
+     --server list; when every replica has missions in flight, replica 0's
+     container is killed (SIGKILL) and replica 1's stopped (SIGTERM: its
+     drain);
   6. checks: every fleet exits 0 with exactly one final per mission, the
      load has no error, the drained replica exited 0; then `podman kube down`.
 
@@ -177,14 +178,15 @@ for line in text.splitlines():
         print(line.rsplit(" ", 1)[1]); break
 EOF
 }
-# Three fleets of six missions between points of demo-city that the docs
-# plan between, 3 s budgets: four goals, so four groups (missions to one
-# goal share a tree); a replica of --plan_threads=2 plans two groups at once
-# and queues the others.
+# Fleets of six missions between points of demo-city that the docs plan
+# between, 3 s budgets: four goals, so four groups (missions to one goal
+# share a tree); a replica of --plan_threads=2 plans two groups at once and
+# queues the others.
 pairs=("1200,1500,250,0.785 6800,6500,250,0.785" "5200,1400,260,1.571 2600,3900,250,0"
   "2000,3000,250,0 5200,1400,260,1.571" "6800,6500,250,0.785 1200,1500,250,0.785"
   "2600,3900,250,0 6800,6500,250,0.785" "1200,1500,250,0.785 2600,3900,250,0")
-for ((f = 0; f < REPLICAS; f++)); do
+write_fleet() {  # write_fleet F: WORKDIR/fleet-F.json
+  local f=$1 m s g
   {
     echo "{\"tenant\": \"fleet-$f\", \"missions\": ["
     for ((m = 0; m < MISSIONS; m++)); do
@@ -193,23 +195,45 @@ for ((f = 0; f < REPLICAS; f++)); do
     done
     echo "]}"
   } >"$WORKDIR/fleet-$f.json"
-done
-# The list of replicas, rotated for fleet f (its first call goes to replica f).
-server_list() {
-  local k s=""
-  for ((k = 0; k < REPLICAS; k++)); do s+="${s:+,}127.0.0.1:${GRPC[$(((k + $1) % REPLICAS))]}"; done
-  echo "$s"
 }
-"$CLIENT" --server="$(server_list 0)" "${TLS[@]}" load --rpc=eval --mode=open --rate=100 --duration_s=30 \
+# Every client is given the same list of the three replicas.
+SERVERS=""
+for ((i = 0; i < REPLICAS; i++)); do SERVERS+="${SERVERS:+,}127.0.0.1:${GRPC[$i]}"; done
+admitted() {  # admitted I: fleet missions replica I has admitted so far
+  local v
+  v=$(metric "${METRICS[$1]}" riskplan_fleet_missions_admitted_total)
+  echo "${v:-0}"
+}
+"$CLIENT" --server="$SERVERS" "${TLS[@]}" load --rpc=eval --mode=open --rate=100 --duration_s=30 \
   --waypoints="1200,1500,250,0.785; 4000,4000,250,0.785; 6800,6500,250,0.785" \
   >"$WORKDIR/load.out" 2>&1 &
 LOAD_PID=$!; BG_PIDS+=("$LOAD_PID")
-FLEET_PIDS=()
-for ((f = 0; f < REPLICAS; f++)); do
-  "$CLIENT" --server="$(server_list "$f")" "${TLS[@]}" fleet --missions="$WORKDIR/fleet-$f.json" \
+# One `riskplan fleet` (its own channel) at a time, each seen admitted by a
+# replica before the next starts, until every replica holds a fleet: a new
+# channel's round-robin starts at a replica of gRPC's choosing, so which
+# replica a fleet lands on is not ours to set. At most MAX_FLEETS.
+MAX_FLEETS=9
+FLEET_PIDS=(); HOME_OF=(); declare -A HOLDS=()
+for ((f = 0; f < MAX_FLEETS && ${#HOLDS[@]} < REPLICAS; f++)); do
+  write_fleet "$f"
+  before=(); for ((i = 0; i < REPLICAS; i++)); do before+=("$(admitted "$i")"); done
+  "$CLIENT" --server="$SERVERS" "${TLS[@]}" fleet --missions="$WORKDIR/fleet-$f.json" \
     >"$WORKDIR/fleet-$f.out" 2>"$WORKDIR/fleet-$f.err" &
   FLEET_PIDS+=("$!"); BG_PIDS+=("$!")
+  home=""
+  for _ in $(seq 1 100); do
+    for ((i = 0; i < REPLICAS; i++)); do
+      if [ "$(admitted "$i")" -gt "${before[$i]}" ]; then home=$i; break; fi
+    done
+    [ -n "$home" ] && break
+    sleep 0.1
+  done
+  [ -n "$home" ] || die "fleet $f was admitted by no replica within 10 s"
+  HOME_OF+=("$home"); HOLDS[$home]=1
+  say "fleet $f: admitted by replica $home"
 done
+NFLEETS=${#FLEET_PIDS[@]}
+[ "${#HOLDS[@]}" -eq "$REPLICAS" ] || die "$NFLEETS fleets did not reach every replica"
 # Until every replica has missions in flight (at most 10 s).
 busy=""
 for _ in $(seq 1 100); do
@@ -245,7 +269,7 @@ for _ in $(seq 1 30); do
 done
 say "replica 1's health port during the drain: $drain_health"
 fleet_rcs=()
-for ((f = 0; f < REPLICAS; f++)); do
+for ((f = 0; f < NFLEETS; f++)); do
   set +e; wait "${FLEET_PIDS[$f]}"; fleet_rcs+=("$?"); set -e
 done
 fleets_s=$(awk -v a="$t_sig" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }')
@@ -256,7 +280,7 @@ phase_end
 # ---------------------------------------------------------------- 6
 phase_start "checks"
 failed=0
-for ((f = 0; f < REPLICAS; f++)); do
+for ((f = 0; f < NFLEETS; f++)); do
   out=$WORKDIR/fleet-$f.out
   finals=$(grep -cE '^\[[0-9]+/[0-9]+\] ' "$out" || true)
   resub=$(grep -c 're-submission' "$WORKDIR/fleet-$f.err" || true)
@@ -265,7 +289,7 @@ for ((f = 0; f < REPLICAS; f++)); do
   for ((m = 0; m < MISSIONS; m++)); do
     grep -qE "^\[[0-9]+/[0-9]+\] f$f-m$m: " "$out" || missing+="f$f-m$m "
   done
-  say "fleet $f: exit ${fleet_rcs[$f]}, $finals finals of $MISSIONS missions, $resub re-submissions${dup:+, twice: $dup}${missing:+, none for: $missing}"
+  say "fleet $f (admitted by replica ${HOME_OF[$f]}): exit ${fleet_rcs[$f]}, $finals finals of $MISSIONS missions, $resub re-submissions${dup:+, twice: $dup}${missing:+, none for: $missing}"
   grep 're-submission' "$WORKDIR/fleet-$f.err" | sed 's/^/    /' >&2 || true
   if [ "${fleet_rcs[$f]}" -ne 0 ] || [ "$finals" -ne "$MISSIONS" ] || [ -n "$dup" ] || [ -n "$missing" ]; then
     failed=1; cat "$WORKDIR/fleet-$f.err" >&2

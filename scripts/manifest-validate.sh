@@ -17,7 +17,8 @@ Validates every object of every FILE (default: deploy/kubernetes/*.yaml).
 Installs the pinned validator with `npm ci` (from the npm registry, once,
 into $RISKPLAN_VALIDATE_DIR, default /var/tmp/riskplan-manifest-validate;
 again only when deploy/validate/package-lock.json changes). Needs node and
-npm, and python3-yaml to read the YAML. Exit 0: all valid; 1: an object is
+npm (Debian 12's nodejs and npm, installed through scripts/install-deps.sh
+when missing and run as root), and python3-yaml to read the YAML. Exit 0: all valid; 1: an object is
 invalid (each error printed with its file, document and field path); 2: the
 validator could not be installed or run.
 USAGE
@@ -32,8 +33,21 @@ VDIR=${RISKPLAN_VALIDATE_DIR:-/var/tmp/riskplan-manifest-validate}
 if [ "$#" -eq 0 ]; then
   set -- "$SRC"/deploy/kubernetes/*.yaml
 fi
-command -v node >/dev/null || { echo "manifest-validate: node is not installed (apt-get install nodejs npm)" >&2; exit 2; }
-command -v npm >/dev/null || { echo "manifest-validate: npm is not installed (apt-get install npm)" >&2; exit 2; }
+# node and npm: Debian 12's nodejs and npm, installed through the project's
+# installer when missing and run as root (an installed node that brings its
+# own npm is left alone).
+missing=()
+command -v node >/dev/null || missing+=(nodejs)
+command -v npm >/dev/null || missing+=(npm)
+if [ "${#missing[@]}" -gt 0 ]; then
+  if [ "$(id -u)" -eq 0 ]; then
+    bash "$SRC/scripts/install-deps.sh" "${missing[@]}" >&2 \
+      || { echo "manifest-validate: installing ${missing[*]} failed" >&2; exit 2; }
+  else
+    echo "manifest-validate: ${missing[*]} not installed (as root: bash scripts/install-deps.sh ${missing[*]})" >&2
+    exit 2
+  fi
+fi
 /usr/bin/python3 -c 'import yaml' 2>/dev/null || { echo "manifest-validate: python3-yaml is not installed" >&2; exit 2; }
 
 # The validator, installed from the lock file (exact versions and hashes).

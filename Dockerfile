@@ -16,7 +16,7 @@ RUN cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 FROM debian:12-slim
 # The shared libraries the binaries link against (gRPC, Protobuf, abseil,
 # prometheus-cpp, OpenSSL, libpng, GDAL, PROJ, and cpp-httplib for riskplan-web),
-# resolved from the build stage's binaries; scripts/image-check.sh checks that
+# resolved from the build stage's binaries; scripts/image-build.sh checks that
 # every one resolves here (docs/deploy.md).
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \

@@ -178,8 +178,9 @@ class RiskModel {
  private:
   RiskModel() = default;
   // The rules of spec section 6 before the window rule; sets *height_m to
-  // q.z - terrain when they all hold.
-  ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m) const;
+  // q.z - terrain, and *i, *j to q's cell, when they all hold.
+  ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m, int* i,
+                                  int* j) const;
 
   std::shared_ptr<const RiskMap> map_;
   std::shared_ptr<const ImpactTable> table_;

@@ -121,8 +121,10 @@ int Main() {
   const int seeds = absl::GetFlag(FLAGS_seeds);
   const std::vector<double> budgets = ParseList(absl::GetFlag(FLAGS_budgets));
   const double wall = absl::GetFlag(FLAGS_wall_factor) * budgets.back();
-  std::vector<std::string> modes = absl::StrSplit(absl::GetFlag(FLAGS_modes), ',', absl::SkipEmpty());
-  const std::map<std::string, double> extra = bench::ParsePlannerParams(absl::GetFlag(FLAGS_params));
+  std::vector<std::string> modes =
+      absl::StrSplit(absl::GetFlag(FLAGS_modes), ',', absl::SkipEmpty());
+  const std::map<std::string, double> extra =
+      bench::ParsePlannerParams(absl::GetFlag(FLAGS_params));
 
   // The lower bound, once for the model.
   double cpu = ThreadCpuSeconds();
@@ -142,7 +144,8 @@ int Main() {
     std::unique_ptr<StateLattice> lattice;
   };
   std::vector<Lat> lattices;
-  for (absl::string_view spec : absl::StrSplit(absl::GetFlag(FLAGS_lattices), ',', absl::SkipEmpty())) {
+  for (absl::string_view spec :
+       absl::StrSplit(absl::GetFlag(FLAGS_lattices), ',', absl::SkipEmpty())) {
     std::vector<std::string> parts = absl::StrSplit(spec, ':');
     LatticeOptions lo;
     lo.spacing_m = std::stod(parts[0]);
@@ -206,10 +209,11 @@ int Main() {
         std::fprintf(stderr, "%s\n", std::string(field.status().message()).c_str());
         return 1;
       }
-      std::printf("guide field (400 m, 8 headings, 25 m step): %.2f CPU s, %.2f MB, %.2fM "
-                  "configurations\n",
-                  ThreadCpuSeconds() - cpu, (*field)->MemoryBytes() / 1e6,
-                  (*field)->build_stats().configurations / 1e6);
+      std::printf(
+          "guide field (400 m, 8 headings, 25 m step): %.2f CPU s, %.2f MB, %.2fM "
+          "configurations\n",
+          ThreadCpuSeconds() - cpu, (*field)->MemoryBytes() / 1e6,
+          (*field)->build_stats().configurations / 1e6);
     }
 
     // risk_at[mode][budget] over seeds.

@@ -83,8 +83,7 @@ class GuideFieldCache {
   static GuideFieldCache& Default();
 
   // The cached field, or one built now (and kept when it fits).
-  absl::StatusOr<std::shared_ptr<const CostToGoField>> Get(const RiskModel& model,
-                                                           const Pose& goal,
+  absl::StatusOr<std::shared_ptr<const CostToGoField>> Get(const RiskModel& model, const Pose& goal,
                                                            const LatticeOptions& options,
                                                            RiskEvaluator* evaluator,
                                                            const StopCondition& stop = {});

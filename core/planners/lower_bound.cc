@@ -92,16 +92,20 @@ absl::StatusOr<std::unique_ptr<RiskLowerBound>> RiskLowerBound::Build(
       const int ci0 = std::max(0, static_cast<int>(std::floor((bx0 - map.x0()) / res)));
       const int cj0 = std::max(0, static_cast<int>(std::floor((by0 - map.y0()) / res)));
       const int ci1 = std::min(
-          nx - 1, static_cast<int>(std::floor((bx0 + options.block_m + 2 * margin - map.x0()) / res)));
+          nx - 1,
+          static_cast<int>(std::floor((bx0 + options.block_m + 2 * margin - map.x0()) / res)));
       const int cj1 = std::min(
-          ny - 1, static_cast<int>(std::floor((by0 + options.block_m + 2 * margin - map.y0()) / res)));
+          ny - 1,
+          static_cast<int>(std::floor((by0 + options.block_m + 2 * margin - map.y0()) / res)));
       bool open = false;
       for (int cj = cj0; cj <= cj1 && !open; ++cj) {
         for (int ci = ci0; ci <= ci1 && !open; ++ci) open = !map.nofly(ci, cj);
       }
       if (!open) continue;
-      const double cx = map.x0() + std::min((bi + 0.5) * options.block_m, map.width_m() - 0.5 * res);
-      const double cy = map.y0() + std::min((bj + 0.5) * options.block_m, map.height_m() - 0.5 * res);
+      const double cx =
+          map.x0() + std::min((bi + 0.5) * options.block_m, map.width_m() - 0.5 * res);
+      const double cy =
+          map.y0() + std::min((bj + 0.5) * options.block_m, map.height_m() - 0.5 * res);
       double least = kInf;
       for (int b = b_lo; b <= b_hi && least > 0.0; ++b) {
         for (int k = 0; k < kbins && least > 0.0; ++k) {
@@ -218,7 +222,8 @@ double RiskLowerBound::Query(const Pose& start, const Pose& goal) const {
     const int bj = id / nbx;
     const double rate = RingRate(bi, bj);
     // The last leg: to the goal, never K away again.
-    if (chebyshev(bi, bj, gbi, gbj) < K) best = std::min(best, d + rate * point_block(goal, bi, bj));
+    if (chebyshev(bi, bj, gbi, gbj) < K)
+      best = std::min(best, d + rate * point_block(goal, bi, bj));
     ring_edges(bi, bj, d, rate, [&](int ni, int nj) {
       const double gx = std::max(std::abs(ni - bi) - 1, 0) * b;
       const double gy = std::max(std::abs(nj - bj) - 1, 0) * b;

@@ -50,8 +50,8 @@
 namespace riskplan {
 
 struct LowerBoundOptions {
-  double block_m = 50.0;   // at least one map cell, at most the map's side
-  int ring = 3;            // K, blocks between marks, [2, 16]
+  double block_m = 50.0;  // at least one map cell, at most the map's side
+  int ring = 3;           // K, blocks between marks, [2, 16]
 };
 
 class RiskLowerBound {

@@ -26,9 +26,9 @@
 #include "core/base/random.h"
 #include "core/flight/piece_risk.h"
 #include "core/flight/trajectory.h"
+#include "core/planners/cost_to_go_field.h"
 #include "core/planners/path_refiner.h"
 #include "core/planners/planner.h"
-#include "core/planners/cost_to_go_field.h"
 #include "core/planners/planner_support.h"
 #include "core/planners/risk_guide.h"
 #include "core/planners/shared_goal_tree.h"
@@ -295,7 +295,8 @@ class Run {
   size_t path_cursor_ = 0;                    // ... of the path-biased samples
   size_t refine_cursor_ = 0;                  // ... of the refinement edits
   std::optional<CoarseRiskGrid> guide_grid_;  // built for the first guide route
-  std::shared_ptr<const CostToGoField> field_;  // params_.guide: the goal's field
+  // With params_.guide: the goal's cost-to-go field, got for the first mission.
+  std::shared_ptr<const CostToGoField> field_;
   SpatialGrid grid_;
   std::vector<Node> nodes_;
   int64_t iterations_ = 0;

@@ -21,8 +21,8 @@ constexpr size_t kBatchPoses = size_t{1} << 15;
 // A piece with more parts than this is not an edge (a spiral of many turns).
 constexpr int64_t kMaxEdgeParts = 100000;
 // The 16 grid moves of a primitive: 8 adjacent cells and 8 knight's moves.
-constexpr int kMoves[16][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1}, {-1, 0}, {-1, -1},
-                               {0, -1}, {1, -1},  {2, 1},  {1, 2},  {-1, 2}, {-2, 1},
+constexpr int kMoves[16][2] = {{1, 0},   {1, 1},   {0, 1},  {-1, 1}, {-1, 0}, {-1, -1},
+                               {0, -1},  {1, -1},  {2, 1},  {1, 2},  {-1, 2}, {-2, 1},
                                {-2, -1}, {-1, -2}, {1, -2}, {2, -1}};
 constexpr double kPrimitiveStretch = 1.25;
 constexpr double kConnectStretch = 1.3;
@@ -31,8 +31,8 @@ constexpr double kConnectStretch = 1.3;
 
 absl::Status CheckLatticeOptions(const LatticeOptions& o) {
   if (!(o.spacing_m >= 10.0) || !std::isfinite(o.spacing_m)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("lattice spacing_m has value %g; it must be >= 10 and finite", o.spacing_m));
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "lattice spacing_m has value %g; it must be >= 10 and finite", o.spacing_m));
   }
   if (o.headings < 4 || o.headings > 64) {
     return absl::InvalidArgumentError(
@@ -45,8 +45,8 @@ absl::Status CheckLatticeOptions(const LatticeOptions& o) {
   for (size_t l = 0; l < o.level_offsets_m.size(); ++l) {
     if (!(o.level_offsets_m[l] >= 0.0) || !std::isfinite(o.level_offsets_m[l])) {
       return absl::InvalidArgumentError(
-          absl::StrFormat("lattice level_offsets_m[%d] has value %g; it must be >= 0 and finite",
-                          l, o.level_offsets_m[l]));
+          absl::StrFormat("lattice level_offsets_m[%d] has value %g; it must be >= 0 and finite", l,
+                          o.level_offsets_m[l]));
     }
   }
   if (!(o.risk_step_m >= 0.0) || !std::isfinite(o.risk_step_m)) {
@@ -81,8 +81,8 @@ absl::StatusOr<std::unique_ptr<StateLattice>> StateLattice::Create(const RiskMod
   const int H = options.headings;
   const int64_t n = static_cast<int64_t>(g->nx_) * g->ny_ * H * g->levels_;
   if (n > (int64_t{1} << 30)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "lattice of %d states is too large; raise spacing_m or lower headings", n));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("lattice of %d states is too large; raise spacing_m or lower headings", n));
   }
   g->poses_.resize(n);
   g->valid_.assign(n, 0);
@@ -185,9 +185,9 @@ absl::Status StateLattice::PriceEdges(const RiskModel& m, std::vector<Edge>* edg
     size_t end = begin;
     while (end < edges->size()) {
       Edge& e = (*edges)[end];
-      PieceRisk rule(TrajectoryPiece::Manoeuvre(e.from, e.to, mp.GroundTurnRadius(),
-                                                mp.GroundClimbAngle()),
-                     step, mp);
+      PieceRisk rule(
+          TrajectoryPiece::Manoeuvre(e.from, e.to, mp.GroundTurnRadius(), mp.GroundClimbAngle()),
+          step, mp);
       if (rule.parts() > kMaxEdgeParts) {
         e.risk = kInf;
         rules.push_back(std::move(rule));
@@ -276,7 +276,8 @@ absl::Status StateLattice::Search(const Pose& goal,
     queue.pop();
     if (settled[s] || c > field->cost[s]) continue;
     if (c >= *bound) break;
-    if ((++pops & 255) == 0 && stop.Reached()) return absl::CancelledError("lattice search stopped");
+    if ((++pops & 255) == 0 && stop.Reached())
+      return absl::CancelledError("lattice search stopped");
     settled[s] = 1;
     if (stats != nullptr) ++stats->states_settled;
     if (!start_risk.empty() && start_risk[s] + c < *bound) {
@@ -349,7 +350,8 @@ absl::StatusOr<LatticeRoute> StateLattice::Trace(const RiskModel& m, const Pose&
   if (absl::Status s = PriceEdges(m, &edges, evaluator, nullptr); !s.ok()) return s;
   const ModelParams& mp = m.params();
   for (const Edge& e : edges) {
-    if (!std::isfinite(e.risk)) return absl::InternalError("lattice route has an inadmissible edge");
+    if (!std::isfinite(e.risk))
+      return absl::InternalError("lattice route has an inadmissible edge");
     route.risk += e.risk;
     route.length_m +=
         DubinsAirplanePath(e.from, e.to, mp.GroundTurnRadius(), mp.GroundClimbAngle()).Length();
@@ -370,9 +372,8 @@ absl::StatusOr<std::optional<LatticeRoute>> StateLattice::Solve(const Pose& star
     out.push_back(Edge{start, poses_[s], kInf});
     to.push_back(s);
   }
-  const bool direct =
-      std::hypot(goal.x - start.x, goal.y - start.y) <= options_.connect_radius_m &&
-      NotALoop(m, start, goal);
+  const bool direct = std::hypot(goal.x - start.x, goal.y - start.y) <= options_.connect_radius_m &&
+                      NotALoop(m, start, goal);
   if (direct) out.push_back(Edge{start, goal, kInf});
   if (absl::Status s = PriceEdges(m, &out, evaluator, stats); !s.ok()) return s;
   std::vector<std::pair<int32_t, double>> start_edges;
@@ -408,10 +409,9 @@ absl::StatusOr<LatticeField> StateLattice::Field(const Pose& goal, RiskEvaluator
   return field;
 }
 
-absl::StatusOr<std::optional<LatticeRoute>> StateLattice::RouteDown(const RiskModel& m,
-                                                                    const LatticeField& field,
-                                                                    const Pose& start,
-                                                                    RiskEvaluator* evaluator) const {
+absl::StatusOr<std::optional<LatticeRoute>> StateLattice::RouteDown(
+    const RiskModel& m, const LatticeField& field, const Pose& start,
+    RiskEvaluator* evaluator) const {
   std::vector<Edge> out;
   std::vector<int32_t> to;
   for (int32_t s : NearStates(m.map(), start)) {
@@ -420,9 +420,8 @@ absl::StatusOr<std::optional<LatticeRoute>> StateLattice::RouteDown(const RiskMo
     to.push_back(s);
   }
   const Pose& goal = field.goal;
-  const bool direct =
-      std::hypot(goal.x - start.x, goal.y - start.y) <= options_.connect_radius_m &&
-      NotALoop(m, start, goal);
+  const bool direct = std::hypot(goal.x - start.x, goal.y - start.y) <= options_.connect_radius_m &&
+                      NotALoop(m, start, goal);
   if (direct) out.push_back(Edge{start, goal, kInf});
   if (absl::Status s = PriceEdges(m, &out, evaluator, nullptr); !s.ok()) return s;
   double best = direct ? out.back().risk : kInf;

@@ -51,8 +51,8 @@
 namespace riskplan {
 
 struct LatticeOptions {
-  double spacing_m = 250.0;  // grid of positions, m; [10, map side]
-  int headings = 8;          // track headings, [4, 64]
+  double spacing_m = 250.0;                           // grid of positions, m; [10, map side]
+  int headings = 8;                                   // track headings, [4, 64]
   std::vector<double> level_offsets_m = {3.0, 25.0};  // above the safe altitude, m; 1 to 8, >= 0
   double risk_step_m = 0.0;       // 0: the model's sample_step_m; else >= sample_step_m
   double connect_radius_m = 0.0;  // 0: 2 * spacing_m

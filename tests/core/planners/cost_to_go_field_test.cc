@@ -35,8 +35,8 @@ TEST(GuideFieldCacheTest, HonoursItsByteAndEntryBounds) {
   auto model = SmallCity(0.0);
   DirectRiskEvaluator evaluator;
   const LatticeOptions options = GuideLatticeOptions(250.0, 25.0);
-  auto one = CostToGoField::Build(*model, *FindFlyablePose(*model, 1000, 1000, 0), options,
-                                  &evaluator);
+  auto one =
+      CostToGoField::Build(*model, *FindFlyablePose(*model, 1000, 1000, 0), options, &evaluator);
   ASSERT_TRUE(one.ok()) << one.status();
   const size_t bytes = (*one)->MemoryBytes();
   ASSERT_GT(bytes, 0u);
@@ -54,12 +54,14 @@ TEST(GuideFieldCacheTest, HonoursItsByteAndEntryBounds) {
   EXPECT_GE(cache.stats().evictions, 3u);
   // A hit for the last goal; the first was evicted.
   const uint64_t misses = cache.stats().misses;
-  ASSERT_TRUE(cache.Get(*model, *FindFlyablePose(*model, 1000, 1000, 0.0), options, &evaluator).ok());
+  ASSERT_TRUE(
+      cache.Get(*model, *FindFlyablePose(*model, 1000, 1000, 0.0), options, &evaluator).ok());
   EXPECT_EQ(cache.stats().misses, misses);
   // The entry bound.
   GuideFieldCache two({size_t{1} << 30, 2});
   for (const auto& xy : goals) {
-    ASSERT_TRUE(two.Get(*model, *FindFlyablePose(*model, xy[0], xy[1], 0.0), options, &evaluator).ok());
+    ASSERT_TRUE(
+        two.Get(*model, *FindFlyablePose(*model, xy[0], xy[1], 0.0), options, &evaluator).ok());
     EXPECT_LE(two.stats().entries, 2u);
   }
 }

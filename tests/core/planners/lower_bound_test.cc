@@ -61,11 +61,12 @@ TEST(LowerBoundTest, NeverAboveAnyPlannersRoute) {
         int64_t iterations;
         std::map<std::string, double> params;
       };
-      const Run runs[] = {{PlannerAlgorithm::kRiskRrtStar, 300, {}},
-                          {PlannerAlgorithm::kRiskRrtStar, 300, {{"guide", 1.0}, {"guide_field_m", 200.0}}},
-                          {PlannerAlgorithm::kRrt, 2000, {}},
-                          {PlannerAlgorithm::kGenetic, 10, {}},
-                          {PlannerAlgorithm::kHarmonic, 200, {}}};
+      const Run runs[] = {
+          {PlannerAlgorithm::kRiskRrtStar, 300, {}},
+          {PlannerAlgorithm::kRiskRrtStar, 300, {{"guide", 1.0}, {"guide_field_m", 200.0}}},
+          {PlannerAlgorithm::kRrt, 2000, {}},
+          {PlannerAlgorithm::kGenetic, 10, {}},
+          {PlannerAlgorithm::kHarmonic, 200, {}}};
       for (const Run& run : runs) {
         auto planner = MakePlanner(run.algorithm);
         ASSERT_TRUE(planner.ok());
@@ -99,8 +100,7 @@ TEST(LowerBoundTest, BadOptionsNameTheirField) {
   auto model = SmallCity(0.0);
   LowerBoundOptions o;
   o.block_m = 1.0;
-  EXPECT_NE(RiskLowerBound::Build(model, o).status().message().find("block_m"),
-            std::string::npos);
+  EXPECT_NE(RiskLowerBound::Build(model, o).status().message().find("block_m"), std::string::npos);
   o = LowerBoundOptions{};
   o.ring = 1;
   EXPECT_NE(RiskLowerBound::Build(model, o).status().message().find("ring"), std::string::npos);

@@ -55,6 +55,9 @@ ABSL_FLAG(int64_t, separate_iterations, 0,
           "iteration budget of each separate plan instead of wall time (0: wall time)");
 ABSL_FLAG(double, cap_factor, 1.0,
           "the shared tree stops at this many times the separate plans' total CPU time");
+ABSL_FLAG(double, wall_net_factor, 4.0,
+          "the shared tree's wall-time safety net: this x the CPU cap + 10 s (raise it on a "
+          "loaded machine, where a CPU second takes many wall seconds)");
 ABSL_FLAG(uint64_t, seed, 1, "seed of every plan");
 ABSL_FLAG(uint64_t, shared_seed, 0, "seed of the shared tree alone (0: --seed)");
 ABSL_FLAG(std::string, separate_cache, "",
@@ -252,7 +255,7 @@ void BM_SharedTree(benchmark::State& state) {
       SharedTreeMission m;
       m.start = start;
       // A wall-time safety net well past the CPU cap (the callback cancels).
-      m.budget.max_time_s = 4.0 * cap + 10.0;
+      m.budget.max_time_s = absl::GetFlag(FLAGS_wall_net_factor) * cap + 10.0;
       m.budget.max_iterations = 0;
       problem.missions.push_back(m);
     }

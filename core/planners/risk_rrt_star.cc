@@ -31,6 +31,9 @@ absl::StatusOr<Params> Params::Parse(const std::map<std::string, double>& given)
   p.refine_edits = values->Get("refine_edits");
   p.refine_scale_m = values->Get("refine_scale_m");
   p.guide_cell_m = values->Get("guide_cell_m");
+  p.guide = values->Get("guide") >= 1.0;
+  p.guide_field_m = values->Get("guide_field_m");
+  p.guide_field_step_m = values->Get("guide_field_step_m");
   if (p.near_radius_m == 0.0) p.near_radius_m = 2.5 * p.step_m;
   if (p.refine_scale_m == 0.0) p.refine_scale_m = 0.5 * p.step_m;
   if (p.goal_bias + p.path_bias > 0.9) {
@@ -68,6 +71,14 @@ const std::vector<PlannerParamInfo>& ParamInfo() {
        "largest standard deviation of an edit's new waypoint, horizontally, m (0: step_m / 2)"},
       {"guide_cell_m", 100.0, 0.0, 2000.0,
        "cell of the coarse risk grid whose cheapest route seeds the tree, m (0: no guide)"},
+      {"guide", 0, 0, 1,
+       "1: seed the tree with the route down the goal's cost-to-go field, a coarse state "
+       "lattice searched from the goal once per goal and wind and cached for every mission "
+       "to it (0: off, the planner as before)"},
+      {"guide_field_m", 400.0, 100.0, 2000.0, "spacing of the guide field's lattice, m"},
+      {"guide_field_step_m", 25.0, 5.0, 200.0,
+       "sampling step of the guide field's edge risks, m (a guide only: reported risks stay "
+       "exact)"},
       {"risk_cache_log2", 0, 0, 20,
        "log2 of the entries of the exact configuration-risk cache (40 B each) used when no "
        "external evaluator is given; 0 turns it off"},

@@ -178,6 +178,9 @@ absl::Status Run::Refine() {
 }
 
 absl::Status Run::Guide(size_t m) {
+  if (params_.guide) {
+    if (absl::Status s = GuideByField(m); !s.ok()) return s;
+  }
   if (params_.guide_cell_m <= 0.0) return absl::OkStatus();
   // The coarse grid depends on the model alone: built once for every start.
   if (!guide_grid_.has_value()) {

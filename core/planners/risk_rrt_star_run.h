@@ -26,6 +26,7 @@
 #include "core/base/random.h"
 #include "core/flight/piece_risk.h"
 #include "core/flight/trajectory.h"
+#include "core/planners/cost_to_go_field.h"
 #include "core/planners/path_refiner.h"
 #include "core/planners/planner.h"
 #include "core/planners/planner_support.h"
@@ -53,6 +54,9 @@ struct Params {
   double refine_edits = 8;      // fractions accumulate between iterations
   double refine_scale_m = 0.0;  // 0 in the request: step_m / 2
   double guide_cell_m = 100.0;  // 0: no guide route
+  bool guide = false;           // the lattice's cost-to-go field (risk_rrt_star_guide.cc)
+  double guide_field_m = 400.0;
+  double guide_field_step_m = 25.0;
 
   // The defaults overridden by `given` (PlannerParamValues::Parse's checks),
   // integer parameters rounded down, and goal_bias + path_bias <= 0.9.
@@ -259,6 +263,10 @@ class Run {
   // Seeds the tree with mission m's coarse guide route (core/planners/risk_guide.h),
   // its waypoints added from the goal's side by the ordinary extension.
   absl::Status Guide(size_t m);
+  // With params_.guide: seeds the tree with mission m's route down the goal's
+  // cost-to-go field (core/planners/cost_to_go_field.h), built once per goal
+  // and wind and shared through GuideFieldCache::Default().
+  absl::Status GuideByField(size_t m);
   // One iteration: a sample, an extension (or a start's connection), the
   // reports and the refinement.
   absl::Status Iterate();
@@ -287,6 +295,8 @@ class Run {
   size_t path_cursor_ = 0;                    // ... of the path-biased samples
   size_t refine_cursor_ = 0;                  // ... of the refinement edits
   std::optional<CoarseRiskGrid> guide_grid_;  // built for the first guide route
+  // With params_.guide: the goal's cost-to-go field, got for the first mission.
+  std::shared_ptr<const CostToGoField> field_;
   SpatialGrid grid_;
   std::vector<Node> nodes_;
   int64_t iterations_ = 0;

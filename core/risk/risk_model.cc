@@ -200,8 +200,8 @@ double RiskModel::SafeAltitude(int i, int j) const {
   return std::max(floor_alt, (*glide_)[map_->Index(i, j)]);
 }
 
-ViolationKind RiskModel::CheckBeforeWindow(const Pose& q, double* limit_m,
-                                           double* height_m) const {
+ViolationKind RiskModel::CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m,
+                                           int* cell_i, int* cell_j) const {
   if (limit_m != nullptr) *limit_m = std::numeric_limits<double>::quiet_NaN();
   int i = 0;
   int j = 0;
@@ -225,22 +225,34 @@ ViolationKind RiskModel::CheckBeforeWindow(const Pose& q, double* limit_m,
     return ViolationKind::kAboveMaxAltitude;
   }
   *height_m = q.z - terrain;
+  *cell_i = i;
+  *cell_j = j;
   return ViolationKind::kNone;
 }
 
 ViolationKind RiskModel::CheckConfiguration(const Pose& q, double* limit_m) const {
   double h = 0.0;
-  const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h);
+  int i = 0;
+  int j = 0;
+  const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h, &i, &j);
   if (kind != ViolationKind::kNone) return kind;
-  // Last, as it needs the height bin: the impact window inside the map.
-  if (!WindowInsideMap(SiteOf(*map_, *table_, AirHeadingBin(q.theta), q, h))) return ViolationKind::kImpactOutsideMap;
+  // Last, as it needs the height bin: the impact window inside the map. A
+  // sample that passed the band rules has its height bin in the flight band's,
+  // so inside band_margins() its window is inside for every heading: the
+  // same answer without locating it (most samples of a city's interior).
+  if (band_margins_.Inside(i, j, map_->nx(), map_->ny())) return ViolationKind::kNone;
+  if (!WindowInsideMap(SiteOf(*map_, *table_, AirHeadingBin(q.theta), q, h))) {
+    return ViolationKind::kImpactOutsideMap;
+  }
   return ViolationKind::kNone;
 }
 
 ViolationKind RiskModel::CheckConfiguration(const Pose& q, const ConfigurationRisk& m,
                                             double* limit_m) const {
   double h = 0.0;
-  const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h);
+  int i = 0;
+  int j = 0;
+  const ViolationKind kind = CheckBeforeWindow(q, limit_m, &h, &i, &j);
   if (kind != ViolationKind::kNone) return kind;
   // q is inside the map, finite and above the terrain: M(q) is undefined
   // only for its window (Locate).

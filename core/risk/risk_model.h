@@ -179,8 +179,9 @@ class RiskModel {
  private:
   RiskModel() = default;
   // The rules of spec section 6 before the window rule; sets *height_m to
-  // q.z - terrain when they all hold.
-  ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m) const;
+  // q.z - terrain, and *i, *j to q's cell, when they all hold.
+  ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m, int* i,
+                                  int* j) const;
 
   // The heading bin of the air heading of track heading `theta` (spec
   // section 3 step 2): table().HeadingBinOf(wind().AirHeading(theta)), bit

@@ -1,0 +1,71 @@
+#include "core/planners/cost_to_go_field.h"
+
+#include <cmath>
+#include <utility>
+
+#include "core/base/model_params.h"
+
+namespace riskplan {
+
+LatticeOptions GuideLatticeOptions(double spacing_m, double risk_step_m) {
+  LatticeOptions o;
+  o.spacing_m = spacing_m;
+  o.headings = 8;
+  o.level_offsets_m = {5.0};
+  o.risk_step_m = risk_step_m;
+  return o;
+}
+
+absl::StatusOr<std::unique_ptr<CostToGoField>> CostToGoField::Build(const RiskModel& model,
+                                                                    const Pose& goal,
+                                                                    const LatticeOptions& options,
+                                                                    RiskEvaluator* evaluator,
+                                                                    const StopCondition& stop) {
+  absl::StatusOr<std::unique_ptr<StateLattice>> lattice = StateLattice::Create(model, options);
+  if (!lattice.ok()) return lattice.status();
+  std::unique_ptr<CostToGoField> f(new CostToGoField());
+  f->lattice_ = std::move(*lattice);
+  absl::StatusOr<LatticeField> field = f->lattice_->Field(goal, evaluator, stop, &f->stats_);
+  if (!field.ok()) return field.status();
+  f->field_ = std::move(*field);
+  // Routes down the field read no edge memo.
+  f->lattice_->DropMemo();
+  return f;
+}
+
+absl::StatusOr<std::optional<LatticeRoute>> CostToGoField::Route(const RiskModel& model,
+                                                                 const Pose& start,
+                                                                 RiskEvaluator* evaluator) const {
+  return lattice_->RouteDown(model, field_, start, evaluator);
+}
+
+GuideFieldCache& GuideFieldCache::Default() {
+  static auto* cache = new GuideFieldCache(Cache::Limits{size_t{256} << 20, 64});
+  return *cache;
+}
+
+absl::StatusOr<std::shared_ptr<const CostToGoField>> GuideFieldCache::Get(
+    const RiskModel& model, const Pose& goal, const LatticeOptions& options,
+    RiskEvaluator* evaluator, const StopCondition& stop) {
+  Key key;
+  key.map = model.map_ptr().get();
+  for (std::string_view name : ModelParamNames()) {
+    absl::StatusOr<double> v = GetModelParam(model.params(), name);
+    key.params.push_back(v.ok() ? *v : 0.0);
+  }
+  key.goal = {goal.x, goal.y, goal.z, goal.theta};
+  key.lattice = {options.spacing_m, static_cast<double>(options.headings), options.risk_step_m,
+                 options.level_offsets_m.empty() ? 0.0 : options.level_offsets_m[0]};
+  return cache_.GetOrBuild(
+      key,
+      [&]() -> absl::StatusOr<Cache::Built> {
+        absl::StatusOr<std::unique_ptr<CostToGoField>> f =
+            CostToGoField::Build(model, goal, options, evaluator, stop);
+        if (!f.ok()) return f.status();
+        const size_t bytes = (*f)->MemoryBytes();
+        return Cache::Built{std::shared_ptr<const CostToGoField>(std::move(*f)), bytes};
+      },
+      model.map_ptr());
+}
+
+}  // namespace riskplan

@@ -130,34 +130,42 @@ absl::StatusOr<std::vector<v1::FlightOutput>> FlightSession::Open(const v1::Flig
     zones_.emplace(zone->id, *std::move(zone));
   }
   resumed_ = open.resume();
-  if (!open.resume() && (open.committed_size() > 0 || open.progress_m() != 0.0)) {
+  if (!open.resume() &&
+      (open.route_size() > 0 || open.committed_count() != 0 || open.progress_m() != 0.0)) {
     return absl::InvalidArgumentError(
-        "open.committed and open.progress_m are for a resumed session (open.resume)");
+        "open.route, open.committed_count and open.progress_m are for a resumed session "
+        "(open.resume)");
   }
-  if (static_cast<size_t>(open.committed_size()) > env_.limits.max_resume_poses) {
+  if (static_cast<size_t>(open.route_size()) > env_.limits.max_resume_poses) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "open.committed has %d poses; at most %d", open.committed_size(),
-        env_.limits.max_resume_poses));
+        "open.route has %d poses; at most %d", open.route_size(), env_.limits.max_resume_poses));
   }
   route_.clear();
-  for (int k = 0; k < open.committed_size(); ++k) {
-    absl::StatusOr<Pose> p = PoseFromProto(open.committed(k), absl::StrCat("open.committed[", k, "]"));
+  for (int k = 0; k < open.route_size(); ++k) {
+    absl::StatusOr<Pose> p = PoseFromProto(open.route(k), absl::StrCat("open.route[", k, "]"));
     if (!p.ok()) return p.status();
-    if (absl::Status s = CheckInsideMap(*spec_.map, *p, absl::StrCat("open.committed[", k, "]"));
+    if (absl::Status s = CheckInsideMap(*spec_.map, *p, absl::StrCat("open.route[", k, "]"));
         !s.ok()) {
       return s;
     }
     route_.push_back(*p);
   }
+  size_t committed = 1;
   if (!route_.empty()) {
     const Pose& s = spec_.start;
     const Pose& c = route_.front();
     if (s.x != c.x || s.y != c.y || s.z != c.z) {
       return absl::InvalidArgumentError(absl::StrFormat(
-          "open.committed[0] (%.1f, %.1f, %.1f) must be the start of open.plan (%.1f, %.1f, %.1f)",
+          "open.route[0] (%.1f, %.1f, %.1f) must be the start of open.plan (%.1f, %.1f, %.1f)",
           c.x, c.y, c.z, s.x, s.y, s.z));
     }
     route_.front() = s;  // the heading as the request normalised it
+    if (open.committed_count() < 1 || open.committed_count() > route_.size()) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "open.committed_count has value %d; it must be in [1, %d], the poses of open.route",
+          open.committed_count(), route_.size()));
+    }
+    committed = open.committed_count();
   } else {
     route_.push_back(spec_.start);
   }
@@ -167,22 +175,18 @@ absl::StatusOr<std::vector<v1::FlightOutput>> FlightSession::Open(const v1::Flig
   if (!std::isfinite(open.progress_m()) || open.progress_m() < 0.0 ||
       open.progress_m() > cum_.back()) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "open.progress_m has value %g; it must be in [0, %g], the length of open.committed",
+        "open.progress_m has value %g; it must be in [0, %g], the length of open.route",
         open.progress_m(), cum_.back()));
   }
   progress_m_ = open.progress_m();
-  committed_ = route_.size();
+  committed_ = committed;
   opened_ = true;
   report_tokens_ = env_.limits.report_burst;
   Outputs out;
-  if (route_.size() >= 2) {
-    absl::StatusOr<TrajectoryEvaluation> e = Evaluate(route_, stop);
-    if (!e.ok()) return e.status();
-    if (!e->admissible) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "open.committed is not an admissible route under the session's zones and wind: ",
-          e->first_violation ? e->first_violation->ToString() : "not admissible"));
-    }
+  // The aircraft flew on along the route while the link was down: the
+  // commit point follows it there first (as the broken session would have).
+  if (route_.size() >= 2 && !CommitRuleHolds()) {
+    if (absl::Status s = CommitTo(progress_m_ + 1.5 * HorizonM()); !s.ok()) return s;
   }
   // The first plan: from the end of what is committed, with the request's budget.
   PlannerBudget first = spec_.options.budget;

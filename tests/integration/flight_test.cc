@@ -383,7 +383,11 @@ TEST(FlightResumeTest, AStreamBrokenMidFlightResumesOnAnotherServerWithTheSameMi
   v1::FlightOpen* open = in.mutable_open();
   open->set_resume(true);
   open->set_time_s(t);
-  *open->mutable_committed() = last.committed();
+  *open->mutable_route() = last.committed();
+  for (int k = 1; k < last.remainder().waypoints_size(); ++k) {
+    *open->add_route() = last.remainder().waypoints(k);
+  }
+  open->set_committed_count(last.committed_size());
   open->set_progress_m(last.progress_m());
   ASSERT_TRUE(s.Write(in));
   std::optional<v1::FlightOutput> resumed = s.NextPlanOrAlert();

@@ -203,10 +203,11 @@ int RunFly(const CliOptions& o, RiskplanClient& client) {
     }
   }
   grpc::Status end = link.End();
+  const int streams = link.streams();  // not under print_mu: the link calls back under its own
   {
     absl::MutexLock lock(&print_mu);
     std::printf("flight ended at t=%.1f s, progress %.1f m, %d stream(s): %s\n", t, progress,
-                link.streams(), StatusCodeName(end.error_code()).c_str());
+                streams, StatusCodeName(end.error_code()).c_str());
   }
   if (!end.ok()) {
     return RpcError(o, "Fly", end);

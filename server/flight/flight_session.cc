@@ -188,8 +188,9 @@ absl::StatusOr<std::vector<v1::FlightOutput>> FlightSession::Open(const v1::Flig
   if (route_.size() >= 2 && !CommitRuleHolds()) {
     if (absl::Status s = CommitTo(progress_m_ + 1.5 * HorizonM()); !s.ok()) return s;
   }
-  // The first plan: from the end of what is committed, with the request's budget.
-  PlannerBudget first = spec_.options.budget;
+  // The first plan: from the end of what is committed, with the request's
+  // budget; a resumed session's with the replanning budget (the aircraft flies).
+  PlannerBudget first = resumed_ ? replan_budget_ : spec_.options.budget;
   Replan(v1::FLIGHT_REASON_OPENED, stop, &out, first);
   return out;
 }

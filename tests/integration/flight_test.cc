@@ -4,6 +4,8 @@
 // another server, and inputs refused with the session alive. Every plan
 // version's route risk is checked against EvaluateRisk, bit for bit.
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -12,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "gtest/gtest.h"
 #include "riskplan/v1/planner.grpc.pb.h"
+#include "tests/child_process.h"
 #include "tests/integration/requests.h"
 #include "tests/integration/server_process.h"
 #include "tests/integration/shared_server_test.h"
@@ -407,6 +410,39 @@ TEST(FlightResumeTest, AStreamBrokenMidFlightResumesOnAnotherServerWithTheSameMi
   // It flies on.
   ASSERT_TRUE(s.Write(Progress(t + 1.0, last.progress_m() + kAirspeed)));
   ASSERT_TRUE(s.End().ok());
+}
+
+TEST(FlightCliTest, AScriptedFlightPrintsItsVersionsAndResumesOnTheOtherServerAfterABreak) {
+  auto a = ServerProcess::Start({});
+  ASSERT_TRUE(a.ok()) << a.status();
+  auto b = ServerProcess::Start({});
+  ASSERT_TRUE(b.ok()) << b.status();
+  if ((*a)->connection().tls()) GTEST_SKIP() << "a list of addresses has no one TLS name";
+  const std::string path = ::testing::TempDir() + "/fly-scenario.json";
+  std::ofstream(path) << R"({
+    "open": {"plan": {"map": "demo-city", "start": {"x": 300, "y": 375, "z": 240, "theta": 0.785},
+                      "goal": {"x": 1700, "y": 1625, "z": 250, "theta": 0.785},
+                      "budget": {"timeMs": 1000}, "seed": 7},
+             "commitHorizonS": 10, "replanBudget": {"timeMs": 300}},
+    "speedup": 40, "report_interval_s": 1, "max_time_s": 400,
+    "events": [
+      {"at_s": 15, "input": {"addZone": {"id": "far", "circle": {"x": 1800, "y": 250, "radiusM": 80}}}},
+      {"at_s": 60, "break": true},
+      {"at_s": 75, "input": {"removeZone": {"id": "far"}}},
+      {"at_s": 80, "input": {"addZone": {"id": "bow", "polygon": {"vertices": [
+        {"x": 800, "y": 800}, {"x": 1000, "y": 1000}, {"x": 1000, "y": 800}, {"x": 800, "y": 1000}]}}}}
+    ]})";
+  const CommandResult r = RunCommand(std::string(RISKPLAN_BIN_DIR) + "/riskplan fly --server=" +
+                                     (*a)->address() + "," + (*b)->address() +
+                                     " --scenario=" + path);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("[s1] version 1 OPENED"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ZONE_ADDED"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("[s1] stream broke"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("[s2] version 1 OPENED"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ZONE_REMOVED"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("intersects itself"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("2 stream(s): OK"), std::string::npos) << r.output;
 }
 
 }  // namespace

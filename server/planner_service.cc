@@ -377,7 +377,7 @@ grpc::ServerBidiReactor<v1::FlightInput, v1::FlightOutput>* PlannerService::Fly(
       .active = &active_,
       .pool = &plan_pool_,
       .metrics = &metrics_,
-      .open_calls = &open_calls_});
+      .open_calls = &open_calls_}, ctx, caller);
   if (!authorized.ok()) {
     call->Reject(authorized);
     return call.get();

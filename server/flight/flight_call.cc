@@ -3,18 +3,26 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "server/observability/rpc_log.h"
 #include "server/api/status_util.h"
 
 namespace riskplan::server {
 
-std::shared_ptr<FlightCall> FlightCall::Create(const FlightCallEnv& env) {
-  std::shared_ptr<FlightCall> call(new FlightCall(env));
+std::shared_ptr<FlightCall> FlightCall::Create(const FlightCallEnv& env,
+                                               grpc::CallbackServerContext* ctx, Caller caller) {
+  std::shared_ptr<FlightCall> call(new FlightCall(env, ctx, std::move(caller)));
   call->self_ = call;
   if (env.open_calls != nullptr) env.open_calls->Opened();
   return call;
 }
 
-FlightCall::FlightCall(const FlightCallEnv& env) : env_(env), session_(env.flight) {}
+FlightCall::FlightCall(const FlightCallEnv& env, grpc::CallbackServerContext* ctx, Caller caller)
+    : env_(env),
+      started_(absl::Now()),
+      peer_(ctx->peer()),
+      caller_(std::move(caller)),
+      session_(env.flight) {}
 
 void FlightCall::Start() {
   {
@@ -63,6 +71,7 @@ void FlightCall::OnReadDone(bool ok) {
                                           " inputs wait for the session: send them no faster "
                                           "than it answers")));
     } else {
+      ++inputs_read_;
       inputs_.push_back(std::move(read_buffer_));
       read_buffer_.Clear();
       schedule = ScheduleLocked();
@@ -121,7 +130,13 @@ void FlightCall::Step() {
   bool again = false;
   {
     absl::MutexLock lock(&mu_);
-    for (v1::FlightOutput& o : outs) outputs_.push_back(std::move(o));
+    for (v1::FlightOutput& o : outs) {
+      versions_ += o.has_plan() ? 1 : 0;
+      alerts_ += o.has_alert() ? 1 : 0;
+      refusals_ += o.has_refusal() ? 1 : 0;
+      outputs_.push_back(std::move(o));
+    }
+    if (map_.empty()) map_ = session_.map_name();
     if (outputs_.size() > kMaxQueuedOutputs) {
       end = grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                          absl::StrCat("more than ", kMaxQueuedOutputs,
@@ -164,6 +179,7 @@ void FlightCall::Pump() {
     } else if (end_.has_value() && !step_scheduled_) {
       finished_ = true;
       status = *end_;
+      finish_status_ = status;
       action = kFinish;
     }
   }
@@ -198,10 +214,27 @@ void FlightCall::OnCancel() {
 
 void FlightCall::OnDone() {
   bool admitted = false;
+  grpc::Status status;
+  std::string detail, map;
   {
     absl::MutexLock lock(&mu_);
     admitted = admitted_;
+    status = finish_status_;
+    map = map_;
+    detail = absl::StrFormat("inputs=%d versions=%d alerts=%d refusals=%d", inputs_read_,
+                             versions_, alerts_, refusals_);
   }
+  const absl::Duration duration = absl::Now() - started_;
+  if (env_.metrics != nullptr) {
+    env_.metrics->RecordRpc("Fly", status.error_code(), duration, caller_.label);
+  }
+  LogRpc({.method = "Fly",
+          .status = status,
+          .duration = duration,
+          .peer = peer_,
+          .identity = caller_.identity,
+          .map = map,
+          .detail = status.ok() ? detail : absl::StrCat(status.error_message(), "; ", detail)});
   if (admitted && env_.active != nullptr) {
     env_.active->Release(this);
     if (env_.metrics != nullptr) env_.metrics->PlanReleased(ServerMetrics::PlanKind::kTrajectory);

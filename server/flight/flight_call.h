@@ -20,6 +20,9 @@
 #include <deque>
 #include <memory>
 #include <optional>
+#include <string>
+
+#include "absl/time/time.h"
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
@@ -28,6 +31,7 @@
 #include "riskplan/v1/planner.grpc.pb.h"
 #include "server/flight/flight_session.h"
 #include "server/observability/metrics.h"
+#include "server/security/auth.h"
 #include "server/plan/open_calls.h"
 #include "server/plan/plan_call.h"
 #include "server/plan/thread_pool.h"
@@ -49,7 +53,9 @@ class FlightCall final : public grpc::ServerBidiReactor<v1::FlightInput, v1::Fli
                          public ActivePlan,
                          public std::enable_shared_from_this<FlightCall> {
  public:
-  static std::shared_ptr<FlightCall> Create(const FlightCallEnv& env);
+  // `caller` is who made it (server/security/auth.h), for the log and the metrics.
+  static std::shared_ptr<FlightCall> Create(const FlightCallEnv& env,
+                                            grpc::CallbackServerContext* ctx, Caller caller = {});
 
   // Admitted: starts reading. Call once, after ActivePlans admitted it.
   void Start();
@@ -64,7 +70,7 @@ class FlightCall final : public grpc::ServerBidiReactor<v1::FlightInput, v1::Fli
   void OnDone() override;
 
  private:
-  explicit FlightCall(const FlightCallEnv& env);
+  FlightCall(const FlightCallEnv& env, grpc::CallbackServerContext* ctx, Caller caller);
 
   // One step of the session on a pool thread.
   void Step();
@@ -76,6 +82,9 @@ class FlightCall final : public grpc::ServerBidiReactor<v1::FlightInput, v1::Fli
   void Pump() ABSL_LOCKS_EXCLUDED(mu_);
 
   const FlightCallEnv env_;
+  const absl::Time started_;
+  const std::string peer_;
+  const Caller caller_;
   std::shared_ptr<FlightCall> self_;  // gRPC's reference, dropped in OnDone
   CancellationToken cancel_;          // the stream broke, or the drain
   CancellationToken shutdown_;
@@ -93,6 +102,13 @@ class FlightCall final : public grpc::ServerBidiReactor<v1::FlightInput, v1::Fli
   bool reads_done_ ABSL_GUARDED_BY(mu_) = false;
   std::optional<grpc::Status> end_ ABSL_GUARDED_BY(mu_);
   bool finished_ ABSL_GUARDED_BY(mu_) = false;
+  grpc::Status finish_status_ ABSL_GUARDED_BY(mu_);
+  // Counts for the log line.
+  int64_t inputs_read_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t versions_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t alerts_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t refusals_ ABSL_GUARDED_BY(mu_) = 0;
+  std::string map_ ABSL_GUARDED_BY(mu_);
   bool admitted_ ABSL_GUARDED_BY(mu_) = false;
 };
 

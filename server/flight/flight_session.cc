@@ -100,7 +100,7 @@ absl::StatusOr<std::vector<v1::FlightOutput>> FlightSession::Open(const v1::Flig
   const v1::Budget& rb = open.replan_budget();
   if (rb.time_ms() < 0 || rb.time_ms() > env_.limits.max_replan_time_ms) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "open.replan_budget.time_ms has value %d; it must be in [0, %d]",
+        "open.replan_budget.time_ms has value %d; it must be in [0, %d] (--max_replan_time_ms)",
         rb.time_ms(), env_.limits.max_replan_time_ms));
   }
   if (rb.iterations() < 0 || rb.iterations() > env_.request_limits.max_iterations) {
@@ -118,7 +118,7 @@ absl::StatusOr<std::vector<v1::FlightOutput>> FlightSession::Open(const v1::Flig
   open_time_s_ = now_s_ = open.time_s();
   if (static_cast<size_t>(open.zones_size()) > env_.limits.zones.max_zones) {
     return absl::InvalidArgumentError(
-        absl::StrFormat("open.zones has %d zones; a session holds at most %d",
+        absl::StrFormat("open.zones has %d zones; a session holds at most %d (--max_flight_zones)",
                         open.zones_size(), env_.limits.zones.max_zones));
   }
   for (int k = 0; k < open.zones_size(); ++k) {
@@ -599,7 +599,7 @@ void FlightSession::OnPosition(const v1::PositionReport& report, const StopCondi
   if (tokens < 1.0) {
     Refuse("position",
            absl::StrFormat("more than %g position reports per second of flight time "
-                           "(bursts of %g)",
+                           "(--max_flight_report_hz; bursts of %g)",
                            env_.limits.max_report_hz, env_.limits.report_burst),
            out);
     return;
@@ -739,7 +739,7 @@ void FlightSession::OnAddZone(const v1::FlightZone& zone, const StopCondition& s
     return;
   }
   if (zones_.size() >= env_.limits.zones.max_zones) {
-    Refuse("add_zone", absl::StrFormat("the session already holds %d zones, its most",
+    Refuse("add_zone", absl::StrFormat("the session already holds %d zones, its most (--max_flight_zones)",
                                        zones_.size()),
            out);
     return;

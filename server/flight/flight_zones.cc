@@ -124,7 +124,7 @@ absl::StatusOr<FlightZoneSpec> ZoneFromProto(const v1::FlightZone& zone, const Z
       if (vs.size() < 3 || static_cast<size_t>(vs.size()) > limits.max_vertices) {
         return absl::InvalidArgumentError(
             absl::StrFormat("%s.polygon.vertices has %d vertices; a zone polygon has 3 to %d "
-                            "",
+                            "(--max_zone_vertices)",
                             field, vs.size(), limits.max_vertices));
       }
       for (int k = 0; k < vs.size(); ++k) {

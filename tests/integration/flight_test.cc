@@ -3,6 +3,8 @@
 // a zone over the aircraft, a wind change, a stream broken and resumed on
 // another server, and inputs refused with the session alive. Every plan
 // version's route risk is checked against EvaluateRisk, bit for bit.
+#include <signal.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -414,6 +416,22 @@ TEST(FlightResumeTest, AStreamBrokenMidFlightResumesOnAnotherServerWithTheSameMi
   // It flies on.
   ASSERT_TRUE(s.Write(Progress(t + 1.0, last.progress_m() + kAirspeed)));
   ASSERT_TRUE(s.End().ok());
+}
+
+TEST(FlightDrainTest, ADrainingServerEndsTheSessionUnavailableSoThatTheClientResumesElsewhere) {
+  auto a = ServerProcess::Start({"--grace_period_ms=3000"});
+  ASSERT_TRUE(a.ok()) << a.status();
+  FlightStream s((*a)->Channel());
+  ASSERT_TRUE(s.Write(Open()));
+  std::optional<v1::FlightOutput> first = s.NextPlanOrAlert();
+  ASSERT_TRUE(first.has_value() && first->has_plan());
+  (*a)->Signal(SIGTERM);
+  while (s.Read().has_value()) {
+  }
+  const grpc::Status status = s.End();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
+  EXPECT_NE(status.error_message().find("resume"), std::string::npos) << status.error_message();
+  EXPECT_EQ((*a)->Wait(absl::Seconds(30)), 0);
 }
 
 TEST(FlightCliTest, AScriptedFlightPrintsItsVersionsAndResumesOnTheOtherServerAfterABreak) {

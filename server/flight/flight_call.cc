@@ -29,7 +29,8 @@ void FlightCall::Start() {
     absl::MutexLock lock(&mu_);
     admitted_ = true;
   }
-  StartRead(&read_buffer_);
+  absl::MutexLock ops(&ops_mu_);
+  if (!finish_started_) StartRead(&read_buffer_);
 }
 
 void FlightCall::Reject(const grpc::Status& status) {
@@ -83,7 +84,10 @@ void FlightCall::OnReadDone(bool ok) {
     step_scheduled_ = false;
     EndLocked(grpc::Status(grpc::StatusCode::UNAVAILABLE, "riskplan-server is shutting down"));
   }
-  if (read_again) StartRead(&read_buffer_);
+  if (read_again) {
+    absl::MutexLock ops(&ops_mu_);
+    if (!finish_started_) StartRead(&read_buffer_);
+  }
   Pump();
 }
 
@@ -187,6 +191,8 @@ void FlightCall::Pump() {
     StartWrite(&write_buffer_);
   } else if (action == kFinish) {
     cancel_.Cancel();
+    absl::MutexLock ops(&ops_mu_);
+    finish_started_ = true;
     Finish(status);
   }
 }

@@ -92,6 +92,12 @@ class FlightCall final : public grpc::ServerBidiReactor<v1::FlightInput, v1::Fli
   // Only the step running on the pool touches the session.
   FlightSession session_;
 
+  // Orders StartRead after Finish out: a read started by OnReadDone races a
+  // finish decided on another thread (the drain, a failed write). Held only
+  // around those two non-blocking calls, never with mu_.
+  absl::Mutex ops_mu_;
+  bool finish_started_ ABSL_GUARDED_BY(ops_mu_) = false;
+
   absl::Mutex mu_;
   v1::FlightInput read_buffer_;  // filled by gRPC between StartRead and OnReadDone
   std::deque<v1::FlightInput> inputs_ ABSL_GUARDED_BY(mu_);

@@ -367,6 +367,40 @@ grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanTrajectory(
   return call.get();
 }
 
+grpc::ServerBidiReactor<v1::FlightInput, v1::FlightOutput>* PlannerService::Fly(
+    grpc::CallbackServerContext* ctx) {
+  Caller caller;
+  const grpc::Status authorized = authorizer_->Check(*ctx, "Fly", &caller);
+  std::shared_ptr<FlightCall> call = FlightCall::Create(FlightCallEnv{
+      .flight = FlightEnv{.maps = &maps_,
+                          .models = &models_,
+                          .request_limits = options_.limits,
+                          .limits = options_.flight_limits},
+      .active = &active_,
+      .pool = &plan_pool_,
+      .metrics = &metrics_,
+      .open_calls = &open_calls_}, ctx, caller);
+  if (!authorized.ok()) {
+    call->Reject(authorized);
+    return call.get();
+  }
+  if (draining()) {
+    call->Reject(kDraining);
+    return call.get();
+  }
+  if (!active_.TryAdmit(call)) {
+    call->Reject(grpc::Status(
+        grpc::StatusCode::RESOURCE_EXHAUSTED,
+        absl::StrFormat("riskplan-server is running its maximum of %d plans and sessions "
+                        "(--max_running_plans); retry later or on another replica",
+                        active_.max_running())));
+    return call.get();
+  }
+  metrics_.PlanAdmitted(ServerMetrics::PlanKind::kTrajectory);
+  call->Start();
+  return call.get();
+}
+
 grpc::ServerWriteReactor<grpc::ByteBuffer>* PlannerService::PlanFleet(
     grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* raw_request) {
   // PlanTrajectory's order: the caller, the drain, the request, then

@@ -24,6 +24,7 @@
 #include "server/security/auth.h"
 #include "server/models/feasibility_cache.h"
 #include "server/fleet/fleet_scheduler.h"
+#include "server/flight/flight_call.h"
 #include "server/models/goal_tree_cache.h"
 #include "server/models/map_registry.h"
 #include "server/observability/metrics.h"
@@ -59,6 +60,8 @@ struct ServiceOptions {
   // Decides who may call what (server/security/auth.h); null: everyone may call
   // everything.
   std::shared_ptr<Authorizer> authorizer;
+  // Fly sessions' bounds (zones, reports, replanning budget).
+  FlightLimits flight_limits;
 };
 
 // The work of an EvaluateRisk call once ValidateEvaluateRequest has passed
@@ -74,11 +77,12 @@ absl::Status RunEvaluation(RiskModelCache& models, FeasibilityCache& checkers,
 
 // riskplan.v1.Planner with every method raw (server/api/message_codec.h says
 // why): the service parses each request and serialises each response itself.
+// Fly, a bidirectional stream of small messages, is the one typed method.
 using RawPlannerService = v1::Planner::WithRawCallbackMethod_PlanTrajectory<
     v1::Planner::WithRawCallbackMethod_PlanFleet<v1::Planner::WithRawCallbackMethod_EvaluateRisk<
         v1::Planner::WithRawCallbackMethod_ListMaps<v1::Planner::WithRawCallbackMethod_GetMapLayer<
-            v1::Planner::WithRawCallbackMethod_GetRiskLayer<
-                v1::Planner::WithRawCallbackMethod_Ping<v1::Planner::Service>>>>>>>;
+            v1::Planner::WithRawCallbackMethod_GetRiskLayer<v1::Planner::WithRawCallbackMethod_Ping<
+                v1::Planner::WithCallbackMethod_Fly<v1::Planner::Service>>>>>>>>;
 
 class PlannerService final : public RawPlannerService {
  public:
@@ -95,6 +99,11 @@ class PlannerService final : public RawPlannerService {
       grpc::CallbackServerContext* ctx, const grpc::ByteBuffer* request) override;
   grpc::ServerWriteReactor<grpc::ByteBuffer>* PlanFleet(grpc::CallbackServerContext* ctx,
                                                         const grpc::ByteBuffer* request) override;
+  // An in-flight session (server/flight/flight_call.h): the caller, the
+  // drain, admission (one of --max_running_plans' slots for the session's
+  // life); the opening is validated by the session itself.
+  grpc::ServerBidiReactor<v1::FlightInput, v1::FlightOutput>* Fly(
+      grpc::CallbackServerContext* ctx) override;
   grpc::ServerUnaryReactor* EvaluateRisk(grpc::CallbackServerContext* ctx,
                                          const grpc::ByteBuffer* request,
                                          grpc::ByteBuffer* response) override;

@@ -32,6 +32,13 @@ ABSL_FLAG(int, max_fleet_missions, 256,
 ABSL_FLAG(int64_t, max_admitted_missions, 1024,
           "PlanFleet: missions admitted at once over every fleet, waiting or planning; a fleet "
           "whose missions do not fit gets RESOURCE_EXHAUSTED at once");
+ABSL_FLAG(int, max_flight_zones, 64,
+          "Fly: most temporary no-fly zones a session holds at once, [1, 10000]");
+ABSL_FLAG(int, max_zone_vertices, 64, "Fly: most vertices of a zone's polygon, [3, 10000]");
+ABSL_FLAG(double, max_flight_report_hz, 50,
+          "Fly: most position reports per second of flight time (bursts of 10), (0, 1000]");
+ABSL_FLAG(int64_t, max_replan_time_ms, 10000,
+          "Fly: largest replanning budget a session may ask for, ms, [1, --max_plan_time_ms]");
 ABSL_FLAG(int64_t, goal_tree_cache_mb, 0,
           "PlanFleet: MB of RISK_RRT_STAR goal trees kept across requests, keyed by map, goal, "
           "model and planner parameters and seed, least recently used out (0: off, each "
@@ -199,6 +206,12 @@ ServiceOptions ServiceOptionsFromFlags() {
   options.max_admitted_missions = absl::GetFlag(FLAGS_max_admitted_missions);
   options.limits.max_fleet_missions =
       static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_fleet_missions)));
+  options.flight_limits.zones.max_zones =
+      static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_flight_zones)));
+  options.flight_limits.zones.max_vertices =
+      static_cast<size_t>(std::max(0, absl::GetFlag(FLAGS_max_zone_vertices)));
+  options.flight_limits.max_report_hz = absl::GetFlag(FLAGS_max_flight_report_hz);
+  options.flight_limits.max_replan_time_ms = absl::GetFlag(FLAGS_max_replan_time_ms);
   options.eval_threads = absl::GetFlag(FLAGS_eval_threads);
   if (options.eval_threads == 0) options.eval_threads = static_cast<int>(cores);
   options.max_queued_evals =
@@ -236,6 +249,16 @@ absl::Status CheckServiceFlags(ServerConfig& config) {
     return absl::InvalidArgumentError(
         "need 1 <= --fleet_plan_slots <= --max_running_plans (0: automatic) and 1 <= "
         "--max_fleet_missions <= --max_admitted_missions");
+  }
+  const FlightLimits& flight = options.flight_limits;
+  if (flight.zones.max_zones < 1 || flight.zones.max_zones > 10000 ||
+      flight.zones.max_vertices < 3 || flight.zones.max_vertices > 10000 ||
+      !(flight.max_report_hz > 0.0 && flight.max_report_hz <= 1000.0) ||
+      flight.max_replan_time_ms < 1 ||
+      flight.max_replan_time_ms > options.limits.max_plan_time_ms) {
+    return absl::InvalidArgumentError(
+        "need --max_flight_zones in [1, 10000], --max_zone_vertices in [3, 10000], "
+        "--max_flight_report_hz in (0, 1000] and --max_replan_time_ms in [1, --max_plan_time_ms]");
   }
   const int64_t goal_tree_cache_mb = absl::GetFlag(FLAGS_goal_tree_cache_mb);
   if (goal_tree_cache_mb < 0 || goal_tree_cache_mb > kMaxGoalTreeCacheMb) {

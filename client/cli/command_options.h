@@ -63,6 +63,9 @@ struct CliOptions {
   // Re-submissions of missions a broken stream left without a result (fleet).
   int max_resubmits = 3;
 
+  // Fly: the scripted flight (client/cli/fly_command.cc).
+  std::string scenario;
+
   // Load.
   std::string rpc = "eval";     // eval | plan | fleet | ping
   std::string mode = "closed";  // closed | open

@@ -7,7 +7,8 @@
 //      whose stream broke still writes the best trajectory it received);
 //   2  bad command-line input;
 //   3  `plan`: the plan ended without a trajectory (NO_SOLUTION, SHUTDOWN);
-//      `fleet`: a mission ended without a trajectory or with its own error.
+//      `fleet`: a mission ended without a trajectory or with its own error;
+//      `fly`: the flight ended with an alert in force.
 #ifndef RISKPLAN_CLIENT_CLI_COMMANDS_H_
 #define RISKPLAN_CLIENT_CLI_COMMANDS_H_
 
@@ -21,6 +22,7 @@ int RunEval(const CliOptions& options, RiskplanClient& client);
 int RunPlan(const CliOptions& options, RiskplanClient& client);
 int RunLoad(const CliOptions& options, RiskplanClient& client);
 int RunFleet(const CliOptions& options, RiskplanClient& client);
+int RunFly(const CliOptions& options, RiskplanClient& client);
 
 }  // namespace riskplan::client
 

@@ -51,6 +51,9 @@ ABSL_FLAG(std::string, wind, "",
           "360; at most half the airspeed), e.g. 8@270 for a west wind; 'wgs84:SPEED@FROM_DEG' "
           "takes the direction from true north (a geo-referenced map). Empty: still air (or "
           "--params' wind_speed_mps, wind_from_deg)");
+ABSL_FLAG(std::string, scenario, "",
+          "fly: the scripted flight, a JSON file (FlightOpen, speed-up, report interval, timeline "
+          "of zone and wind changes and stream breaks; docs/in-flight.md)");
 ABSL_FLAG(std::string, start, "",
           "plan: start pose 'x,y,z,theta' (m, m, m AMSL, rad from east), or "
           "'wgs84:lat,lon,alt,heading_deg' (deg, deg, m AMSL, deg clockwise from true north) on a "
@@ -205,6 +208,19 @@ riskplan::cmdline::ProgramHelp Help() {
        "--picture=fleet.svg",
        join(join(join(connection, {"map", "missions", "max_resubmits"}), planning),
             {"params", "picture", "picture_size", "report_json", "trajectory_out"})},
+      {"fly", "a scripted flight on an in-flight session (Fly): plan versions and alerts",
+       "  riskplan fly --scenario=FILE.json\n"
+       "\n"
+       "The aircraft follows the latest plan version at its ground speed, faster than\n"
+       "real time by the scenario's speedup, reporting its progress; the scenario's\n"
+       "events (zones, wind, stream breaks) are sent at their flight times. Prints\n"
+       "every plan version, alert and refusal. A broken stream is resumed by itself\n"
+       "(on any replica of --server, --max_resubmits times at most).\n"
+       "Exit code 3: the flight ended with an alert in force.\n"
+       "\n"
+       "Example:\n"
+       "  riskplan fly --scenario=docs/examples/fly-fire.json",
+       join(connection, {"scenario", "max_resubmits"})},
       {"load", "load test of one RPC (eval, plan, fleet or ping), closed or open loop",
        "  riskplan load [--rpc=eval|plan|fleet|ping] [--mode=closed|open] [flags]\n"
        "\n"
@@ -276,6 +292,7 @@ int main(int argc, char** argv) {
   o.plan_firmware = absl::GetFlag(FLAGS_plan_firmware);
   o.target_level_of_safety = absl::GetFlag(FLAGS_target_level_of_safety);
   o.missions = absl::GetFlag(FLAGS_missions);
+  o.scenario = absl::GetFlag(FLAGS_scenario);
   o.max_resubmits = absl::GetFlag(FLAGS_max_resubmits);
   o.rpc = absl::GetFlag(FLAGS_rpc);
   o.mode = absl::GetFlag(FLAGS_mode);
@@ -301,5 +318,6 @@ int main(int argc, char** argv) {
   if (command == "eval") return riskplan::client::RunEval(o, client);
   if (command == "plan") return riskplan::client::RunPlan(o, client);
   if (command == "fleet") return riskplan::client::RunFleet(o, client);
+  if (command == "fly") return riskplan::client::RunFly(o, client);
   return riskplan::client::RunLoad(o, client);  // ParseCommand allows no other
 }

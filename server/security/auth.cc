@@ -61,7 +61,7 @@ std::optional<Role> RequiredRole(absl::string_view method) {
       method == "EvaluateRisk") {
     return Role::kViewer;
   }
-  if (method == "PlanTrajectory" || method == "PlanFleet") return Role::kPlanner;
+  if (method == "PlanTrajectory" || method == "PlanFleet" || method == "Fly") return Role::kPlanner;
   return Role::kOperator;  // Ping, and whatever is not listed yet
 }
 

@@ -1,0 +1,260 @@
+// server/flight/ without gRPC: zones (checks, containment, closed cells),
+// the emergency landing over the glide layer, and a session's versions in a
+// wind: their risk is EvaluateTrajectory's bit for bit with the wind's model.
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/flight/trajectory.h"
+#include "gtest/gtest.h"
+#include "server/flight/emergency_landing.h"
+#include "server/flight/flight_session.h"
+#include "server/flight/flight_zones.h"
+#include "server/models/map_registry.h"
+#include "server/models/model_cache.h"
+
+namespace riskplan::server {
+namespace {
+
+v1::FlightZone Polygon(const std::string& id, std::vector<std::pair<double, double>> vertices) {
+  v1::FlightZone z;
+  z.set_id(id);
+  for (auto [x, y] : vertices) {
+    v1::ZoneVertex* v = z.mutable_polygon()->add_vertices();
+    v->set_x(x);
+    v->set_y(y);
+  }
+  return z;
+}
+
+TEST(FlightZonesTest, RefusesEveryBadZoneNamingWhatIsWrong) {
+  const ZoneLimits limits;
+  const auto error = [&](const v1::FlightZone& z) {
+    absl::StatusOr<FlightZoneSpec> s = ZoneFromProto(z, limits, "add_zone");
+    EXPECT_FALSE(s.ok());
+    return s.ok() ? std::string() : std::string(s.status().message());
+  };
+  EXPECT_NE(error(Polygon("bow", {{0, 0}, {10, 10}, {10, 0}, {0, 10}})).find("edges 0 and 2 cross"),
+            std::string::npos);
+  EXPECT_NE(error(Polygon("fold", {{0, 0}, {10, 0}, {5, 0}})).find("fold back"), std::string::npos);
+  EXPECT_NE(error(Polygon("two", {{0, 0}, {10, 0}})).find("3 to 64"), std::string::npos);
+  EXPECT_NE(error(Polygon("", {{0, 0}, {10, 0}, {0, 10}})).find("add_zone.id"), std::string::npos);
+  v1::FlightZone none;
+  none.set_id("none");
+  EXPECT_NE(error(none).find("no shape"), std::string::npos);
+  v1::FlightZone half = Polygon("half", {{0, 0}, {10, 0}, {0, 10}});
+  half.set_min_alt_m(100);
+  EXPECT_NE(error(half).find("both min_alt_m and max_alt_m"), std::string::npos);
+  v1::FlightZone interval = Polygon("late", {{0, 0}, {10, 0}, {0, 10}});
+  interval.set_valid_from_s(50);
+  interval.set_valid_until_s(40);
+  EXPECT_NE(error(interval).find("valid_until_s"), std::string::npos);
+  v1::FlightZone nan = Polygon("nan", {{0, 0}, {NAN, 0}, {0, 10}});
+  EXPECT_NE(error(nan).find("vertices[1]"), std::string::npos);
+}
+
+TEST(FlightZonesTest, ContainsHonoursTheBandAndTheValidity) {
+  v1::FlightZone z = Polygon("square", {{0, 0}, {100, 0}, {100, 100}, {0, 100}});
+  z.set_min_alt_m(200);
+  z.set_max_alt_m(300);
+  z.set_valid_from_s(10);
+  z.set_valid_until_s(20);
+  absl::StatusOr<FlightZoneSpec> s = ZoneFromProto(z, {}, "zone");
+  ASSERT_TRUE(s.ok()) << s.status();
+  EXPECT_TRUE(s->Contains({50, 50, 250, 0}));
+  EXPECT_FALSE(s->Contains({50, 50, 350, 0}));
+  EXPECT_FALSE(s->Contains({150, 50, 250, 0}));
+  EXPECT_TRUE(s->Contains({100, 50, 250, 0}));  // the boundary is in
+  EXPECT_FALSE(s->ActiveAt(9.9));
+  EXPECT_TRUE(s->ActiveAt(10));
+  EXPECT_FALSE(s->ActiveAt(20));
+}
+
+TEST(FlightZonesTest, EveryPointOfAZoneLiesInAClosedCell) {
+  absl::StatusOr<std::unique_ptr<MapRegistry>> registry = MapRegistry::DemoCity({.size_m = 2000});
+  ASSERT_TRUE(registry.ok());
+  std::shared_ptr<const RiskMap> map = (*registry)->Find("demo-city");
+  v1::FlightZone circle;
+  circle.set_id("c");
+  circle.mutable_circle()->set_x(1003.3);
+  circle.mutable_circle()->set_y(997.1);
+  circle.mutable_circle()->set_radius_m(61.7);
+  for (const v1::FlightZone& z :
+       {circle, Polygon("p", {{700, 700}, {880.5, 731}, {760, 912.2}, {745, 780}})}) {
+    FlightZoneSpec spec = *ZoneFromProto(z, {}, "zone");
+    std::vector<uint8_t> nofly(map->layers().nofly.size(), 0);
+    const int64_t closed = CloseZoneCells(*map, spec, &nofly);
+    EXPECT_GT(closed, 0);
+    for (double x = 600; x < 1100; x += 1.3) {
+      for (double y = 600; y < 1100; y += 1.7) {
+        int i = 0, j = 0;
+        if (!spec.ContainsXY(x, y) || !map->CellOf(x, y, &i, &j)) continue;
+        ASSERT_EQ(nofly[map->Index(i, j)], 1) << z.id() << " at " << x << ", " << y;
+      }
+    }
+  }
+}
+
+class FlightSessionTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    registry_ = *MapRegistry::DemoCity({.size_m = 2000});
+    models_ = *RiskModelCache::Create(*registry_, 4);
+    env_.maps = registry_.get();
+    env_.models = models_.get();
+  }
+  v1::FlightInput Open() const {
+    v1::FlightInput in;
+    v1::PlanRequest* plan = in.mutable_open()->mutable_plan();
+    plan->set_map("demo-city");
+    plan->mutable_start()->set_x(300);
+    plan->mutable_start()->set_y(375);
+    plan->mutable_start()->set_z(240);
+    plan->mutable_start()->set_theta(0.785);
+    plan->mutable_goal()->set_x(1700);
+    plan->mutable_goal()->set_y(1625);
+    plan->mutable_goal()->set_z(250);
+    plan->mutable_goal()->set_theta(0.785);
+    plan->mutable_budget()->set_iterations(1500);
+    plan->set_seed(3);
+    in.mutable_open()->mutable_replan_budget()->set_iterations(800);
+    return in;
+  }
+  std::unique_ptr<MapRegistry> registry_;
+  std::unique_ptr<RiskModelCache> models_;
+  FlightEnv env_;
+  CancellationToken never_;
+};
+
+std::vector<Pose> Waypoints(const v1::Trajectory& t) {
+  std::vector<Pose> poses;
+  for (const v1::Pose& p : t.waypoints()) poses.push_back({p.x(), p.y(), p.z(), p.theta()});
+  return poses;
+}
+
+TEST_F(FlightSessionTest, AVersionInAWindIsEvaluateTrajectoryOfItsRouteInThatWind) {
+  FlightSession session(env_);
+  absl::StatusOr<std::vector<v1::FlightOutput>> opened = session.Handle(Open(), never_);
+  ASSERT_TRUE(opened.ok()) << opened.status();
+  ASSERT_EQ(opened->size(), 1u);
+  ASSERT_TRUE(opened->front().has_plan());
+  v1::FlightInput wind;
+  wind.mutable_wind()->set_wind_speed_mps(5.0);
+  wind.mutable_wind()->set_wind_from_deg(200.0);
+  absl::StatusOr<std::vector<v1::FlightOutput>> out = session.Handle(wind, never_);
+  ASSERT_TRUE(out.ok());
+  ASSERT_EQ(out->size(), 1u);
+  ASSERT_TRUE(out->front().has_plan()) << out->front().DebugString();
+  const v1::FlightPlanVersion& v = out->front().plan();
+  EXPECT_EQ(v.reason(), v1::FLIGHT_REASON_WIND);
+  ModelParams params;
+  params.wind_speed_mps = 5.0;
+  params.wind_from_deg = 200.0;
+  std::shared_ptr<const RiskModel> model = *models_->Get(*registry_->Find("demo-city"), params);
+  const std::vector<Pose> route = Waypoints(v.route());
+  TrajectoryEvaluation e = *EvaluateTrajectory(*model, *PiecesFromWaypoints(route, params));
+  EXPECT_TRUE(e.admissible);
+  EXPECT_EQ(e.risk, v.route().risk());
+  EXPECT_EQ(e.length_m, v.route().length_m());
+  EXPECT_EQ(e.flight_time_s, v.route().flight_time_s());
+}
+
+TEST_F(FlightSessionTest, TheEmergencyLandingGlidesDownTheLayerToASite) {
+  std::shared_ptr<const RiskModel> model = models_->Default(*registry_->Find("demo-city"));
+  std::shared_ptr<const std::vector<double>> glide = *GlideLayerOf(*model, StopCondition());
+  const RiskMap& map = model->map();
+  const Pose from{1000, 1000, 260, 0.0};
+  int i = 0, j = 0;
+  ASSERT_TRUE(map.CellOf(from.x, from.y, &i, &j));
+  ASSERT_LE((*glide)[map.Index(i, j)], from.z);
+  std::optional<EmergencyOption> option = FindEmergencyLanding(map, model->params(), *glide, from);
+  ASSERT_TRUE(option.has_value());
+  EXPECT_EQ(option->altitude_margin_m, from.z - (*glide)[map.Index(i, j)]);
+  bool is_site = false;
+  for (const LandingSite& s : map.landing_sites()) {
+    is_site = is_site || (s.i == option->site_i && s.j == option->site_j);
+  }
+  EXPECT_TRUE(is_site);
+  for (const Pose& p : option->glide) {
+    ASSERT_TRUE(map.CellOf(p.x, p.y, &i, &j));
+    EXPECT_GE(p.z + 1e-9, (*glide)[map.Index(i, j)]);
+  }
+  // Below the glide altitude of its cell: no site is reachable.
+  ASSERT_TRUE(map.CellOf(from.x, from.y, &i, &j));
+  const Pose low{from.x, from.y, (*glide)[map.Index(i, j)] - 1.0, 0.0};
+  EXPECT_FALSE(FindEmergencyLanding(map, model->params(), *glide, low).has_value());
+}
+
+TEST_F(FlightSessionTest, AZoneThatBeginsLaterActsWhenTheClockReachesIt) {
+  FlightSession session(env_);
+  absl::StatusOr<std::vector<v1::FlightOutput>> opened = session.Handle(Open(), never_);
+  ASSERT_TRUE(opened.ok() && opened->size() == 1u && opened->front().has_plan());
+  const v1::Trajectory& route = opened->front().plan().route();
+  const double step = route.length_m() / (route.path_size() - 1);
+  const v1::Pose& ahead = route.path(static_cast<int>(std::lround(900.0 / step)));
+  v1::FlightInput zone;
+  zone.mutable_add_zone()->set_id("later");
+  zone.mutable_add_zone()->mutable_circle()->set_x(ahead.x());
+  zone.mutable_add_zone()->mutable_circle()->set_y(ahead.y());
+  zone.mutable_add_zone()->mutable_circle()->set_radius_m(120);
+  zone.mutable_add_zone()->set_valid_from_s(5);
+  absl::StatusOr<std::vector<v1::FlightOutput>> none = session.Handle(zone, never_);
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->empty());  // not active yet: nothing changes
+  v1::FlightInput report;
+  report.mutable_position()->set_time_s(6);
+  report.mutable_position()->set_progress_m(6 * 18.0);
+  absl::StatusOr<std::vector<v1::FlightOutput>> out = session.Handle(report, never_);
+  ASSERT_TRUE(out.ok());
+  ASSERT_EQ(out->size(), 1u);
+  ASSERT_TRUE(out->front().has_plan()) << out->front().DebugString();
+  const v1::FlightPlanVersion& v = out->front().plan();
+  EXPECT_EQ(v.reason(), v1::FLIGHT_REASON_ZONE_TIMED);
+  ASSERT_EQ(v.active_zones_size(), 1);
+  for (const v1::Pose& p : v.route().path()) {
+    EXPECT_GT(std::hypot(p.x() - ahead.x(), p.y() - ahead.y()), 120.0);
+  }
+}
+
+TEST_F(FlightSessionTest, APoseOffTheRouteIsPlannedFrom) {
+  FlightSession session(env_);
+  ASSERT_TRUE(session.Handle(Open(), never_).ok());
+  v1::FlightInput report;
+  report.mutable_position()->set_time_s(10);
+  v1::Pose* pose = report.mutable_position()->mutable_pose();
+  pose->set_x(300 - 100 * std::sin(0.785));
+  pose->set_y(375 + 100 * std::cos(0.785));
+  pose->set_z(240);
+  pose->set_theta(0.785);
+  absl::StatusOr<std::vector<v1::FlightOutput>> out = session.Handle(report, never_);
+  ASSERT_TRUE(out.ok());
+  ASSERT_EQ(out->size(), 1u);
+  ASSERT_TRUE(out->front().has_plan()) << out->front().DebugString();
+  const v1::FlightPlanVersion& v = out->front().plan();
+  EXPECT_EQ(v.reason(), v1::FLIGHT_REASON_OFF_ROUTE);
+  EXPECT_EQ(v.committed(0).x(), pose->x());
+  EXPECT_EQ(v.committed(0).y(), pose->y());
+  EXPECT_EQ(v.progress_m(), 0.0);
+  EXPECT_GE(v.committed_until_m(), (10.0 + 1.0) * 18.0);
+}
+
+TEST_F(FlightSessionTest, TheFirstMessageMustOpenAndAnInputAfterTheEndIsRefused) {
+  FlightSession session(env_);
+  v1::FlightInput report;
+  report.mutable_position()->set_time_s(1);
+  EXPECT_FALSE(session.Handle(report, never_).ok());
+  FlightSession s2(env_);
+  ASSERT_TRUE(s2.Handle(Open(), never_).ok());
+  v1::FlightInput end;
+  end.mutable_end();
+  ASSERT_TRUE(s2.Handle(end, never_).ok());
+  EXPECT_TRUE(s2.ended());
+  absl::StatusOr<std::vector<v1::FlightOutput>> after = s2.Handle(report, never_);
+  ASSERT_TRUE(after.ok());
+  ASSERT_EQ(after->size(), 1u);
+  EXPECT_TRUE(after->front().has_refusal());
+}
+
+}  // namespace
+}  // namespace riskplan::server

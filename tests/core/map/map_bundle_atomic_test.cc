@@ -31,8 +31,9 @@ using ::testing::HasSubstr;
 // A fresh, empty directory per test: the parent of the bundles it writes.
 fs::path TestDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir =
-      fs::path(::testing::TempDir()) / "riskplan_map_bundle_atomic_test" / info->name();
+  const fs::path dir = fs::path(::testing::TempDir()) /
+                       ::riskplan::testing::ProcessRoot("riskplan_map_bundle_atomic_test") /
+                       info->name();
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -94,10 +95,13 @@ std::string WriteUnderFileSizeLimit(const RiskMap& map, const fs::path& dir,
 
 // Every test's folder is under TempDir()/riskplan_map_bundle_atomic_test, removed when
 // the program ends.
-const ::testing::Environment* const kCleanup = ::riskplan::testing::RemoveAtExit("riskplan_map_bundle_atomic_test");
+const ::testing::Environment* const kCleanup =
+    ::riskplan::testing::RemoveAtExit("riskplan_map_bundle_atomic_test");
 
 TEST(MapBundleAtomicTest, ARunLeavesNoFolderBehind) {
-  EXPECT_THAT(::riskplan::testing::LeftBehind("MapBundleAtomicTest.WritesACompleteBundleAndNothingElse"), ::testing::IsEmpty());
+  EXPECT_THAT(
+      ::riskplan::testing::LeftBehind("MapBundleAtomicTest.WritesACompleteBundleAndNothingElse"),
+      ::testing::IsEmpty());
 }
 
 TEST(MapBundleAtomicTest, WritesACompleteBundleAndNothingElse) {

@@ -13,8 +13,8 @@
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "tests/core/map/test_dir_cleanup.h"
 #include "nlohmann/json.hpp"
+#include "tests/core/map/test_dir_cleanup.h"
 
 namespace riskplan {
 namespace {
@@ -26,7 +26,8 @@ using ::testing::HasSubstr;
 // A fresh, empty directory per test.
 std::string TestDir(const std::string& leaf = "bundle") {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(::testing::TempDir()) / "riskplan_map_bundle_test" /
+  const fs::path dir = fs::path(::testing::TempDir()) /
+                       ::riskplan::testing::ProcessRoot("riskplan_map_bundle_test") /
                        (std::string(info->name()) + "_" + leaf);
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -107,10 +108,12 @@ std::string LoadError(const std::string& dir) {
 
 // Every test's folder is under TempDir()/riskplan_map_bundle_test, removed when
 // the program ends.
-const ::testing::Environment* const kCleanup = ::riskplan::testing::RemoveAtExit("riskplan_map_bundle_test");
+const ::testing::Environment* const kCleanup =
+    ::riskplan::testing::RemoveAtExit("riskplan_map_bundle_test");
 
 TEST(MapBundleTest, ARunLeavesNoFolderBehind) {
-  EXPECT_THAT(::riskplan::testing::LeftBehind("MapBundleTest.RoundTripIsBitExact"), ::testing::IsEmpty());
+  EXPECT_THAT(::riskplan::testing::LeftBehind("MapBundleTest.RoundTripIsBitExact"),
+              ::testing::IsEmpty());
 }
 
 TEST(MapBundleTest, RoundTripIsBitExact) {

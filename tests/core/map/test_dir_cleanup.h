@@ -1,12 +1,15 @@
 // The map bundle tests' folders: each test writes under
-// ::testing::TempDir()/ROOT, and the whole of it is removed when the test
-// program ends (a gtest environment's TearDown), so that a run leaves nothing
+// ::testing::TempDir()/ProcessRoot(ROOT), a folder of this process alone
+// (ctest runs the tests of one program as parallel processes: a shared folder
+// removed by one of them would vanish under another), and the whole of it is
+// removed when the test program ends (a gtest environment's TearDown), so that a run leaves nothing
 // behind. LeftBehind() runs one test of this program again, as a child with
 // its own TEST_TMPDIR, and lists what the child left there.
 #ifndef RISKPLAN_TESTS_CORE_MAP_TEST_DIR_CLEANUP_H_
 #define RISKPLAN_TESTS_CORE_MAP_TEST_DIR_CLEANUP_H_
 
 #include <stdlib.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -17,12 +20,18 @@
 
 namespace riskplan::testing {
 
+// ROOT-PID: this process's own root.
+inline std::string ProcessRoot(const std::string& root) {
+  return root + "-" + std::to_string(getpid());
+}
+
 class RemoveTestRoot : public ::testing::Environment {
  public:
   explicit RemoveTestRoot(std::string root) : root_(std::move(root)) {}
   void TearDown() override {
     std::error_code ignored;
-    std::filesystem::remove_all(std::filesystem::path(::testing::TempDir()) / root_, ignored);
+    std::filesystem::remove_all(std::filesystem::path(::testing::TempDir()) / ProcessRoot(root_),
+                                ignored);
   }
 
  private:
@@ -41,9 +50,8 @@ inline std::vector<std::string> LeftBehind(const std::string& test) {
   char dir_template[] = "/tmp/riskplan-leftover-XXXXXX";
   if (mkdtemp(dir_template) == nullptr) return {"mkdtemp failed"};
   const std::string dir = dir_template;
-  const std::string command =
-      "TEST_TMPDIR=" + dir + " /proc/" + std::to_string(getpid()) +
-      "/exe --gtest_filter=" + test + " >/dev/null 2>&1";
+  const std::string command = "TEST_TMPDIR=" + dir + " /proc/" + std::to_string(getpid()) +
+                              "/exe --gtest_filter=" + test + " >/dev/null 2>&1";
   std::vector<std::string> left;
   if (std::system(command.c_str()) != 0) left.push_back("child failed");
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {

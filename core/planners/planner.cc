@@ -8,6 +8,7 @@
 #include "core/flight/trajectory.h"
 #include "core/planners/genetic_planner.h"
 #include "core/planners/harmonic_planner.h"
+#include "core/planners/limit_filter.h"
 #include "core/planners/risk_rrt_star.h"
 #include "core/planners/rrt_planner.h"
 
@@ -68,7 +69,11 @@ class AlgorithmPlanner final : public Planner {
   absl::StatusOr<PlanResult> Plan(const PlanningProblem& problem, const PlanOptions& options,
                                   const CancellationToken& cancel,
                                   const ImprovementCallback& on_improvement) override {
-    return entry_.plan(evaluator_, problem, options, cancel, on_improvement);
+    return PlanWithLimits(
+        [&](const ImprovementCallback& report) {
+          return entry_.plan(evaluator_, problem, options, cancel, report);
+        },
+        problem, options, evaluator_, on_improvement);
   }
 
  private:

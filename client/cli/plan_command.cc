@@ -2,6 +2,7 @@
 // runs, the best trajectory, and the files made of it (--trajectory_out,
 // --picture, the ground-station and GIS exports). A stream that breaks still
 // leaves what it delivered.
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -341,6 +342,21 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
         v1::Algorithm_Name(request.algorithm()), static_cast<int>(picture.improvements.size()),
         final_update.trajectory().risk(), final_update.trajectory().length_m(),
         static_cast<int>(final_update.iterations()), v1::EndReason_Name(final_update.end_reason()));
+    if (final_update.front_size() > 0) {
+      // The front (--pareto): up to 6 of its routes, from the quickest to the
+      // safest, each in its own colour with its flight time and risk in the key.
+      const int n = final_update.front_size();
+      const int shown = std::min(n, 6);
+      for (int k = 0; k < shown; ++k) {
+        const int i = shown == 1 ? 0 : k * (n - 1) / (shown - 1);
+        const v1::Trajectory& t = final_update.front(i);
+        picture.fleet.push_back(t);
+        picture.fleet_labels.push_back(
+            absl::StrFormat("front %d/%d: %.0f s, risk %.3g", i + 1, n, t.flight_time_s(), t.risk()));
+      }
+      picture.fleet_key = true;
+      picture.caption += absl::StrFormat("; front of %d routes (risk against flight time)", n);
+    }
     if (int code = WritePlanPicture(o, client, request, final_update, picture); code != 0) {
       return code;
     }

@@ -49,14 +49,25 @@ absl::StatusOr<LimitCheck> CheckTrajectoryLimits(const RiskModel& model,
   if (!pieces.ok()) return pieces.status();
   auto eval = EvaluateTrajectory(model, *pieces, {}, evaluator);
   if (!eval.ok()) return eval.status();
-  LimitCheck out;
-  out.risk = eval->risk;
-  out.length_m = eval->length_m;
-  out.flight_time_s = eval->flight_time_s;
-  out.admissible = eval->admissible;
-  if (!out.admissible) {
+  if (!eval->admissible) {
+    LimitCheck out;
+    out.risk = eval->risk;
+    out.length_m = eval->length_m;
+    out.flight_time_s = eval->flight_time_s;
     out.broken = "admissibility";
-  } else if (limits.max_flight_time_s > 0.0 && out.flight_time_s > limits.max_flight_time_s) {
+    return out;
+  }
+  return CheckNumbers(eval->risk, eval->length_m, eval->flight_time_s, limits);
+}
+
+LimitCheck CheckNumbers(double risk, double length_m, double flight_time_s,
+                        const FlightLimits& limits) {
+  LimitCheck out;
+  out.risk = risk;
+  out.length_m = length_m;
+  out.flight_time_s = flight_time_s;
+  out.admissible = true;
+  if (limits.max_flight_time_s > 0.0 && out.flight_time_s > limits.max_flight_time_s) {
     out.broken = "max_flight_time_s";
   } else if (limits.max_length_m > 0.0 && out.length_m > limits.max_length_m) {
     out.broken = "max_length_m";

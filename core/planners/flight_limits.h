@@ -85,6 +85,11 @@ absl::StatusOr<LimitCheck> CheckTrajectoryLimits(const RiskModel& model,
                                                  const FlightLimits& limits,
                                                  RiskEvaluator* evaluator = nullptr);
 
+// The check of an admissible trajectory's exact numbers (what
+// CheckTrajectoryLimits does after its evaluation).
+LimitCheck CheckNumbers(double risk, double length_m, double flight_time_s,
+                        const FlightLimits& limits);
+
 // Adds a point to a non-dominated front (risk, flight time both minimised):
 // dropped when a point of the front is no worse in both and better in one
 // (or equal in both); otherwise inserted, removing the points it dominates.

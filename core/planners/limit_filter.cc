@@ -1,5 +1,6 @@
 #include "core/planners/limit_filter.h"
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -33,8 +34,7 @@ class Filter {
   void Offer(const PlanImprovement& improvement) {
     if (!error_.ok()) return;
     ++summary_.candidates;
-    absl::StatusOr<LimitCheck> check =
-        CheckTrajectoryLimits(*problem_.model, improvement.waypoints, limits_, evaluator_);
+    absl::StatusOr<LimitCheck> check = Check(improvement);
     if (!check.ok()) {
       error_ = check.status();
       return;
@@ -91,7 +91,31 @@ class Filter {
 
   void Remember(const PlanImprovement& improvement) { last_offered_ = improvement.waypoints; }
 
+  // A pass's final best, when it was not reported as an improvement.
+  void OfferFinal(const PlanImprovement& best) {
+    if (SameWaypoints(best.waypoints, last_waypoints_) ||
+        SameWaypoints(best.waypoints, last_offered_)) {
+      return;
+    }
+    last_offered_ = best.waypoints;
+    Offer(best);
+  }
+
  private:
+  // The exact numbers of a reported trajectory. In still air they need no
+  // evaluation: a planner's risk and length are EvaluateTrajectory's bit for
+  // bit, its trajectories are admissible, and the flight time is
+  // FlightTimeS(length, airspeed) (spec section 4, version 2). In a wind the
+  // time depends on the ground speed along the track: EvaluateTrajectory.
+  absl::StatusOr<LimitCheck> Check(const PlanImprovement& improvement) const {
+    const RiskModel& model = *problem_.model;
+    if (!model.params().Calm()) {
+      return CheckTrajectoryLimits(model, improvement.waypoints, limits_, evaluator_);
+    }
+    return CheckNumbers(improvement.risk, improvement.length_m,
+                        FlightTimeS(improvement.length_m, model.params().airspeed_mps), limits_);
+  }
+
   bool Better(const PlanImprovement& a, const PlanImprovement& b) const {
     if (limits_.objective == PlanObjective::kMinTime) {
       if (a.flight_time_s != b.flight_time_s) return a.flight_time_s < b.flight_time_s;
@@ -169,18 +193,77 @@ class Filter {
 
 }  // namespace
 
-absl::StatusOr<PlanResult> PlanWithLimits(
-    const std::function<absl::StatusOr<PlanResult>(const ImprovementCallback&)>& algorithm,
-    const PlanningProblem& problem, const PlanOptions& options, RiskEvaluator* evaluator,
-    const ImprovementCallback& on_improvement) {
-  if (!options.limits.Active()) return algorithm(on_improvement);
+std::vector<PlanOptions> LimitPasses(PlannerAlgorithm algorithm, const PlanOptions& options) {
+  const FlightLimits& l = options.limits;
+  const bool trades_time = l.max_flight_time_s > 0.0 || l.max_length_m > 0.0 ||
+                           l.objective == PlanObjective::kMinTime || l.pareto;
+  if (algorithm != PlannerAlgorithm::kRiskRrtStar || !trades_time ||
+      options.params.count("guide_cell_m") > 0) {
+    return {options};
+  }
+  PlanOptions unguided = options;
+  PlanOptions guided = options;
+  unguided.params["guide_cell_m"] = 0.0;
+  // Half the budget each; an odd iteration goes to the guided pass.
+  unguided.budget.max_time_s = options.budget.max_time_s / 2.0;
+  guided.budget.max_time_s = options.budget.max_time_s - unguided.budget.max_time_s;
+  unguided.budget.max_iterations = options.budget.max_iterations / 2;
+  guided.budget.max_iterations = options.budget.max_iterations - unguided.budget.max_iterations;
+  if (options.budget.max_iterations == 1) return {options};  // one iteration: no halves
+  return {unguided, guided};
+}
+
+absl::StatusOr<PlanResult> PlanWithLimits(PlannerAlgorithm algorithm, const AlgorithmRun& run,
+                                          const PlanningProblem& problem,
+                                          const PlanOptions& options, RiskEvaluator* evaluator,
+                                          const ImprovementCallback& on_improvement) {
+  if (!options.limits.Active()) return run(options, on_improvement);
   if (absl::Status s = CheckFlightLimits(options.limits); !s.ok()) return s;
   if (problem.model == nullptr) return absl::InvalidArgumentError("the problem has no model");
   Filter filter(problem, options.limits, evaluator, on_improvement);
-  return filter.Finish(algorithm([&](const PlanImprovement& improvement) {
-    filter.Remember(improvement);
-    filter.Offer(improvement);
-  }));
+  const std::vector<PlanOptions> passes = LimitPasses(algorithm, options);
+  PlanResult total;
+  double elapsed = 0.0;
+  int64_t iterations = 0;
+  for (size_t k = 0; k < passes.size(); ++k) {
+    absl::StatusOr<PlanResult> pass = run(passes[k], [&](const PlanImprovement& improvement) {
+      if (elapsed == 0.0 && iterations == 0) {
+        filter.Remember(improvement);
+        filter.Offer(improvement);
+        return;
+      }
+      PlanImprovement shifted = improvement;
+      shifted.elapsed_s += elapsed;
+      shifted.iterations += iterations;
+      filter.Remember(shifted);
+      filter.Offer(shifted);
+    });
+    if (!pass.ok()) return filter.Finish(std::move(pass));
+    // The result of the passes: the last one's, with the counts of all.
+    std::optional<PlanImprovement> best = total.best;
+    if (pass->best.has_value()) {
+      pass->best->elapsed_s += elapsed;
+      pass->best->iterations += iterations;
+      best = pass->best;
+    }
+    const uint64_t evaluated = total.configurations_evaluated + pass->configurations_evaluated;
+    elapsed += pass->elapsed_s;
+    iterations += pass->iterations;
+    total = *std::move(pass);
+    total.best = best;
+    total.elapsed_s = elapsed;
+    total.iterations = iterations;
+    total.configurations_evaluated = evaluated;
+    if (total.reason == StopReason::kCancelled) break;
+    // The pass's final best goes through the filter now (the next pass
+    // would hide it from Finish).
+    if (k + 1 < passes.size() && total.best.has_value()) filter.OfferFinal(*total.best);
+  }
+  // Some pass found a trajectory: the run has one.
+  if (total.reason == StopReason::kNoSolution && total.best.has_value()) {
+    total.reason = StopReason::kBudgetExhausted;
+  }
+  return filter.Finish(std::move(total));
 }
 
 }  // namespace riskplan

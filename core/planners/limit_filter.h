@@ -5,6 +5,7 @@
 #define RISKPLAN_CORE_PLANNERS_LIMIT_FILTER_H_
 
 #include <functional>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/planners/planner.h"
@@ -30,10 +31,26 @@ namespace riskplan {
 //   flight time for the endurance).
 // With inactive limits (FlightLimits::Active() false) it only calls
 // `algorithm`: nothing changes, improvements keep flight_time_s 0.
-absl::StatusOr<PlanResult> PlanWithLimits(
-    const std::function<absl::StatusOr<PlanResult>(const ImprovementCallback&)>& algorithm,
-    const PlanningProblem& problem, const PlanOptions& options, RiskEvaluator* evaluator,
-    const ImprovementCallback& on_improvement);
+//
+// RISK_RRT_STAR with a limit on time or length, MIN_TIME or the front (and no
+// guide_cell_m of the caller's) runs in two passes through the same filter,
+// each with half the budget: first without its guide route (its trajectories
+// then sweep from the direct, quick ones to safer, longer ones), then with it
+// (the safest, often longest routes). The guide alone tends to find the long
+// safe route first and never a quick one (on demo-city's README demo, every
+// guided trajectory flies more than 780 s while unguided ones start at 440 s),
+// so an endurance would otherwise leave nothing to choose from. The improvements
+// of the second pass count time and iterations from the start of the first.
+using AlgorithmRun = std::function<absl::StatusOr<PlanResult>(const PlanOptions& options,
+                                                              const ImprovementCallback& report)>;
+absl::StatusOr<PlanResult> PlanWithLimits(PlannerAlgorithm algorithm, const AlgorithmRun& run,
+                                          const PlanningProblem& problem,
+                                          const PlanOptions& options, RiskEvaluator* evaluator,
+                                          const ImprovementCallback& on_improvement);
+
+// The passes PlanWithLimits runs: `options` itself, or for RISK_RRT_STAR
+// under limits that trade risk for time, the unguided and the guided halves.
+std::vector<PlanOptions> LimitPasses(PlannerAlgorithm algorithm, const PlanOptions& options);
 
 }  // namespace riskplan
 

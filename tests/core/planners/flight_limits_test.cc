@@ -11,6 +11,7 @@
 
 #include "core/flight/trajectory.h"
 #include "core/planners/flight_limits.h"
+#include "core/planners/limit_filter.h"
 #include "core/planners/planner.h"
 #include "gtest/gtest.h"
 #include "tests/core/planner_test_util.h"
@@ -56,19 +57,39 @@ void ExpectWithin(const RiskModel& model, const FlightLimits& limits, const Outc
     EXPECT_EQ(i->risk, e.risk);
     EXPECT_EQ(i->length_m, e.length_m);
     EXPECT_EQ(i->flight_time_s, e.flight_time_s);
-    if (limits.max_flight_time_s > 0) EXPECT_LE(e.flight_time_s, limits.max_flight_time_s);
-    if (limits.max_length_m > 0) EXPECT_LE(e.length_m, limits.max_length_m);
-    if (limits.max_risk > 0) EXPECT_LE(e.risk, limits.max_risk);
+    if (limits.max_flight_time_s > 0) {
+      EXPECT_LE(e.flight_time_s, limits.max_flight_time_s);
+    }
+    if (limits.max_length_m > 0) {
+      EXPECT_LE(e.length_m, limits.max_length_m);
+    }
+    if (limits.max_risk > 0) {
+      EXPECT_LE(e.risk, limits.max_risk);
+    }
     if (limits.max_risk_per_flight_hour > 0) {
       EXPECT_LE(RiskPerFlightHour(e.risk, e.flight_time_s), limits.max_risk_per_flight_hour);
     }
-    for (const FrontPoint& p : i->front) {
+    EXPECT_TRUE(NonDominated(i->front));
+  }
+  // Every point of the last streamed front and of the final one is exact
+  // and within the limits (the earlier fronts hold the same kind of points:
+  // each entered the front once).
+  std::vector<const FrontPoint*> points;
+  if (!out.improvements.empty()) {
+    for (const FrontPoint& p : out.improvements.back().front) points.push_back(&p);
+  }
+  for (const FrontPoint& p : out.result->front) points.push_back(&p);
+  EXPECT_TRUE(NonDominated(out.result->front));
+  {
+    for (const FrontPoint* q : points) {
+      const FrontPoint& p = *q;
       const TrajectoryEvaluation f = Evaluate(model, p.waypoints);
       EXPECT_EQ(p.risk, f.risk);
       EXPECT_EQ(p.flight_time_s, f.flight_time_s);
-      if (limits.max_flight_time_s > 0) EXPECT_LE(f.flight_time_s, limits.max_flight_time_s);
+      if (limits.max_flight_time_s > 0) {
+        EXPECT_LE(f.flight_time_s, limits.max_flight_time_s);
+      }
     }
-    EXPECT_TRUE(NonDominated(i->front));
   }
 }
 
@@ -254,11 +275,12 @@ TEST_F(FlightLimitsTest, StreamedFrontIsNonDominated) {
   }
 }
 
-// With no limits the planners are unchanged: same trajectory, bit for bit.
-TEST_F(FlightLimitsTest, InactiveLimitsChangeNothing) {
+// A limit every trajectory meets changes nothing but the flight times
+// reported: same trajectories, bit for bit.
+TEST_F(FlightLimitsTest, LooseLimitsChangeNothing) {
   const Scenario& sc = Find("sw-ne");
   FlightLimits loose;
-  loose.max_flight_time_s = 1e9;
+  loose.max_risk = 1.0;
   const Outcome a = Plan(kPlanners[0], sc, {});
   const Outcome b = Plan(kPlanners[0], sc, loose);
   ASSERT_TRUE(a.result.ok() && b.result.ok());
@@ -267,6 +289,63 @@ TEST_F(FlightLimitsTest, InactiveLimitsChangeNothing) {
   EXPECT_EQ(a.improvements.size(), b.improvements.size());
   EXPECT_EQ(a.result->best->flight_time_s, 0.0);
   EXPECT_GT(b.result->best->flight_time_s, 0.0);
+}
+
+// In a wind the flight time is the ground speed's: every time streamed is
+// EvaluateTrajectory's in that wind, and the endurance bounds it.
+TEST_F(FlightLimitsTest, EnduranceInAWindUsesTheGroundSpeed) {
+  ModelParams p = model_->params();
+  p.wind_speed_mps = 8.0;
+  p.wind_from_deg = 270.0;
+  auto wind = RiskModel::Create(model_->map_ptr(), p, model_->table_ptr());
+  ASSERT_TRUE(wind.ok()) << wind.status();
+  const Scenario& sc = Find("sw-ne");
+  const Outcome free =
+      RunPlan(PlannerAlgorithm::kRiskRrtStar, *wind, sc.start, sc.goal, 800, 1, {}, {});
+  ASSERT_TRUE(free.result.ok() && free.result->best.has_value());
+  const TrajectoryEvaluation e = Evaluate(**wind, free.result->best->waypoints);
+  // With the wind behind it the route is quicker than length / airspeed.
+  EXPECT_NE(e.flight_time_s, FlightTimeS(e.length_m, p.airspeed_mps));
+  PlanOptions options;
+  options.limits.max_flight_time_s = e.flight_time_s;
+  options.limits.pareto = true;
+  const Outcome out =
+      RunPlan(PlannerAlgorithm::kRiskRrtStar, *wind, sc.start, sc.goal, 800, 1, {}, options);
+  ExpectWithin(**wind, options.limits, out);
+  EXPECT_FALSE(out.improvements.empty());
+}
+
+// RISK_RRT_STAR under an endurance runs an unguided pass then a guided one,
+// each with half the iterations; the counts add up and the second pass's
+// improvements count from the first's start.
+TEST_F(FlightLimitsTest, RiskRrtStarTradesTimeInTwoPasses) {
+  PlanOptions options;
+  options.budget.max_iterations = 1001;
+  options.limits.max_flight_time_s = 1000;
+  std::vector<PlanOptions> passes = LimitPasses(PlannerAlgorithm::kRiskRrtStar, options);
+  ASSERT_EQ(passes.size(), 2u);
+  EXPECT_EQ(passes[0].params.at("guide_cell_m"), 0.0);
+  EXPECT_EQ(passes[1].params.count("guide_cell_m"), 0u);
+  EXPECT_EQ(passes[0].budget.max_iterations + passes[1].budget.max_iterations, 1001);
+  options.params["guide_cell_m"] = 50;  // the caller's choice stands
+  EXPECT_EQ(LimitPasses(PlannerAlgorithm::kRiskRrtStar, options).size(), 1u);
+  options.params.clear();
+  EXPECT_EQ(LimitPasses(PlannerAlgorithm::kRrt, options).size(), 1u);
+  options.limits = {};
+  options.limits.max_risk = 1e-6;  // no time traded
+  EXPECT_EQ(LimitPasses(PlannerAlgorithm::kRiskRrtStar, options).size(), 1u);
+
+  const Scenario& sc = Find("sw-ne");
+  FlightLimits limits;
+  limits.max_flight_time_s = 1e9;
+  const Outcome out = Plan({PlannerAlgorithm::kRiskRrtStar, 1200}, sc, limits);
+  ExpectWithin(*model_, limits, out);
+  ASSERT_TRUE(out.result->best.has_value());
+  EXPECT_EQ(out.result->iterations, 1200);
+  for (size_t k = 1; k < out.improvements.size(); ++k) {
+    EXPECT_GE(out.improvements[k].iterations, out.improvements[k - 1].iterations);
+    EXPECT_LT(out.improvements[k].risk, out.improvements[k - 1].risk);
+  }
 }
 
 }  // namespace

@@ -50,6 +50,10 @@ echo "== MIN_RISK, --max_risk_per_flight_hour=1e-6, 10 s =="
 plan --budget_ms=10000 --max_risk_per_flight_hour=1e-6
 echo "== MIN_TIME, --max_risk_per_flight_hour=1e-6, 10 s =="
 plan --budget_ms=10000 --objective=MIN_TIME --max_risk_per_flight_hour=1e-6
+echo "== MIN_TIME, --max_risk_per_flight_hour=2e-6, 10 s =="
+plan --budget_ms=10000 --objective=MIN_TIME --max_risk_per_flight_hour=2e-6
+echo "== MIN_RISK, --max_risk_per_flight_hour=2e-6, 10 s =="
+plan --budget_ms=10000 --max_risk_per_flight_hour=2e-6
 echo
 echo "== the front after 3 s (--pareto) =="
 front=$(plan --budget_ms=3000 --pareto)

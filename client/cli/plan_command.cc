@@ -3,6 +3,7 @@
 // --picture, the ground-station and GIS exports). A stream that breaks still
 // leaves what it delivered.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -345,10 +346,24 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
     if (final_update.front_size() > 0) {
       // The front (--pareto): up to 6 of its routes, from the quickest to the
       // safest, each in its own colour with its flight time and risk in the key.
+      // The points nearest to 6 flight times evenly spread over the front's
+      // range (the front sorted by flight time), each once.
       const int n = final_update.front_size();
-      const int shown = std::min(n, 6);
-      for (int k = 0; k < shown; ++k) {
-        const int i = shown == 1 ? 0 : k * (n - 1) / (shown - 1);
+      const double t0 = final_update.front(0).flight_time_s();
+      const double t1 = final_update.front(n - 1).flight_time_s();
+      std::vector<int> chosen;
+      for (int k = 0; k < 6; ++k) {
+        const double target = t0 + (t1 - t0) * k / 5.0;
+        int best = 0;
+        for (int i = 1; i < n; ++i) {
+          if (std::abs(final_update.front(i).flight_time_s() - target) <
+              std::abs(final_update.front(best).flight_time_s() - target)) {
+            best = i;
+          }
+        }
+        if (chosen.empty() || chosen.back() != best) chosen.push_back(best);
+      }
+      for (int i : chosen) {
         const v1::Trajectory& t = final_update.front(i);
         picture.fleet.push_back(t);
         picture.fleet_labels.push_back(

@@ -91,6 +91,8 @@ class Filter {
 
   void Remember(const PlanImprovement& improvement) { last_offered_ = improvement.waypoints; }
 
+  bool HasBest() const { return best_.has_value(); }
+
   // A pass's final best, when it was not reported as an improvement.
   void OfferFinal(const PlanImprovement& best) {
     if (SameWaypoints(best.waypoints, last_waypoints_) ||
@@ -201,16 +203,22 @@ std::vector<PlanOptions> LimitPasses(PlannerAlgorithm algorithm, const PlanOptio
       options.params.count("guide_cell_m") > 0) {
     return {options};
   }
-  PlanOptions unguided = options;
-  PlanOptions guided = options;
-  unguided.params["guide_cell_m"] = 0.0;
-  // Half the budget each; an odd iteration goes to the guided pass.
-  unguided.budget.max_time_s = options.budget.max_time_s / 2.0;
-  guided.budget.max_time_s = options.budget.max_time_s - unguided.budget.max_time_s;
-  unguided.budget.max_iterations = options.budget.max_iterations / 2;
-  guided.budget.max_iterations = options.budget.max_iterations - unguided.budget.max_iterations;
-  if (options.budget.max_iterations == 1) return {options};  // one iteration: no halves
-  return {unguided, guided};
+  if (options.budget.max_iterations == 1) return {options};  // one iteration: no parts
+  PlanOptions first = options;
+  PlanOptions second = options;
+  // MIN_RISK without the front: a guided probe of a quarter of the budget,
+  // then three quarters for the pass the probe chooses (PlanWithLimits);
+  // otherwise half unguided, half guided.
+  const bool probe = l.objective == PlanObjective::kMinRisk && !l.pareto;
+  const double share = probe ? 0.25 : 0.5;
+  if (!probe) first.params["guide_cell_m"] = 0.0;
+  if (probe) second.params["guide_cell_m"] = 0.0;
+  first.budget.max_time_s = options.budget.max_time_s * share;
+  second.budget.max_time_s = options.budget.max_time_s - first.budget.max_time_s;
+  first.budget.max_iterations =
+      static_cast<int64_t>(static_cast<double>(options.budget.max_iterations) * share);
+  second.budget.max_iterations = options.budget.max_iterations - first.budget.max_iterations;
+  return {first, second};
 }
 
 absl::StatusOr<PlanResult> PlanWithLimits(PlannerAlgorithm algorithm, const AlgorithmRun& run,
@@ -221,7 +229,12 @@ absl::StatusOr<PlanResult> PlanWithLimits(PlannerAlgorithm algorithm, const Algo
   if (absl::Status s = CheckFlightLimits(options.limits); !s.ok()) return s;
   if (problem.model == nullptr) return absl::InvalidArgumentError("the problem has no model");
   Filter filter(problem, options.limits, evaluator, on_improvement);
-  const std::vector<PlanOptions> passes = LimitPasses(algorithm, options);
+  std::vector<PlanOptions> passes = LimitPasses(algorithm, options);
+  // The guided probe (MIN_RISK): when one of its trajectories meets the
+  // limits the guided search goes on, on a new tree with the same seed (which
+  // grows the probe's tree again and further); when none does, the rest of
+  // the budget goes to the unguided sweep.
+  const bool probe = passes.size() == 2 && passes[0].params.count("guide_cell_m") == 0;
   PlanResult total;
   double elapsed = 0.0;
   int64_t iterations = 0;
@@ -258,6 +271,7 @@ absl::StatusOr<PlanResult> PlanWithLimits(PlannerAlgorithm algorithm, const Algo
     // The pass's final best goes through the filter now (the next pass
     // would hide it from Finish).
     if (k + 1 < passes.size() && total.best.has_value()) filter.OfferFinal(*total.best);
+    if (k == 0 && probe && filter.HasBest()) passes[1].params.erase("guide_cell_m");
   }
   // Some pass found a trajectory: the run has one.
   if (total.reason == StopReason::kNoSolution && total.best.has_value()) {

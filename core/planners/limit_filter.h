@@ -33,14 +33,18 @@ namespace riskplan {
 // `algorithm`: nothing changes, improvements keep flight_time_s 0.
 //
 // RISK_RRT_STAR with a limit on time or length, MIN_TIME or the front (and no
-// guide_cell_m of the caller's) runs in two passes through the same filter,
-// each with half the budget: first without its guide route (its trajectories
-// then sweep from the direct, quick ones to safer, longer ones), then with it
-// (the safest, often longest routes). The guide alone tends to find the long
-// safe route first and never a quick one (on demo-city's README demo, every
-// guided trajectory flies more than 780 s while unguided ones start at 440 s),
-// so an endurance would otherwise leave nothing to choose from. The improvements
-// of the second pass count time and iterations from the start of the first.
+// guide_cell_m of the caller's) runs in two passes through the same filter.
+// Its guide route alone tends to find the long safe route first and never a
+// quick one (on demo-city's README demo every guided trajectory flies more
+// than 780 s, while unguided ones sweep from 440 s to 700 s), so an
+// endurance could otherwise leave nothing to choose from:
+// - MIN_RISK without the front: a guided probe with a quarter of the budget;
+//   if one of its trajectories meets the limits, a guided pass with the other
+//   three quarters (a new tree, same seed), else an unguided one;
+// - MIN_TIME or the front: half unguided (the sweep from quick to safe), then
+//   half guided (the safest routes).
+// The improvements of the second pass count time and iterations from the
+// start of the first.
 using AlgorithmRun = std::function<absl::StatusOr<PlanResult>(const PlanOptions& options,
                                                               const ImprovementCallback& report)>;
 absl::StatusOr<PlanResult> PlanWithLimits(PlannerAlgorithm algorithm, const AlgorithmRun& run,
@@ -49,7 +53,8 @@ absl::StatusOr<PlanResult> PlanWithLimits(PlannerAlgorithm algorithm, const Algo
                                           const ImprovementCallback& on_improvement);
 
 // The passes PlanWithLimits runs: `options` itself, or for RISK_RRT_STAR
-// under limits that trade risk for time, the unguided and the guided halves.
+// under limits that trade risk for time the two above (for MIN_RISK the
+// second is unguided until the probe chooses).
 std::vector<PlanOptions> LimitPasses(PlannerAlgorithm algorithm, const PlanOptions& options);
 
 }  // namespace riskplan

@@ -322,11 +322,23 @@ TEST_F(FlightLimitsTest, RiskRrtStarTradesTimeInTwoPasses) {
   PlanOptions options;
   options.budget.max_iterations = 1001;
   options.limits.max_flight_time_s = 1000;
+  // MIN_RISK: a guided probe of a quarter, then (until the probe chooses)
+  // an unguided pass.
   std::vector<PlanOptions> passes = LimitPasses(PlannerAlgorithm::kRiskRrtStar, options);
+  ASSERT_EQ(passes.size(), 2u);
+  EXPECT_EQ(passes[0].params.count("guide_cell_m"), 0u);
+  EXPECT_EQ(passes[1].params.at("guide_cell_m"), 0.0);
+  EXPECT_EQ(passes[0].budget.max_iterations, 250);
+  EXPECT_EQ(passes[1].budget.max_iterations, 751);
+  // The front: half unguided, half guided.
+  options.limits.pareto = true;
+  passes = LimitPasses(PlannerAlgorithm::kRiskRrtStar, options);
   ASSERT_EQ(passes.size(), 2u);
   EXPECT_EQ(passes[0].params.at("guide_cell_m"), 0.0);
   EXPECT_EQ(passes[1].params.count("guide_cell_m"), 0u);
-  EXPECT_EQ(passes[0].budget.max_iterations + passes[1].budget.max_iterations, 1001);
+  EXPECT_EQ(passes[0].budget.max_iterations, 500);
+  EXPECT_EQ(passes[1].budget.max_iterations, 501);
+  options.limits.pareto = false;
   options.params["guide_cell_m"] = 50;  // the caller's choice stands
   EXPECT_EQ(LimitPasses(PlannerAlgorithm::kRiskRrtStar, options).size(), 1u);
   options.params.clear();

@@ -50,6 +50,17 @@ struct CliOptions {
   std::string picture;         // .svg or .png
   int picture_size = 800;      // largest side, pixels (map cells after downsampling)
   std::string trajectory_out;  // JSON of the best trajectory's waypoints
+  // Limits (PlanRequest.limits; 0: none) and objective (plan, fleet).
+  double max_flight_time_s = 0.0;
+  double max_length_m = 0.0;
+  double max_risk = 0.0;
+  double max_risk_per_flight_hour = 0.0;
+  std::string objective = "MIN_RISK";  // MIN_RISK | MIN_TIME
+  bool pareto = false;
+  // A QGroundControl mission to plan leg by leg, and where to write it back
+  // planned (plan).
+  std::string mission;
+  std::string mission_out;
 
   // Ground-station and GIS files of the trajectory (plan, eval), written
   // from the server's path sampled every exports.spacing_m.

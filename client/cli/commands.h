@@ -20,6 +20,8 @@ namespace riskplan::client {
 int RunMaps(const CliOptions& options, RiskplanClient& client);
 int RunEval(const CliOptions& options, RiskplanClient& client);
 int RunPlan(const CliOptions& options, RiskplanClient& client);
+// `riskplan plan --mission=FILE.plan` (client/cli/mission_command.cc).
+int RunMission(const CliOptions& options, RiskplanClient& client);
 int RunLoad(const CliOptions& options, RiskplanClient& client);
 int RunFleet(const CliOptions& options, RiskplanClient& client);
 int RunFly(const CliOptions& options, RiskplanClient& client);

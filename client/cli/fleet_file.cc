@@ -67,6 +67,25 @@ absl::Status SetOption(const std::string& key, const Json& value, const std::str
     o->seed = value.get<uint64_t>();
     return absl::OkStatus();
   }
+  const auto number = [&](double* out) -> absl::Status {
+    if (!value.is_number()) {
+      return absl::InvalidArgumentError(absl::StrFormat("%s: must be a number", where));
+    }
+    *out = value.get<double>();
+    return absl::OkStatus();
+  };
+  if (key == "max_flight_time_s") return number(&o->max_flight_time_s);
+  if (key == "max_length_m") return number(&o->max_length_m);
+  if (key == "max_risk") return number(&o->max_risk);
+  if (key == "max_risk_per_flight_hour") return number(&o->max_risk_per_flight_hour);
+  if (key == "objective") return text(&o->objective);
+  if (key == "pareto") {
+    if (!value.is_boolean()) {
+      return absl::InvalidArgumentError(absl::StrFormat("%s: must be true or false", where));
+    }
+    o->pareto = value.get<bool>();
+    return absl::OkStatus();
+  }
   if (key == "display_step_m") {
     if (!value.is_number()) {
       return absl::InvalidArgumentError(absl::StrFormat("%s: must be a number", where));
@@ -84,7 +103,8 @@ absl::Status SetOption(const std::string& key, const Json& value, const std::str
   return absl::InvalidArgumentError(absl::StrFormat(
       "%s: unknown key; a mission has id, priority, start, goal, map, algorithm, budget_ms, "
       "iterations, seed, params, wind, planner_params, obstacles, min_update_interval_ms, "
-      "display_step_m, tree",
+      "display_step_m, tree, max_flight_time_s, max_length_m, max_risk, "
+      "max_risk_per_flight_hour, objective, pareto",
       where));
 }
 

@@ -18,6 +18,30 @@ absl::Status InFlag(const char* flag, const absl::Status& status) {
   return absl::Status(status.code(), absl::StrFormat("%s: %s", flag, status.message()));
 }
 
+// --max_flight_time_s, --max_length_m, --max_risk, --max_risk_per_flight_hour,
+// --objective and --pareto into the request's limits (unset when all are at
+// their defaults). The server checks the values (finite, >= 0).
+absl::Status SetLimits(const CliOptions& o, v1::PlanRequest* request) {
+  v1::Objective objective = v1::OBJECTIVE_UNSPECIFIED;
+  if (!v1::Objective_Parse(absl::AsciiStrToUpper(o.objective), &objective) ||
+      objective == v1::OBJECTIVE_UNSPECIFIED) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("--objective=%s: unknown; known: MIN_RISK, MIN_TIME", o.objective));
+  }
+  if (o.max_flight_time_s == 0.0 && o.max_length_m == 0.0 && o.max_risk == 0.0 &&
+      o.max_risk_per_flight_hour == 0.0 && objective == v1::MIN_RISK && !o.pareto) {
+    return absl::OkStatus();
+  }
+  v1::FlightLimits* limits = request->mutable_limits();
+  limits->set_max_flight_time_s(o.max_flight_time_s);
+  limits->set_max_length_m(o.max_length_m);
+  limits->set_max_risk(o.max_risk);
+  limits->set_max_risk_per_flight_hour(o.max_risk_per_flight_hour);
+  limits->set_objective(objective);
+  limits->set_pareto(o.pareto);
+  return absl::OkStatus();
+}
+
 // --wind into the request's wind or wind_wgs84 (nothing when empty).
 template <typename Request>
 absl::Status SetWind(const std::string& text, Request* request) {
@@ -145,6 +169,7 @@ absl::StatusOr<v1::PlanRequest> PlanRequestFromOptions(const CliOptions& o) {
     return s;
   }
   if (absl::Status s = SetWind(o.wind, &request); !s.ok()) return s;
+  if (absl::Status s = SetLimits(o, &request); !s.ok()) return s;
   std::string_view rest;
   if (HasWgs84Prefix(o.obstacles, &rest)) {
     absl::StatusOr<std::vector<v1::GeoPoint2>> obstacles = ParseGeoPoints2(rest);

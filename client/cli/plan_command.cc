@@ -2,6 +2,8 @@
 // runs, the best trajectory, and the files made of it (--trajectory_out,
 // --picture, the ground-station and GIS exports). A stream that breaks still
 // leaves what it delivered.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -234,7 +236,8 @@ grpc::Status StreamPlan(const CliOptions& o, RiskplanClient& client, const v1::P
 }
 
 // How the plan ended, and its best trajectory if it has one.
-void PrintPlanEnd(const CliOptions& o, const v1::PlanUpdate& final_update, size_t received) {
+void PrintPlanEnd(const CliOptions& o, const v1::PlanRequest& request,
+                  const v1::PlanUpdate& final_update, size_t received) {
   // "found" counts every improvement of the planner, also those the server
   // never sent because a newer one replaced them (docs/api.md, "The
   // stream"); "sent" counts the distinct ones received.
@@ -245,7 +248,11 @@ void PrintPlanEnd(const CliOptions& o, const v1::PlanUpdate& final_update, size_
       static_cast<int>(final_update.iterations()), static_cast<int>(final_update.tree_size()),
       static_cast<int>(final_update.improvements()), static_cast<int>(received));
   if (!final_update.has_trajectory()) {
-    std::printf("no admissible trajectory was found\n");
+    if (!final_update.limits().note().empty()) {
+      std::printf("no trajectory within the limits: %s\n", final_update.limits().note().c_str());
+    } else {
+      std::printf("no admissible trajectory was found\n");
+    }
     return;
   }
   const v1::Trajectory& best = final_update.trajectory();
@@ -259,6 +266,27 @@ void PrintPlanEnd(const CliOptions& o, const v1::PlanUpdate& final_update, size_
                           best.flight_time_s() > 0 ? best.length_m() / best.flight_time_s() : 0,
                           o.target_level_of_safety)
                           .c_str());
+  std::printf("flight time %.1f s\n", best.flight_time_s());
+  // The margin to each limit the request set (what is left of it).
+  const v1::FlightLimits& limits = request.limits();
+  const auto margin = [](const char* name, double limit, double value, const char* unit) {
+    if (limit <= 0.0) return;
+    std::printf("limit %s = %g%s: %.6g%s, margin %.6g%s (%.1f %%)\n", name, limit, unit, value,
+                unit, limit - value, unit, 100.0 * (limit - value) / limit);
+  };
+  margin("max_flight_time_s", limits.max_flight_time_s(), best.flight_time_s(), " s");
+  margin("max_length_m", limits.max_length_m(), best.length_m(), " m");
+  margin("max_risk", limits.max_risk(), best.risk(), "");
+  margin("max_risk_per_flight_hour", limits.max_risk_per_flight_hour(),
+         best.risk_per_flight_hour(), "");
+  if (final_update.front_size() > 0) {
+    std::printf("front: %d non-dominated trajectories (flight time s, risk):",
+                final_update.front_size());
+    for (const v1::Trajectory& t : final_update.front()) {
+      std::printf(" (%.1f, %.4g)", t.flight_time_s(), t.risk());
+    }
+    std::printf("\n");
+  }
 }
 
 // The ground-station and GIS files of the plan's best trajectory; 0, or the
@@ -289,6 +317,8 @@ int ExportPlan(const CliOptions& o, RiskplanClient& client, const v1::PlanReques
 }  // namespace
 
 int RunPlan(const CliOptions& o, RiskplanClient& client) {
+  if (!o.mission.empty()) return RunMission(o, client);
+  if (!o.mission_out.empty()) return Usage("--mission_out needs --mission=FILE.plan");
   PlanSetup setup;
   if (int code = PreparePlan(o, client, &setup); code != 0) return code;
   const v1::PlanRequest& request = setup.request;
@@ -298,7 +328,7 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
   grpc::Status status = StreamPlan(o, client, request, &picture.improvements, &final_update);
   if (!status.ok()) return KeepWhatWasReceived(o, client, request, status, setup.exports, picture);
 
-  PrintPlanEnd(o, final_update, picture.improvements.size());
+  PrintPlanEnd(o, request, final_update, picture.improvements.size());
   if (final_update.has_trajectory()) {
     if (int code = WriteTrajectoryOut(o, final_update.trajectory()); code != 0) return code;
     if (setup.exports.any()) {
@@ -313,6 +343,35 @@ int RunPlan(const CliOptions& o, RiskplanClient& client) {
         v1::Algorithm_Name(request.algorithm()), static_cast<int>(picture.improvements.size()),
         final_update.trajectory().risk(), final_update.trajectory().length_m(),
         static_cast<int>(final_update.iterations()), v1::EndReason_Name(final_update.end_reason()));
+    if (final_update.front_size() > 0) {
+      // The front (--pareto): up to 6 of its routes, from the quickest to the
+      // safest, each in its own colour with its flight time and risk in the key.
+      // The points nearest to 6 flight times evenly spread over the front's
+      // range (the front sorted by flight time), each once.
+      const int n = final_update.front_size();
+      const double t0 = final_update.front(0).flight_time_s();
+      const double t1 = final_update.front(n - 1).flight_time_s();
+      std::vector<int> chosen;
+      for (int k = 0; k < 6; ++k) {
+        const double target = t0 + (t1 - t0) * k / 5.0;
+        int best = 0;
+        for (int i = 1; i < n; ++i) {
+          if (std::abs(final_update.front(i).flight_time_s() - target) <
+              std::abs(final_update.front(best).flight_time_s() - target)) {
+            best = i;
+          }
+        }
+        if (chosen.empty() || chosen.back() != best) chosen.push_back(best);
+      }
+      for (int i : chosen) {
+        const v1::Trajectory& t = final_update.front(i);
+        picture.fleet.push_back(t);
+        picture.fleet_labels.push_back(
+            absl::StrFormat("front %d/%d: %.0f s, risk %.3g", i + 1, n, t.flight_time_s(), t.risk()));
+      }
+      picture.fleet_key = true;
+      picture.caption += absl::StrFormat("; front of %d routes (risk against flight time)", n);
+    }
     if (int code = WritePlanPicture(o, client, request, final_update, picture); code != 0) {
       return code;
     }

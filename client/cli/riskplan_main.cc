@@ -54,6 +54,26 @@ ABSL_FLAG(std::string, wind, "",
 ABSL_FLAG(std::string, scenario, "",
           "fly: the scripted flight, a JSON file (FlightOpen, speed-up, report interval, timeline "
           "of zone and wind changes and stream breaks; docs/in-flight.md)");
+ABSL_FLAG(double, max_flight_time_s, 0.0,
+          "plan, fleet: endurance, s: no trajectory flying longer (at the ground speed in wind) "
+          "is streamed or returned; 0: no limit");
+ABSL_FLAG(double, max_length_m, 0.0, "plan, fleet: longest trajectory, m (3-D); 0: no limit");
+ABSL_FLAG(double, max_risk, 0.0,
+          "plan, fleet: target level of safety per flight, expected casualties; 0: no limit");
+ABSL_FLAG(double, max_risk_per_flight_hour, 0.0,
+          "plan, fleet: target level of safety per flight hour (risk / flight hours, e.g. 1e-6); "
+          "0: no limit");
+ABSL_FLAG(std::string, objective, "MIN_RISK",
+          "plan, fleet: MIN_RISK (the lowest risk within the limits) or MIN_TIME (the quickest "
+          "trajectory within the limits)");
+ABSL_FLAG(bool, pareto, false,
+          "plan, fleet: stream the front of non-dominated (risk, flight time) trajectories");
+ABSL_FLAG(std::string, mission, "",
+          "plan: a QGroundControl mission (.plan) to plan leg by leg instead of --start and "
+          "--goal: its takeoff, waypoints and land or return (docs/geodata.md); the limits "
+          "apply to the whole mission, --budget_ms to each leg");
+ABSL_FLAG(std::string, mission_out, "",
+          "plan --mission: write the planned mission back as a .plan QGroundControl opens");
 ABSL_FLAG(std::string, start, "",
           "plan: start pose 'x,y,z,theta' (m, m, m AMSL, rad from east), or "
           "'wgs84:lat,lon,alt,heading_deg' (deg, deg, m AMSL, deg clockwise from true north) on a "
@@ -135,7 +155,9 @@ riskplan::cmdline::ProgramHelp Help() {
       "start",          "goal",       "algorithm",
       "budget_ms",      "iterations", "seed",
       "planner_params", "obstacles",  "min_update_interval_ms",
-      "display_step_m", "tree",       "wind"};
+      "display_step_m", "tree",       "wind",
+      "max_flight_time_s", "max_length_m", "max_risk",
+      "max_risk_per_flight_hour", "objective", "pareto"};
   const std::vector<std::string> exports = {"plan_out",      "geojson_out",
                                             "kml_out",       "export_spacing_m",
                                             "plan_firmware", "target_level_of_safety"};
@@ -182,10 +204,23 @@ riskplan::cmdline::ProgramHelp Help() {
        "Examples:\n"
        "  riskplan plan --start=1200,1500,250,0.785 --goal=6800,6500,250,0.785 "
        "--budget_ms=5000 --picture=plan.svg\n"
+       "\n"
+       "Limits: --max_flight_time_s (endurance), --max_length_m, --max_risk (per\n"
+       "flight) and --max_risk_per_flight_hour (target level of safety) bound every\n"
+       "trajectory streamed or returned; --objective=MIN_TIME returns the quickest\n"
+       "trajectory within them; --pareto streams the risk-time front. When no\n"
+       "trajectory found meets them, the plan ends NO_SOLUTION and says which limit\n"
+       "and the best value found (e.g. the fastest flight time).\n"
+       "\n"
+       "Missions: --mission=F.plan plans a QGroundControl mission leg by leg\n"
+       "(takeoff, waypoints, land or return; free headings chosen on the bisector),\n"
+       "the limits shared among the legs; --mission_out=G.plan writes it planned.\n"
+       "\n"
        "  riskplan plan --map=lux --start=wgs84:49.6012,6.1034,420,45 "
        "--goal=wgs84:49.6301,6.1625,430,90 --plan_out=mission.plan",
        join(join(join(connection, {"map"}), planning),
-            join({"params", "picture", "picture_size", "trajectory_out"}, exports))},
+            join({"params", "picture", "picture_size", "trajectory_out", "mission", "mission_out"},
+                 exports))},
       {"fleet", "plan many missions in one call (PlanFleet), with progress per mission",
        "  riskplan fleet --missions=FILE.json [plan flags] [--picture=F.svg]\n"
        "\n"
@@ -193,7 +228,9 @@ riskplan::cmdline::ProgramHelp Help() {
        "\"tenant\": \"...\", \"send_improvements\": true} (docs/api.md, \"Missions files\").\n"
        "A mission's keys are the plan flags' names (start, goal, map, algorithm,\n"
        "budget_ms, iterations, seed, params, wind, planner_params, obstacles,\n"
-       "min_update_interval_ms, display_step_m, tree) plus id and priority; what a\n"
+       "min_update_interval_ms, display_step_m, tree, and the limits max_flight_time_s,\n"
+       "max_length_m, max_risk, max_risk_per_flight_hour, objective, pareto) plus id\n"
+       "and priority; what a\n"
        "mission does not give, the flag gives (e.g. one --goal for all).\n"
        "Prints each mission's end as it comes, then a summary table; --picture draws\n"
        "every mission's trajectory on --map. Exit code 3: some mission has no\n"
@@ -282,6 +319,14 @@ int main(int argc, char** argv) {
   o.min_update_interval_ms = absl::GetFlag(FLAGS_min_update_interval_ms);
   o.display_step_m = absl::GetFlag(FLAGS_display_step_m);
   o.tree = absl::GetFlag(FLAGS_tree);
+  o.max_flight_time_s = absl::GetFlag(FLAGS_max_flight_time_s);
+  o.max_length_m = absl::GetFlag(FLAGS_max_length_m);
+  o.max_risk = absl::GetFlag(FLAGS_max_risk);
+  o.max_risk_per_flight_hour = absl::GetFlag(FLAGS_max_risk_per_flight_hour);
+  o.objective = absl::GetFlag(FLAGS_objective);
+  o.pareto = absl::GetFlag(FLAGS_pareto);
+  o.mission = absl::GetFlag(FLAGS_mission);
+  o.mission_out = absl::GetFlag(FLAGS_mission_out);
   o.picture = absl::GetFlag(FLAGS_picture);
   o.picture_size = absl::GetFlag(FLAGS_picture_size);
   o.trajectory_out = absl::GetFlag(FLAGS_trajectory_out);

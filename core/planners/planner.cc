@@ -8,6 +8,7 @@
 #include "core/flight/trajectory.h"
 #include "core/planners/genetic_planner.h"
 #include "core/planners/harmonic_planner.h"
+#include "core/planners/limit_filter.h"
 #include "core/planners/risk_rrt_star.h"
 #include "core/planners/rrt_planner.h"
 
@@ -62,16 +63,23 @@ const AlgorithmEntry* EntryOf(PlannerAlgorithm algorithm) {
 // algorithm's Plan() with each call.
 class AlgorithmPlanner final : public Planner {
  public:
-  AlgorithmPlanner(const AlgorithmEntry& entry, RiskEvaluator* evaluator)
-      : entry_(entry), evaluator_(evaluator) {}
+  AlgorithmPlanner(PlannerAlgorithm algorithm, const AlgorithmEntry& entry,
+                   RiskEvaluator* evaluator)
+      : algorithm_(algorithm), entry_(entry), evaluator_(evaluator) {}
 
   absl::StatusOr<PlanResult> Plan(const PlanningProblem& problem, const PlanOptions& options,
                                   const CancellationToken& cancel,
                                   const ImprovementCallback& on_improvement) override {
-    return entry_.plan(evaluator_, problem, options, cancel, on_improvement);
+    return PlanWithLimits(
+        algorithm_,
+        [&](const PlanOptions& pass, const ImprovementCallback& report) {
+          return entry_.plan(evaluator_, problem, pass, cancel, report);
+        },
+        problem, options, evaluator_, on_improvement);
   }
 
  private:
+  const PlannerAlgorithm algorithm_;
   const AlgorithmEntry& entry_;
   RiskEvaluator* evaluator_;
 };
@@ -85,7 +93,7 @@ absl::StatusOr<std::unique_ptr<Planner>> MakePlanner(PlannerAlgorithm algorithm,
     return absl::InvalidArgumentError(
         absl::StrFormat("unknown planner algorithm %d", static_cast<int>(algorithm)));
   }
-  return std::unique_ptr<Planner>(new AlgorithmPlanner(*entry, evaluator));
+  return std::unique_ptr<Planner>(new AlgorithmPlanner(algorithm, *entry, evaluator));
 }
 
 const std::vector<PlannerParamInfo>& PlannerParams(PlannerAlgorithm algorithm) {

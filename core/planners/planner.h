@@ -24,6 +24,7 @@
 #include "absl/status/statusor.h"
 #include "core/base/cancellation.h"
 #include "core/base/geometry.h"
+#include "core/planners/flight_limits.h"
 #include "core/risk/risk_evaluator.h"
 #include "core/risk/risk_model.h"
 
@@ -95,6 +96,10 @@ struct PlanOptions {
   // Most samples any piece a planner flies may need (CheckEdgeSamples): the
   // work of one edge, bounded before the plan starts.
   int64_t max_edge_samples = kDefaultMaxEdgeSamples;
+  // Endurance, target level of safety, objective and front
+  // (core/planners/flight_limits.h): honoured by every planner MakePlanner
+  // makes.
+  FlightLimits limits;
 };
 
 enum class StopReason {
@@ -118,6 +123,12 @@ struct PlanImprovement {
   // a dynamic obstacle appeared), so this trajectory replaces the previous
   // one whatever its risk: the order of decreasing risk starts again here.
   bool replanned = false;
+  // Flight time, s (EvaluateTrajectory's: the ground speed in wind). Set by
+  // MakePlanner's planners on every improvement they report.
+  double flight_time_s = 0.0;
+  // With PlanOptions::limits.pareto: the non-dominated (risk, flight time)
+  // trajectories found so far that meet the limits, by increasing flight time.
+  std::vector<FrontPoint> front;
 };
 
 struct TreeEdge {
@@ -133,6 +144,11 @@ struct PlanResult {
   double elapsed_s = 0.0;
   uint64_t configurations_evaluated = 0;
   std::vector<TreeEdge> tree;  // only with PlanOptions::record_tree
+  // With PlanOptions::limits.pareto: the final front.
+  std::vector<FrontPoint> front;
+  // With active limits: what the filter saw, and the note saying why there is
+  // no trajectory when every one found broke a limit.
+  LimitSummary limits;
 };
 
 // Called on the planner's thread for every improvement, in order of strictly

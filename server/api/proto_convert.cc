@@ -281,6 +281,33 @@ absl::Status TrajectoryToProto(const PlanImprovement& improvement, const ModelPa
   return absl::OkStatus();
 }
 
+namespace {
+
+// PlanUpdate.front: each point as a Trajectory (its path sampled for drawing).
+absl::Status FrontToProto(const std::vector<FrontPoint>& front, const ModelParams& params,
+                          double display_step_m, const geo::GeoFrame* frame,
+                          v1::PlanUpdate* update) {
+  for (size_t k = 0; k < front.size(); ++k) {
+    const FrontPoint& p = front[k];
+    PlanImprovement point;
+    point.waypoints = p.waypoints;
+    point.risk = p.risk;
+    point.length_m = p.length_m;
+    point.flight_time_s = p.flight_time_s;
+    point.iterations = p.found_at_iteration;
+    point.elapsed_s = p.found_at_s;
+    if (absl::Status s = TrajectoryToProto(point, params, display_step_m, frame,
+                                           update->add_front());
+        !s.ok()) {
+      return absl::InternalError(absl::StrFormat(
+          "front[%d] (%d waypoints) cannot be converted: %s", k, p.waypoints.size(), s.message()));
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::StatusOr<v1::PlanUpdate> ImprovementToProto(const PlanImprovement& improvement,
                                                   const ModelParams& params, double display_step_m,
                                                   const geo::GeoFrame* frame) {
@@ -295,6 +322,10 @@ absl::StatusOr<v1::PlanUpdate> ImprovementToProto(const PlanImprovement& improve
         absl::StrFormat("the trajectory of the improvement found at iteration %d (%d waypoints) "
                         "cannot be converted: %s",
                         improvement.iterations, improvement.waypoints.size(), s.message()));
+  }
+  if (absl::Status s = FrontToProto(improvement.front, params, display_step_m, frame, &update);
+      !s.ok()) {
+    return s;
   }
   return update;
 }
@@ -319,6 +350,21 @@ absl::StatusOr<v1::PlanUpdate> FinalUpdateToProto(const PlanResult& result,
           "converted: %s",
           result.best->iterations, result.best->waypoints.size(), s.message()));
     }
+  }
+  if (absl::Status s = FrontToProto(result.front, params, display_step_m, frame, &update);
+      !s.ok()) {
+    return s;
+  }
+  if (result.limits.candidates > 0 || !result.limits.note.empty()) {
+    v1::LimitReport* report = update.mutable_limits();
+    report->set_note(result.limits.note);
+    report->set_candidates(result.limits.candidates);
+    report->set_rejected(result.limits.rejected);
+    report->set_fastest_flight_time_s(result.limits.fastest_flight_time_s.value_or(0.0));
+    report->set_shortest_length_m(result.limits.shortest_length_m.value_or(0.0));
+    report->set_lowest_risk(result.limits.lowest_risk.value_or(0.0));
+    report->set_lowest_risk_per_flight_hour(
+        result.limits.lowest_risk_per_flight_hour.value_or(0.0));
   }
   if (include_tree) {
     // Bounded (docs/api.md): a long plan's tree can have millions of edges;

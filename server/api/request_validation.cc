@@ -479,6 +479,31 @@ absl::Status CheckPlannerParams(PlannerAlgorithm algorithm,
   return absl::OkStatus();
 }
 
+// PlanRequest.limits -> PlanOptions::limits (docs/api.md, "Limits").
+static absl::Status PlanLimits(const v1::PlanRequest& request, PlanOptions* options) {
+  const v1::FlightLimits& proto = request.limits();
+  FlightLimits& limits = options->limits;
+  limits.max_flight_time_s = proto.max_flight_time_s();
+  limits.max_length_m = proto.max_length_m();
+  limits.max_risk = proto.max_risk();
+  limits.max_risk_per_flight_hour = proto.max_risk_per_flight_hour();
+  limits.pareto = proto.pareto();
+  switch (proto.objective()) {
+    case v1::OBJECTIVE_UNSPECIFIED:
+    case v1::MIN_RISK:
+      limits.objective = PlanObjective::kMinRisk;
+      break;
+    case v1::MIN_TIME:
+      limits.objective = PlanObjective::kMinTime;
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "limits.objective has value %d; it must be MIN_RISK (1) or MIN_TIME (2) (0: MIN_RISK)",
+          static_cast<int>(proto.objective())));
+  }
+  return CheckFlightLimits(limits);
+}
+
 absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
                                              const MapRegistry& registry,
                                              const RequestLimits& limits) {
@@ -501,6 +526,7 @@ absl::StatusOr<PlanSpec> ValidatePlanRequest(const v1::PlanRequest& request,
   if (absl::Status s = PlanParams(request, registry, limits, &spec); !s.ok()) return s;
   if (absl::Status s = PlanUpdates(request, limits, &spec); !s.ok()) return s;
   if (absl::Status s = PlanObstacles(request, registry, limits, &spec); !s.ok()) return s;
+  if (absl::Status s = PlanLimits(request, &spec.options); !s.ok()) return s;
   return spec;
 }
 

@@ -92,7 +92,9 @@ std::vector<MissionGroup> GroupMissions(const FleetSpec& spec) {
     const FleetMissionSpec& m = spec.missions[i];
     if (!m.plan.ok()) continue;
     size_t g = groups.size();
-    if (m.plan->algorithm == PlannerAlgorithm::kRiskRrtStar) {
+    // A mission with limits (endurance, target level of safety, objective,
+    // front) is planned alone: MakePlanner's planner applies its own limits.
+    if (m.plan->algorithm == PlannerAlgorithm::kRiskRrtStar && !m.plan->options.limits.Active()) {
       const std::string key = TreeKey(*m.plan);
       auto it = open.find(key);
       if (it != open.end() && groups[it->second].missions.size() < kMaxSharedTreeMissions) {

@@ -125,6 +125,30 @@ TEST_F(FleetRequestTest, MissionsShareATreeOnlyWhenEverythingButStartAndBudgetIs
   EXPECT_EQ(groups[0].missions, (std::vector<size_t>{0, 1}));
 }
 
+// Limits are per mission: a mission with limits is validated with its own
+// (a bad one named with the mission's path) and planned alone, since the
+// shared tree's planner does not apply them.
+TEST_F(FleetRequestTest, MissionsWithLimitsArePlannedAloneWithTheirOwnLimits) {
+  v1::FleetRequest r;
+  for (int i = 0; i < 4; ++i) *r.add_missions() = Mission(absl::StrFormat("m%d", i), 200 + 100 * i);
+  r.mutable_missions(1)->mutable_request()->mutable_limits()->set_max_flight_time_s(600);
+  r.mutable_missions(2)->mutable_request()->mutable_limits()->set_objective(v1::MIN_TIME);
+  r.mutable_missions(3)->mutable_request()->mutable_limits()->set_max_risk(-1);
+  absl::StatusOr<FleetSpec> spec = Validate(r);
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  ASSERT_TRUE(spec->missions[1].plan.ok());
+  EXPECT_EQ(spec->missions[1].plan->options.limits.max_flight_time_s, 600.0);
+  EXPECT_EQ(spec->missions[2].plan->options.limits.objective, PlanObjective::kMinTime);
+  EXPECT_EQ(spec->missions[0].plan->options.limits.max_flight_time_s, 0.0);
+  EXPECT_THAT(spec->missions[3].plan.status().message(),
+              HasSubstr("missions[3].request.limits.max_risk is -1"));
+  std::vector<MissionGroup> groups = GroupMissions(*spec);
+  ASSERT_EQ(groups.size(), 3u);
+  EXPECT_EQ(groups[0].missions, std::vector<size_t>{0});
+  EXPECT_EQ(groups[1].missions, std::vector<size_t>{1});
+  EXPECT_EQ(groups[2].missions, std::vector<size_t>{2});
+}
+
 TEST(MissionErrorTest, FieldErrorsGetTheRequestPathOthersTheMission) {
   EXPECT_EQ(MissionError(3, absl::InvalidArgumentError("start.z has value nan")).message(),
             "missions[3].request.start.z has value nan");

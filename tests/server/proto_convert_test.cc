@@ -176,6 +176,38 @@ TEST(ProtoConvertTest, FinalUpdateWhoseBestDoesNotConvertIsAnInternalErrorNaming
               ::testing::HasSubstr("final message's best trajectory (found at iteration 5"));
 }
 
+// The front and the limits' report: every front point a Trajectory with its
+// exact numbers and a path to draw; the note of a plan the limits emptied.
+TEST(ProtoConvertTest, FrontAndLimitReport) {
+  PlanResult result;
+  result.reason = StopReason::kNoSolution;
+  result.front = {FrontPoint{.waypoints = {{0, 0, 200, 0}, {1000, 0, 200, 0}},
+                             .risk = 2e-7, .length_m = 1000, .flight_time_s = 55.5},
+                  FrontPoint{.waypoints = {{0, 0, 200, 0}, {500, 500, 200, 0}, {1000, 0, 200, 0}},
+                             .risk = 1e-7, .length_m = 1500, .flight_time_s = 83.3}};
+  result.limits.candidates = 7;
+  result.limits.rejected = 7;
+  result.limits.fastest_flight_time_s = 55.5;
+  result.limits.note = "no trajectory within the endurance (max_flight_time_s = 10 s): ...";
+  absl::StatusOr<v1::PlanUpdate> update =
+      FinalUpdateToProto(result, v1::NO_SOLUTION, ModelParams{}, 25.0, false);
+  ASSERT_TRUE(update.ok()) << update.status();
+  ASSERT_EQ(update->front_size(), 2);
+  EXPECT_EQ(update->front(0).risk(), 2e-7);
+  EXPECT_EQ(update->front(1).risk(), 1e-7);
+  EXPECT_EQ(update->front(1).waypoints_size(), 3);
+  EXPECT_GT(update->front(0).path_size(), 2);
+  EXPECT_GT(update->front(0).flight_time_s(), 0.0);
+  EXPECT_EQ(update->limits().candidates(), 7);
+  EXPECT_EQ(update->limits().fastest_flight_time_s(), 55.5);
+  EXPECT_THAT(update->limits().note(), ::testing::HasSubstr("no trajectory within the endurance"));
+  // No limits: no report.
+  update = FinalUpdateToProto(PlanResult{}, v1::NO_SOLUTION, ModelParams{}, 25.0, false);
+  ASSERT_TRUE(update.ok());
+  EXPECT_FALSE(update->has_limits());
+  EXPECT_EQ(update->front_size(), 0);
+}
+
 TEST(ProtoConvertTest, EndReasons) {
   EXPECT_EQ(EndReasonToProto(StopReason::kBudgetExhausted, false), v1::BUDGET_EXHAUSTED);
   EXPECT_EQ(EndReasonToProto(StopReason::kConverged, true), v1::CONVERGED);

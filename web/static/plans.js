@@ -84,6 +84,54 @@ function drawTrajectory(t) {
   L.polyline(path, { color: '#d00', weight: 3, className: 'best-trajectory' }).addTo(bestLayer);
 }
 
+// The page's limits (PlanRequest.limits, docs/api.md "Limits"): none when
+// every field is at its default.
+function limitFields() {
+  const t = Number($('max-flight-time').value);
+  if (!(t >= 0) || !isFinite(t)) throw new ApiError('INVALID_ARGUMENT', `endurance has value '${$('max-flight-time').value}'; it must be a number >= 0 (s; 0: none)`, 'page');
+  const limits = {};
+  if (t > 0) limits.max_flight_time_s = t;
+  if ($('enforce-los').checked) limits.max_risk_per_flight_hour = targetLevelOfSafety();
+  if ($('objective').value !== 'MIN_RISK') limits.objective = $('objective').value;
+  if ($('pareto').checked) limits.pareto = true;
+  return Object.keys(limits).length ? { limits } : {};
+}
+
+// The front (PlanUpdate.front) as points of risk against flight time; a
+// click draws that point's route in blue.
+function drawFront(front) {
+  const svg = $('front-chart');
+  const W = 320, H = 170, pad = 36;
+  const ts = front.map((t) => t.flight_time_s), rs = front.map((t) => t.risk);
+  const t0 = Math.min(...ts), t1 = Math.max(...ts), r0 = Math.min(...rs), r1 = Math.max(...rs);
+  const x = (t) => pad + (W - 2 * pad) * (t1 > t0 ? (t - t0) / (t1 - t0) : 0.5);
+  const y = (r) => H - pad + (2 * pad - H) * (r1 > r0 ? (r - r0) / (r1 - r0) : 0.5);
+  const ns = 'http://www.w3.org/2000/svg';
+  svg.replaceChildren();
+  const text = (tx, ty, s, anchor) => {
+    const el = document.createElementNS(ns, 'text');
+    el.setAttribute('x', tx); el.setAttribute('y', ty); el.setAttribute('font-size', '10');
+    el.setAttribute('text-anchor', anchor || 'start'); el.textContent = s; svg.appendChild(el);
+  };
+  text(pad, H - 8, `${t0.toFixed(0)} s`); text(W - pad, H - 8, `${t1.toFixed(0)} s`, 'end');
+  text(2, pad - 6, r1.toExponential(2)); text(2, H - pad + 12, r0.toExponential(2));
+  front.forEach((t, k) => {
+    const c = document.createElementNS(ns, 'circle');
+    c.setAttribute('cx', x(t.flight_time_s)); c.setAttribute('cy', y(t.risk)); c.setAttribute('r', 4);
+    c.setAttribute('fill', '#36c'); c.style.cursor = 'pointer';
+    const title = document.createElementNS(ns, 'title');
+    title.textContent = `front ${k + 1}/${front.length}: ${t.flight_time_s.toFixed(1)} s, risk ${t.risk.toExponential(3)}, ${t.length_m.toFixed(0)} m`;
+    c.appendChild(title);
+    c.addEventListener('click', () => {
+      if (!rp.frontLayer) rp.frontLayer = L.layerGroup().addTo(map);
+      rp.frontLayer.clearLayers();
+      if (t.path && t.path.length) L.polyline(frame.pathOf(t), { color: '#36c', weight: 3 }).addTo(rp.frontLayer);
+    });
+    svg.appendChild(c);
+  });
+  $('front-box').hidden = false;
+}
+
 function onUpdate(e) {
   const id = Number(e.lastEventId);
   if (id <= lastSeenId) return;  // already drawn before a reconnection
@@ -93,6 +141,8 @@ function onUpdate(e) {
   if (u.wind) showWind(u.wind);
   $('iterations').textContent = u.iterations;
   $('improvements').textContent = u.improvements;
+  if (u.front && u.front.length) drawFront(u.front);
+  if (u.limits && u.limits.note) { $('limits-note').textContent = u.limits.note; $('limits-note').hidden = false; }
   const t = u.trajectory;
   if (t && t.path && t.path.length) {
     drawTrajectory(t);
@@ -168,6 +218,8 @@ async function startPlan() {
   riskChart.update('none');
   showChart('risk', false);
   rp.improvements = []; rp.finalTrajectory = null;
+  if (rp.frontLayer) rp.frontLayer.clearLayers();
+  $('front-box').hidden = true; $('limits-note').hidden = true;
   $('iterations').textContent = '0'; $('improvements').textContent = '0'; $('risk').textContent = '–';
   setState('starting');
   try {
@@ -182,6 +234,7 @@ async function startPlan() {
       min_update_interval_ms: String(Number($('update-interval').value)),
     };
     Object.assign(request, windFields());
+    Object.assign(request, limitFields());
     rp.lastPlanRequest = request;
     const r = await api('POST', '/api/plans', request);
     rp.planId = r.id;

@@ -361,6 +361,9 @@ TEST_F(GatewayTest, BadRequestsAreRefusedNamingWhatIsWrong) {
 // 400 (404 for a map the server does not have) with the message, never 201
 // and then a "failed" event.
 TEST_F(GatewayTest, APlanTheServerWouldRefuseIsRefusedBeforeItStarts) {
+  // Plans of earlier tests may still be ending (slowly, under a sanitizer):
+  // none of these requests may add one.
+  const int running_before = Json::parse(Call("GET", "/api/status").body)["running_plans"];
   struct Case {
     Json body;
     int status;
@@ -399,7 +402,8 @@ TEST_F(GatewayTest, APlanTheServerWouldRefuseIsRefusedBeforeItStarts) {
     EXPECT_EQ(error["source"], "gateway");
   }
   // No plan was started for any of them.
-  EXPECT_EQ(Json::parse(Call("GET", "/api/status").body)["running_plans"], 0);
+  EXPECT_LE(Json::parse(Call("GET", "/api/status").body)["running_plans"].get<int>(),
+            running_before);
 }
 
 // The layers are gzipped by the gateway (cpp-httplib would answer a browser

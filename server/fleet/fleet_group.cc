@@ -30,8 +30,8 @@ void FleetGroup::Offer(size_t mission, const absl::StatusOr<PlanResult>& result)
   call_->OfferResult(mission, result);
 }
 
-std::unique_ptr<RiskEvaluator> FleetGroup::NewEvaluator(double max_time_s) const {
-  if (engine_ == nullptr) return nullptr;
+std::unique_ptr<RiskEvaluator> FleetGroup::NewEvaluator(const PlanOptions& options,
+                                                        double max_time_s) const {
   // As PlanCall's: the evaluator stops waiting for boards once the call is
   // cancelled or (for one mission) its time budget is over.
   std::optional<std::chrono::steady_clock::time_point> deadline;
@@ -40,7 +40,8 @@ std::unique_ptr<RiskEvaluator> FleetGroup::NewEvaluator(double max_time_s) const
                std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                    std::chrono::duration<double>(max_time_s));
   }
-  return engine_->NewEvaluator(StopCondition(&call_->cancel_token(), nullptr, deadline));
+  return NewPlanEvaluator(engine_, options,
+                          StopCondition(&call_->cancel_token(), nullptr, deadline));
 }
 
 void FleetGroup::Run() {
@@ -81,7 +82,8 @@ void FleetGroup::PlanAlone(size_t mission) {
                        : MissionError(mission, InField("model_params", model.status())));
     return;
   }
-  std::unique_ptr<RiskEvaluator> evaluator = NewEvaluator(spec.options.budget.max_time_s);
+  std::unique_ptr<RiskEvaluator> evaluator =
+      NewEvaluator(spec.options, spec.options.budget.max_time_s);
   absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec.algorithm, evaluator.get());
   if (!planner.ok()) {
     Offer(mission, MissionError(mission, planner.status()));
@@ -134,7 +136,7 @@ void FleetGroup::PlanShared() {
   }
   // The evaluator serves the missions that still run when the first ones
   // end: it stops on the call's cancel only (SharedGoalTreePlanner's rule).
-  std::unique_ptr<RiskEvaluator> evaluator = NewEvaluator(0.0);
+  std::unique_ptr<RiskEvaluator> evaluator = NewEvaluator(first.options, 0.0);
   SharedGoalTreePlanner planner(evaluator.get());
   absl::StatusOr<std::vector<absl::StatusOr<PlanResult>>> results = planner.Plan(
       problem, options, call_->cancel_token(),

@@ -54,7 +54,7 @@ class FleetGroup final : public ActivePlan {
   void PlanAlone(size_t mission);
   void PlanShared();
   void Offer(size_t mission, const absl::StatusOr<PlanResult>& result);
-  std::unique_ptr<RiskEvaluator> NewEvaluator(double max_time_s) const;
+  std::unique_ptr<RiskEvaluator> NewEvaluator(const PlanOptions& options, double max_time_s) const;
 
   const uint64_t id_;
   const std::shared_ptr<FleetCall> call_;

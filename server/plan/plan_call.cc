@@ -7,13 +7,22 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
+#include "accel/kernel_evaluator.h"
 #include "core/base/check.h"
 #include "server/api/message_codec.h"
 #include "server/api/proto_convert.h"
-#include "server/observability/rpc_log.h"
 #include "server/api/status_util.h"
+#include "server/observability/rpc_log.h"
 
 namespace riskplan::server {
+
+std::unique_ptr<RiskEvaluator> NewPlanEvaluator(accel::RiskEngine* engine,
+                                                const PlanOptions& options, StopCondition stop) {
+  if (engine != nullptr) return engine->NewEvaluator(stop);
+  const auto cache = options.params.find("risk_cache_log2");
+  if (cache != options.params.end() && cache->second > 0) return nullptr;
+  return std::make_unique<accel::KernelRiskEvaluator>();
+}
 
 // ---------------------------------------------------------------------------
 // ActivePlans
@@ -190,16 +199,14 @@ absl::StatusOr<PlanResult> PlanCall::Plan() {
   // (measured from here, just before the planner's own clock starts): a
   // stalled or restarting board's chunk is then computed by this thread, and
   // the planner ends on time instead of after the board's request deadline.
-  std::unique_ptr<RiskEvaluator> evaluator;
-  if (env_.engine != nullptr) {
-    std::optional<std::chrono::steady_clock::time_point> deadline;
-    if (spec_.options.budget.max_time_s > 0.0) {
-      deadline = std::chrono::steady_clock::now() +
-                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                     std::chrono::duration<double>(spec_.options.budget.max_time_s));
-    }
-    evaluator = env_.engine->NewEvaluator(StopCondition(&cancel_, nullptr, deadline));
+  std::optional<std::chrono::steady_clock::time_point> deadline;
+  if (spec_.options.budget.max_time_s > 0.0) {
+    deadline = std::chrono::steady_clock::now() +
+               std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                   std::chrono::duration<double>(spec_.options.budget.max_time_s));
   }
+  std::unique_ptr<RiskEvaluator> evaluator =
+      NewPlanEvaluator(env_.engine, spec_.options, StopCondition(&cancel_, nullptr, deadline));
   absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec_.algorithm, evaluator.get());
   if (!planner.ok()) return planner.status();
   return (*planner)->Plan(

@@ -84,9 +84,10 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
   alignas(32) double fx[kLocateBlock];
   alignas(32) double fy[kLocateBlock];
   alignas(32) double kf[kLocateBlock];
-  alignas(32) double psi[kLocateBlock];  // air headings (spec version 3), in wind only
-  const WindTriangle& wind = model.wind();
-  const bool calm = wind.calm();
+  // In a wind, the heading bin of each configuration's air heading (spec
+  // version 3), RiskModel::AirHeadingBin's; in still air pass 1 computes it.
+  int air_bin[kLocateBlock];
+  const bool calm = model.wind().calm();
   alignas(32) double h[kLocateBlock];
   alignas(32) double bf[kLocateBlock];
   alignas(32) double ox[kLocateBlock];
@@ -109,11 +110,13 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
   for (size_t base = 0; base < n; base += kLocateBlock) {
     const size_t m = std::min(kLocateBlock, n - base);
     const size_t m4 = (m + 3) / 4 * 4;  // lanes past m hold copies of the last pose
-    // Pass 0, in wind: the air heading of each track heading, whose bin
-    // picks the kernel (RiskModel::Locate's SiteOf).
+    // Pass 0, in wind: the bin of the air heading of each track heading,
+    // which picks the kernel (RiskModel::Locate's SiteOf), mostly from the
+    // model's table. A heading that is not finite is never located (pass 2).
     if (!calm) {
       for (size_t t = 0; t < m4; ++t) {
-        psi[t] = wind.AirHeading(configs[base + std::min(t, m - 1)].theta);
+        const double theta = configs[base + std::min(t, m - 1)].theta;
+        air_bin[t] = std::isfinite(theta) ? model.AirHeadingBin(theta) : 0;
       }
     }
     // Pass 1: x, y and the floors of the cell and of the heading bin.
@@ -129,8 +132,7 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
       const __m256d t3 = _mm256_unpackhi_pd(r2, r3);
       const __m256d x = _mm256_permute2f128_pd(t0, t2, 0x20);
       const __m256d y = _mm256_permute2f128_pd(t1, t3, 0x20);
-      const __m256d theta =
-          calm ? _mm256_permute2f128_pd(t1, t3, 0x31) : _mm256_load_pd(psi + t);
+      const __m256d theta = _mm256_permute2f128_pd(t1, t3, 0x31);
       _mm256_store_pd(xs + t, x);
       _mm256_store_pd(ys + t, y);
       _mm256_store_pd(fx + t, _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(x, x0), res), kFloor));
@@ -184,13 +186,15 @@ __attribute__((target("avx2"))) void LocateAvx2(const RiskModel& model,
         b = static_cast<int>(bf[t]);
       }
       int k;
-      if (kf[t] >= 0.0 && kf[t] < c.heading_bins) {
+      if (!calm) {
+        k = air_bin[t];
+      } else if (kf[t] >= 0.0 && kf[t] < c.heading_bins) {
         k = static_cast<int>(kf[t]);  // theta in [0, 2 pi): no division
       } else if (kf[t] > -2147483648.0 && kf[t] < 2147483648.0) {
         const int r = static_cast<int>(kf[t]) % c.heading_bins;
         k = r < 0 ? r + c.heading_bins : r;
       } else {
-        k = table.HeadingBinOf(calm ? configs[base + t].theta : psi[t]);
+        k = table.HeadingBinOf(configs[base + t].theta);
       }
       const ImpactKernel& kernel = table.kernel(b, k);
       site[t].height_bin = b;

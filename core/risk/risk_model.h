@@ -176,16 +176,11 @@ class RiskModel {
   // Bytes of a glide layer of its own (0 when it uses the map's).
   size_t GlideBytes() const;
 
- private:
-  RiskModel() = default;
-  // The rules of spec section 6 before the window rule; sets *height_m to
-  // q.z - terrain, and *i, *j to q's cell, when they all hold.
-  ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m, int* i,
-                                  int* j) const;
-
   // The heading bin of the air heading of track heading `theta` (spec
   // section 3 step 2): table().HeadingBinOf(wind().AirHeading(theta)), bit
-  // for bit, from air_bins_ where it can be read there.
+  // for bit, read from a table of 4096 track-heading intervals where one bin
+  // covers the whole interval (in a wind; in still air the bin of theta
+  // itself). The batch locators (accel/batch_locate.cc) read it too.
   int AirHeadingBin(double theta) const {
     if (air_bins_.empty()) return table_->HeadingBinOf(wind_.AirHeading(theta));
     if (theta >= 0.0 && theta < kTwoPi) {
@@ -194,6 +189,14 @@ class RiskModel {
     }
     return table_->HeadingBinOf(wind_.AirHeading(theta));
   }
+
+ private:
+  RiskModel() = default;
+  // The rules of spec section 6 before the window rule; sets *height_m to
+  // q.z - terrain, and *i, *j to q's cell, when they all hold.
+  ViolationKind CheckBeforeWindow(const Pose& q, double* limit_m, double* height_m, int* i,
+                                  int* j) const;
+
   // Fills air_bins_ (in a wind).
   void BuildAirBins();
 

@@ -58,8 +58,12 @@ class WindTriangle {
   // gs(theta); exactly the airspeed when calm().
   double GroundSpeed(double theta) const {
     if (calm_) return airspeed_;
-    const double cross = CrossWind(theta);
-    return std::sqrt(airspeed_ * airspeed_ - cross * cross) + TailWind(theta);
+    // CrossWind and TailWind with one sine and one cosine (the same doubles).
+    const double s = std::sin(theta);
+    const double c = std::cos(theta);
+    const double cross = -w_.x * s + w_.y * c;
+    const double tail = w_.x * c + w_.y * s;
+    return std::sqrt(airspeed_ * airspeed_ - cross * cross) + tail;
   }
 
  private:

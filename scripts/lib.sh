@@ -67,3 +67,35 @@ bg_build_stop() {
   BG_BUILD_PID=""
   rm -f "$BG_BUILD_LOG"
 }
+
+# start_demo_server LOG [ARG...] / stop_demo_server
+#
+# For the demo scripts: makes a temporary directory (WORKDIR), sets an EXIT
+# trap that stops the server and removes the directory, and starts
+# $BIN/riskplan-server on 127.0.0.1 (a free port; the built-in demo-city)
+# with start_and_wait, its stderr into LOG (empty: $WORKDIR/server.log) and
+# ARG... as extra flags. Sets SERVER_PID and ADDRESS (HOST:PORT).
+# stop_demo_server stops it (SIGTERM) and returns the server's exit status,
+# so that a server that does not end cleanly fails the demo.
+SERVER_PID=""
+WORKDIR=""
+stop_demo_server() {
+  [ -n "$SERVER_PID" ] || return 0
+  local pid=$SERVER_PID rc=0
+  SERVER_PID=""
+  kill -TERM "$pid" 2>/dev/null || true
+  wait "$pid" || rc=$?
+  return "$rc"
+}
+demo_cleanup() {
+  stop_demo_server 2>/dev/null || true
+  if [ -n "$WORKDIR" ]; then rm -rf "$WORKDIR"; fi
+}
+start_demo_server() {
+  local log=$1
+  shift
+  WORKDIR=$(mktemp -d)
+  trap demo_cleanup EXIT
+  start_and_wait SERVER_PID ADDRESS "$WORKDIR" "${log:-$WORKDIR/server.log}" 120 \
+    "$BIN/riskplan-server" --listen=127.0.0.1:0 --rpc_log=false "$@"
+}

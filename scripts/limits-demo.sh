@@ -12,18 +12,7 @@ source scripts/lib.sh
 BIN=${BUILD_DIR:-build}/bin
 START="1200,1500,250,0.785"
 GOAL="6800,6500,250,0.785"
-workdir=$(mktemp -d)
-server_pid=""
-cleanup() {
-  if [ -n "$server_pid" ] && kill -0 "$server_pid" 2>/dev/null; then
-    kill -TERM "$server_pid" 2>/dev/null || true
-    wait "$server_pid" 2>/dev/null || true
-  fi
-  rm -rf "$workdir"
-}
-trap cleanup EXIT
-start_and_wait server_pid ADDRESS "$workdir" "$workdir/server.log" 120 \
-  "$BIN/riskplan-server" --listen=127.0.0.1:0 --rpc_log=false
+start_demo_server ""
 plan() {
   "$BIN/riskplan" --server="$ADDRESS" plan --map=demo-city --start="$START" --goal="$GOAL" \
     --min_update_interval_ms=1000 "$@" | grep -E "^(ended|best|flight time|limit|front|no traj|risk per)" || true

@@ -19,19 +19,7 @@ START=${START:-"1200,1500,250,0.785"}
 GOAL=${GOAL:-"6800,6500,250,0.785"}
 BUDGET_MS=${BUDGET_MS:-10000}
 
-workdir=$(mktemp -d)
-server_pid=""
-cleanup() {
-  if [ -n "$server_pid" ] && kill -0 "$server_pid" 2>/dev/null; then
-    kill -TERM "$server_pid" 2>/dev/null || true
-    wait "$server_pid" 2>/dev/null || true
-  fi
-  rm -rf "$workdir"
-}
-trap cleanup EXIT
-
-start_and_wait server_pid ADDRESS "$workdir" "$OUT/demo-server.log" 120 \
-  "$BIN/riskplan-server" --listen=127.0.0.1:0 --rpc_log=false
+start_demo_server "$OUT/demo-server.log"
 echo "== riskplan-server on demo-city at $ADDRESS =="
 "$BIN/riskplan" --server="$ADDRESS" maps
 
@@ -47,9 +35,7 @@ evaluation=$("$BIN/riskplan" --server="$ADDRESS" eval --map=demo-city \
   --trajectory_file="$OUT/demo-plan.json")
 echo "${evaluation%%$'\n'*}"
 
-kill -TERM "$server_pid"
-wait "$server_pid"
-server_pid=""
+stop_demo_server
 echo
 echo "picture: $OUT/demo-plan.svg (population density, no-fly zones in violet, landing sites,"
 echo "         every streamed improvement from light to dark blue, start green, goal magenta)"

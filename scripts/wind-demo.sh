@@ -22,30 +22,18 @@ WIND=${WIND:-"8@270"}
 ITERATIONS=${ITERATIONS:-2000}
 SEED=${SEED:-1}
 
-workdir=$(mktemp -d)
-server_pid=""
-cleanup() {
-  if [ -n "$server_pid" ] && kill -0 "$server_pid" 2>/dev/null; then
-    kill -TERM "$server_pid" 2>/dev/null || true
-    wait "$server_pid" 2>/dev/null || true
-  fi
-  rm -rf "$workdir"
-}
-trap cleanup EXIT
-
-start_and_wait server_pid ADDRESS "$workdir" "$OUT/wind-demo-server.log" 120 \
-  "$BIN/riskplan-server" --listen=127.0.0.1:0 --rpc_log=false
+start_demo_server "$OUT/wind-demo-server.log"
 rp() { "$BIN/riskplan" --server="$ADDRESS" "$@"; }
 
 # Two missions of one fleet: the same start, goal, seed and budget, one in
 # still air and one in the wind.
-cat > "$workdir/missions.json" <<JSON
+cat > "$WORKDIR/missions.json" <<JSON
 {"missions": [
   {"id": "still-air", "start": "$START"},
   {"id": "wind-${WIND/@/-from-}", "start": "$START", "wind": "$WIND"}]}
 JSON
 echo "== the demo plan in still air and in a wind of ${WIND%@*} m/s from ${WIND#*@} deg =="
-rp fleet --map=demo-city --missions="$workdir/missions.json" --goal="$GOAL" \
+rp fleet --map=demo-city --missions="$WORKDIR/missions.json" --goal="$GOAL" \
   --budget_ms=0 --iterations="$ITERATIONS" --seed="$SEED" \
   --picture="$PICTURE" --trajectory_out="$OUT/wind-demo.json"
 
@@ -67,8 +55,6 @@ for id in still-air "wind-${WIND/@/-from-}"; do
     "$wind_risk" "$wind_time" "$([ "$wind_ok" = admissible ] && echo "" || echo ", not admissible")"
 done
 
-kill -TERM "$server_pid"
-wait "$server_pid"
-server_pid=""
+stop_demo_server
 echo
 echo "picture: $PICTURE (the two routes with a key, the wind's arrow top right)"

@@ -36,6 +36,19 @@ inline std::shared_ptr<const RiskModel> DemoCityModel() {
   return model;
 }
 
+// A 2 km demo-city with a wind of `wind_mps` blowing from `from_deg` (0:
+// still air), for the lattice, bound and guide tests.
+inline std::shared_ptr<const RiskModel> SmallCityModel(double wind_mps, double from_deg) {
+  auto map = MakeDemoCity(DemoCityOptions{.size_m = 2000.0});
+  EXPECT_TRUE(map.ok()) << map.status();
+  ModelParams params;
+  params.wind_speed_mps = wind_mps;
+  params.wind_from_deg = from_deg;
+  auto model = RiskModel::Create(*map, params);
+  EXPECT_TRUE(model.ok()) << model.status();
+  return *model;
+}
+
 // The shared scenario set (bench/scenarios.h), with every pose found.
 inline std::vector<Scenario> DemoCityScenarios(const RiskModel& model) {
   std::vector<Scenario> out = bench::DemoCityScenarios(model);

@@ -20,15 +20,9 @@ namespace {
 using testing_planner::FindFlyablePose;
 using testing_planner::ReEvaluate;
 
+// The 2 km city, the wind (if any) from 300°.
 std::shared_ptr<const RiskModel> SmallCity(double wind_mps) {
-  auto map = MakeDemoCity(DemoCityOptions{.size_m = 2000.0});
-  EXPECT_TRUE(map.ok()) << map.status();
-  ModelParams params;
-  params.wind_speed_mps = wind_mps;
-  params.wind_from_deg = 300.0;
-  auto model = RiskModel::Create(*map, params);
-  EXPECT_TRUE(model.ok()) << model.status();
-  return *model;
+  return testing_planner::SmallCityModel(wind_mps, 300.0);
 }
 
 TEST(GuideFieldCacheTest, HonoursItsByteAndEntryBounds) {

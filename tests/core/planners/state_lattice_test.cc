@@ -18,15 +18,9 @@ using testing_planner::FindFlyablePose;
 using testing_planner::ReEvaluate;
 
 // demo-city at 2 km (the same city scaled), with `wind_mps` from 240 degrees.
+// The 2 km city, the wind (if any) from 240°.
 std::shared_ptr<const RiskModel> SmallCity(double wind_mps = 0.0) {
-  auto map = MakeDemoCity(DemoCityOptions{.size_m = 2000.0});
-  EXPECT_TRUE(map.ok()) << map.status();
-  ModelParams params;
-  params.wind_speed_mps = wind_mps;
-  params.wind_from_deg = 240.0;
-  auto model = RiskModel::Create(*map, params);
-  EXPECT_TRUE(model.ok()) << model.status();
-  return *model;
+  return testing_planner::SmallCityModel(wind_mps, 240.0);
 }
 
 struct Pair {

@@ -191,6 +191,102 @@ def plan_and_check(driver, iterations):
     return risks
 
 
+def run_plan(driver, iterations):
+    """Plans with an iteration budget and waits for the end; the page's state."""
+    set_value(driver, "budget-ms", 0)
+    set_value(driver, "budget-iterations", iterations)
+    driver.execute_script("rp.profile = null;")
+    click(driver, "plan")
+    wf.wait_for(lambda: js(driver, "rp.state") in ("finished", "failed"), 300,
+                "the plan to finish")
+    error_text = js(driver, "document.getElementById('error').hidden ? '' : "
+                            "document.getElementById('error').textContent")
+    check(js(driver, "rp.state") == "finished", f"the plan finished (page error: {error_text!r})")
+
+
+def check_limits_and_front(driver):
+    """Endurance, the enforced target level of safety and the risk-time front
+    set on the page: every trajectory shown honours them, the front has
+    points and a click on one draws its route; an endurance no route can
+    meet ends with the server's note on the page."""
+    from selenium.webdriver.common.by import By
+
+    endurance_s, tls = 130, 8e-6
+    set_value(driver, "max-flight-time", endurance_s)
+    set_value(driver, "target-los", tls)
+    driver.execute_script("document.getElementById('enforce-los').checked = true;"
+                          "document.getElementById('pareto').checked = true;")
+    run_plan(driver, 3000)
+    limits = js(driver, "rp.lastPlanRequest.limits")
+    check(limits == {"max_flight_time_s": endurance_s, "max_risk_per_flight_hour": tls,
+                     "pareto": True}, f"the plan was sent with the page's limits: {limits}")
+    improvements = js(driver, "rp.improvements")
+    check(len(improvements) >= 1, f"{len(improvements)} improvements within the limits")
+    for i in improvements:
+        if not (i["flight_time_s"] <= endurance_s and i["risk_per_flight_hour"] <= tls):
+            raise AssertionError(f"an improvement outside the limits: {i}")
+    check(True, f"every improvement flies at most {endurance_s} s (longest "
+                f"{max(i['flight_time_s'] for i in improvements):.1f} s) and carries at most "
+                f"{tls:g} per flight hour (highest "
+                f"{max(i['risk_per_flight_hour'] for i in improvements):.2e})")
+    final = js(driver, "rp.finalTrajectory")
+    shown = js(driver, "document.getElementById('risk').textContent")
+    shown_time = float(shown.split("flight time ")[1].split(" s")[0])
+    shown_rph = float(shown.split(" s, ")[1].split(" per flight hour")[0])
+    check(shown_time <= endurance_s and abs(shown_time - final["flight_time_s"]) <= 0.05 and
+          shown_rph <= tls, f"the page shows a flight time within the endurance and a risk per "
+                            f"flight hour within the target: {shown!r}")
+    target = js(driver, "Chart.getChart('risk-chart').data.datasets[1]")
+    check(f"target level of safety {tls:.0e}".replace("e-06", "e-6") in target["label"] and
+          abs(target["data"][-1]["y"] - tls * final["flight_time_s"] / 3600) <=
+          1e-9 * target["data"][-1]["y"],
+          f"the risk chart draws the enforced target ({target['label']})")
+    front = js(driver, "rp.front.map((t) => ({t: t.flight_time_s, r: t.risk, "
+                       "n: t.path.length}))")
+    circles = driver.find_elements(By.CSS_SELECTOR, "#front-chart circle.front-point")
+    check(js(driver, "!document.getElementById('front-box').hidden") and len(front) >= 2 and
+          len(circles) == len(front),
+          f"the front chart shows {len(circles)} points ({len(front)} in the final front)")
+    check(all(p["t"] <= endurance_s and p["r"] / (p["t"] / 3600) <= tls * (1 + 1e-9)
+              for p in front), "every point of the front is within the limits")
+    check(all(a["t"] <= b["t"] and a["r"] >= b["r"] for a, b in zip(front, front[1:])),
+          "the front goes by increasing flight time and decreasing risk")
+    k = len(circles) // 2
+    circles[k].click()
+    wf.wait_for(lambda: js(driver, "rp.frontShown") == k, 30, "the clicked point's route")
+    drawn = js(driver, "rp.frontLayer.getLayers()[0].getLatLngs().map((p) => [p.lat, p.lng])")
+    want = js(driver, f"frame.pathOf(rp.front[{k}]).map((p) => Array.isArray(p) ? p : [p.lat, p.lng])")
+    check(drawn == want and len(drawn) == front[k]["n"] and
+          js(driver, "document.querySelectorAll('path.front-route').length") == 1,
+          f"clicking front point {k + 1} of {len(front)} ({front[k]['t']:.1f} s, risk "
+          f"{front[k]['r']:.3e}) draws that route ({len(drawn)} points) in blue")
+    other = (k + 1) % len(circles)
+    circles[other].click()
+    wf.wait_for(lambda: js(driver, "rp.frontShown") == other, 30, "another point's route")
+    check(js(driver, "document.querySelectorAll('path.front-route').length") == 1,
+          "a click on another point replaces the route shown")
+
+    # An endurance below any route's flight time: the server's note, no trajectory.
+    set_value(driver, "max-flight-time", 60)
+    driver.execute_script("document.getElementById('enforce-los').checked = false;"
+                          "document.getElementById('pareto').checked = false;")
+    run_plan(driver, 3000)
+    note = js(driver, "document.getElementById('limits-note').hidden ? '' : "
+                      "document.getElementById('limits-note').textContent")
+    check(note.startswith("no trajectory within the endurance (max_flight_time_s = 60 s): "
+                          "the fastest trajectory found flies ") and
+          float(note.rsplit(" ", 2)[1]) > 60,
+          f"an endurance of 60 s is refused with the server's note: {note!r}")
+    check(js(driver, "rp.improvements.length") == 0 and
+          js(driver, "document.querySelectorAll('path.best-trajectory').length") == 0 and
+          js(driver, "document.getElementById('risk').textContent") == "\u2013",
+          "and no trajectory is drawn or shown")
+    state = js(driver, "document.getElementById('state').textContent")
+    check(state.startswith("finished: no admissible trajectory"), f"the end in words: {state!r}")
+    set_value(driver, "max-flight-time", 0)
+    set_value(driver, "target-los", "1e-6")
+
+
 def main():
     bin_dir, out_dir = sys.argv[1], sys.argv[2]
     os.makedirs(out_dir, exist_ok=True)
@@ -334,6 +430,9 @@ def main():
         check(abs(profile["risk"] - final_risk) <= 1e-9 * final_risk,
               f"EvaluateRisk of the final waypoints gives the plan's risk {final_risk:.6e}")
         check(final_risk == risks[-1], "the final risk is the last improvement's")
+
+        # 3b. Endurance, target level of safety and the risk-time front.
+        check_limits_and_front(driver)
 
         # 4. A polyline drawn by clicks, evaluated.
         driver.execute_script("rp.profile = null; document.getElementById('evaluation').textContent = '';")

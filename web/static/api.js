@@ -15,6 +15,8 @@ const rp = window.rp = {
   improvements: [],     // {id, risk, iterations, elapsed_s} per drawn update
   latencies: [],        // ms from the gateway reading an update to the page drawing it
   finalTrajectory: null,
+  front: null,          // the newest risk-time front drawn (PlanUpdate.front)
+  frontShown: null,     // the index in it of the route drawn in blue, once clicked
   profile: null,        // the last EvaluateRisk response drawn as a profile
   bestPath: null,       // the newest trajectory as drawn: [lat, lng] per point
   lastPlanRequest: null,

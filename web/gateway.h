@@ -106,6 +106,11 @@ class Gateway {
   void PostPlanCancel(const httplib::Request& req, httplib::Response& res);
   void GetPlanEvents(const httplib::Request& req, httplib::Response& res);
   void GetFavicon(const httplib::Request& req, httplib::Response& res);
+  // QGroundControl missions (docs/web.md, "Missions"): a .plan read for the
+  // page, planned leg by leg, and written back with its route.
+  void PostMissionParse(const httplib::Request& req, httplib::Response& res);
+  void PostMissionPlan(const httplib::Request& req, httplib::Response& res);
+  void PostMissionExport(const httplib::Request& req, httplib::Response& res);
 
   // The server's maps (ListMaps), kept from the last call: each map's
   // fingerprint (its MapInfo's bytes) keys the layer cache, and its bounds
@@ -116,6 +121,9 @@ class Gateway {
   // "Refused before the plan starts"): InvalidArgument or NotFound naming
   // the field.
   absl::Status CheckPlan(const v1::PlanRequest& request);
+  // FailedPrecondition when the map `name` has no geo-reference (a mission
+  // is in WGS84); an unknown map is CheckPlan's to name.
+  absl::Status CheckMissionMap(const std::string& name);
 
   // A map layer as JSON and gzip (level 1), made once per map, layer and
   // side and kept (kMaxCachedLayers, the least recently used dropped).

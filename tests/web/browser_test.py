@@ -287,6 +287,132 @@ def check_limits_and_front(driver):
     set_value(driver, "target-los", "1e-6")
 
 
+def mission_plan(corners, waypoint_x=1000.0, riskplan=None):
+    """A QGroundControl .plan on the geo-referenced city: takeoff, a waypoint
+    (yaw null: riskplan chooses), land; `riskplan` as its riskplan section."""
+    def item(command, jump, x, y, alt):
+        lat, lon = wf.bilinear_wgs84(corners, x, y)
+        return {"type": "SimpleItem", "command": command, "frame": 0, "doJumpId": jump,
+                "autoContinue": True, "params": [0, 0, 0, None, lat, lon, alt]}
+    home = wf.bilinear_wgs84(corners, 300, 375)
+    plan = {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+            "mission": {"version": 2, "firmwareType": 12, "vehicleType": 1, "cruiseSpeed": 18,
+                        "hoverSpeed": 5, "plannedHomePosition": [home[0], home[1], 200],
+                        "items": [item(22, 1, 300, 375, 240), item(16, 2, waypoint_x, 900, 250),
+                                  item(21, 3, 1700, 1625, 250)]},
+            "geoFence": {"version": 2, "circles": [], "polygons": []},
+            "rallyPoints": {"version": 2, "points": []}}
+    if riskplan is not None:
+        plan["riskplan"] = riskplan
+    return plan
+
+
+def check_mission_upload_and_download(driver, work, downloads, corners, geo_name, local_name):
+    """A .plan uploaded on the page (shown on the local map: the page moves to
+    the geo-referenced map that holds it) fills the form with its limits and
+    is planned leg by leg through its waypoint; the planned mission downloads
+    as a .plan with the mission's own items and its limits, which the gateway
+    reads back as the same mission; a file with a loiter is refused naming
+    the item."""
+    from selenium.webdriver.common.by import By
+
+    select_map(driver, local_name)
+    path = os.path.join(work, "survey.plan")
+    with open(path, "w") as f:
+        json.dump(mission_plan(corners, riskplan={"limits": {"max_flight_time_s": 400}}), f)
+    set_value(driver, "budget-ms", 0)
+    set_value(driver, "budget-iterations", 800)
+    set_value(driver, "max-flight-time", 0)
+    driver.execute_script("rp.improvements = []; rp.finalTrajectory = null; rp.profile = null;")
+    driver.find_element(By.ID, "mission-file").send_keys(path)
+    wf.wait_for(lambda: js(driver, "rp.mission !== null && rp.mission.legEnds !== null") or
+                js(driver, "rp.state === 'failed'"), 300, "the uploaded mission to be planned")
+    error_text = js(driver, "document.getElementById('error').hidden ? '' : "
+                            "document.getElementById('error').textContent")
+    check(js(driver, "rp.state") == "finished" and not error_text,
+          f"the uploaded mission was planned (page error: {error_text!r})")
+    check(js(driver, "rp.map.name") == geo_name and js(driver, "rp.crs") == "EPSG:3857",
+          f"the page moved to {geo_name}, the geo-referenced map that holds the mission")
+    described = js(driver, "document.getElementById('mission-text').textContent")
+    check(described == "survey.plan: 3 points (1 takeoff, 1 waypoint, 1 land), 2 legs; limits "
+                       "from its riskplan section: endurance 400 s",
+          f"the page describes the mission: {described!r}")
+    check(js(driver, "document.getElementById('max-flight-time').value") == "400" and
+          js(driver, "rp.lastPlanRequest.limits") == {"max_flight_time_s": 400},
+          "the endurance of the file's riskplan section filled the form and went with the plan")
+    check(js(driver, "document.querySelectorAll('path.mission-point').length") == 3,
+          "the mission's three points are drawn on the map")
+    progress = js(driver, "document.getElementById('mission-progress').textContent")
+    check(progress == "the mission's 2 legs planned", f"the page says: {progress!r}")
+    t = js(driver, "rp.finalTrajectory")
+    ends = js(driver, "rp.mission.legEnds")
+    want = [wf.bilinear_wgs84(corners, x, y) for x, y in ((300, 375), (1000, 900), (1700, 1625))]
+    at = [0, ends[0], ends[1]]
+    off = [wf.ground_distance_m((t["waypoints_wgs84"][k]["lat_deg"], t["waypoints_wgs84"][k]["lon_deg"]), w)
+           for k, w in zip(at, want)]
+    check(len(ends) == 2 and ends[1] == len(t["waypoints"]) - 1 and max(off) < 1.0,
+          f"the trajectory flies from the takeoff through the waypoint to the landing "
+          f"(within {max(off):.2f} m of each)")
+    check(t["flight_time_s"] <= 400, f"the mission flies {t['flight_time_s']:.1f} s, within its "
+                                     "400 s endurance")
+    shown = js(driver, "document.getElementById('risk').textContent")
+    check(f"flight time {t['flight_time_s']:.1f} s" in shown, f"the page shows the mission: {shown!r}")
+    check(js(driver, "document.querySelectorAll('path.best-trajectory').length") == 1,
+          "the joined trajectory is drawn")
+
+    # Downloaded: the mission written back, with its limits.
+    for old in glob.glob(os.path.join(downloads, "*.plan")):
+        os.unlink(old)
+    click(driver, "download-plan")
+    path = wf.wait_for(lambda: [p for p in glob.glob(os.path.join(downloads, "*.plan"))
+                                if os.path.getsize(p) > 0], 60, "the .plan download")[0]
+    written = wf.wait_for(lambda: _read_json(path), 30, "the downloaded .plan to be complete")
+    items = written["mission"]["items"]
+    check(os.path.basename(path) == f"riskplan-mission-{geo_name}.plan" and
+          written["fileType"] == "Plan" and written["version"] == 1 and
+          written["mission"]["version"] == 2 and items[0]["command"] == 22 and
+          items[-1]["command"] == 21 and len(written["riskplan"]["mission_items"]) == 3,
+          f"the downloaded {os.path.basename(path)} holds the takeoff, {len(items) - 2} route "
+          "items and the landing, the mission's own three listed")
+    check(written["riskplan"]["limits"]["max_flight_time_s"] == 400, "and the mission's limits")
+    host_port = js(driver, "location.host")
+    answer = subprocess.run(
+        ["curl", "-s", "-H", "Content-Type: text/plain", "--data-binary", f"@{path}",
+         f"http://{host_port}/api/mission/parse"], check=True, capture_output=True).stdout
+    again = json.loads(answer)
+    check("points" in again, f"the gateway reads the downloaded file: {answer[:300]!r}")
+    check([p["kind"] for p in again["points"]] == ["takeoff", "waypoint", "land"] and
+          again["limits"]["max_flight_time_s"] == 400,
+          "the gateway reads it back as the same mission with its limits")
+
+    # A file riskplan cannot plan: the error names the item; nothing is planned.
+    bad = mission_plan(corners)
+    bad["mission"]["items"][1]["command"] = 19
+    path = os.path.join(work, "loiter.plan")
+    with open(path, "w") as f:
+        json.dump(bad, f)
+    plan_before = js(driver, "rp.planId")
+    driver.execute_script("document.getElementById('error').hidden = true;")
+    driver.find_element(By.ID, "mission-file").send_keys(path)
+    wf.wait_for(lambda: not js(driver, "document.getElementById('error').hidden"), 60,
+                "the loiter to be refused")
+    shown = js(driver, "document.getElementById('error-message').textContent")
+    check(shown.startswith("mission item 1 (doJumpId 2): command 19 (NAV_LOITER_TIME) cannot be "
+                           "planned by riskplan") and js(driver, "rp.planId") == plan_before and
+          js(driver, "document.getElementById('error-code').textContent") ==
+          "INVALID_ARGUMENT (gateway):", f"a loiter is refused naming the item: {shown!r}")
+    driver.execute_script("document.getElementById('error').hidden = true;")
+    set_value(driver, "max-flight-time", 0)
+
+
+def _read_json(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
 def main():
     bin_dir, out_dir = sys.argv[1], sys.argv[2]
     os.makedirs(out_dir, exist_ok=True)
@@ -686,6 +812,9 @@ def main():
         want = sum(math.dist(a, b) for a, b in zip(corners_m, corners_m[1:]))
         check(abs(length - want) < 4 * 2 * m_per_px,
               f"a 3-point polyline evaluated: {length:.1f} m (about {want:.1f} m)")
+
+        # 8b. A QGroundControl mission uploaded, planned, downloaded.
+        check_mission_upload_and_download(driver, work, downloads, corners, geo_name, map_name)
 
         # And back to the local map: CRS.Simple again.
         select_map(driver, map_name)

@@ -37,11 +37,12 @@ class ApiError extends Error {
   constructor(code, message, source) { super(message); this.code = code; this.source = source; }
 }
 
-async function api(method, path, body) {
+// body: sent as JSON, or as it is when raw (a file's text).
+async function api(method, path, body, raw) {
   const init = { method, headers: {} };
   if (body !== undefined) {
-    init.body = JSON.stringify(body);
-    init.headers['Content-Type'] = 'application/json';
+    init.body = raw ? body : JSON.stringify(body);
+    init.headers['Content-Type'] = raw ? 'text/plain' : 'application/json';
   }
   const res = await fetch(path, init);
   const text = await res.text();

@@ -12,6 +12,7 @@ const overlays = rp.overlays;  // name -> Leaflet layer
 const legends = {};            // name -> HTML
 // Layer groups of the live map.
 let endpointLayers = null, trajectories = null, bestLayer = null, polylineLayer = null;
+let missionLayer = null, missionRouteLayer = null;  // an uploaded mission's points, its legs planned
 
 function makeMap() {
   if (map) map.remove();  // and every layer on it
@@ -39,6 +40,8 @@ function makeMap() {
   trajectories = L.layerGroup().addTo(map);   // earlier improvements, faded
   bestLayer = L.layerGroup().addTo(map);      // the newest
   polylineLayer = L.layerGroup().addTo(map);  // a drawn polyline
+  missionLayer = L.layerGroup().addTo(map);
+  missionRouteLayer = L.layerGroup().addTo(map);
   map.on('overlayadd overlayremove', drawLegend);
   map.on('mousemove', (e) => { $('cursor').textContent = frame.cursorText(e.latlng); });
   map.on('mousedown', pressEndpoint);
@@ -53,7 +56,8 @@ const ROUTE_LEGEND =
   '<div class="item"><span class="key" style="background:#a0a;border-radius:6px"></span>goal, its line the heading</div>' +
   '<div class="item"><span class="line" style="border-color:#d00"></span>best trajectory so far</div>' +
   '<div class="item"><span class="line" style="border-color:#aaa"></span>earlier improvements (fainter: older)</div>' +
-  '<div class="item"><span class="line" style="border-color:#06f;border-top-style:dashed"></span>drawn polyline</div>';
+  '<div class="item"><span class="line" style="border-color:#06f;border-top-style:dashed"></span>drawn polyline</div>' +
+  '<div class="item"><span class="key" style="background:#fc6;border-radius:6px"></span>mission point of an uploaded .plan</div>';
 
 function drawLegend() {
   const parts = [ROUTE_LEGEND];
@@ -127,6 +131,7 @@ async function loadMap(info) {
   rp.layersDrawn = {};
   endpoints.start = endpoints.goal = null;
   drawEndpoint('start'); drawEndpoint('goal');
+  clearMission();  // its points were on the map shown before
   removeOverlay('risk layer');
   const b = frame.rect(info.x0_m, info.y0_m, info.width_m, info.height_m, info.bounds_wgs84);
   map.setMaxBounds(b.pad(0.5));

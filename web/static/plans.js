@@ -146,6 +146,7 @@ function onUpdate(e) {
   $('improvements').textContent = u.improvements;
   if (u.front && u.front.length) drawFront(u.front);
   if (u.limits && u.limits.note) { $('limits-note').textContent = u.limits.note; $('limits-note').hidden = false; }
+  if (d.mission) onMissionFinal(d);
   const t = u.trajectory;
   if (t && t.path && t.path.length) {
     drawTrajectory(t);
@@ -161,6 +162,7 @@ function onUpdate(e) {
     // Drawn: the first animation frame after the map and the plot changed.
     requestAnimationFrame(() => rp.latencies.push(nowMs() - d.gateway_ms));
   }
+  if (d.leg !== undefined) onMissionLeg(d, u);
   return u;
 }
 
@@ -241,7 +243,7 @@ async function startPlan() {
     Object.assign(request, windFields());
     Object.assign(request, limitFields());
     rp.lastPlanRequest = request;
-    const r = await api('POST', '/api/plans', request);
+    const r = rp.mission ? await startMissionPlan(request) : await api('POST', '/api/plans', request);
     rp.planId = r.id;
     watch(r.id);
   } catch (err) { setState('failed'); throw err; }

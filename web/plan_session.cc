@@ -33,8 +33,8 @@ PlanSession::PlanSession(std::string id, v1::PlanRequest request, PlanEventLimit
                          std::shared_ptr<const MissionPlan> mission)
     : id_(std::move(id)),
       request_(std::move(request)),
-      limits_(limits),
-      mission_(std::move(mission)) {}
+      mission_(std::move(mission)),
+      events_(limits) {}
 
 PlanSession::~PlanSession() {
   {
@@ -139,19 +139,12 @@ void PlanSession::Run(v1::Planner::Stub* stub) {
 }
 
 void PlanSession::Append(const std::string& type, std::string data, PlanState end_state) {
+  // The state changes before the event is seen: a viewer woken by the
+  // terminal event reads the session ended.
   absl::MutexLock lock(&mu_);
   if (state_ != PlanState::kRunning) return;  // nothing after the terminal event
-  PlanEvent event{++last_id_, type, std::make_shared<const std::string>(std::move(data))};
-  bytes_ += event.data->size();
-  events_.push_back(std::move(event));
   state_ = end_state;
-  // Drop the oldest events beyond the bounds; never the newest (the best
-  // trajectory, or the terminal event).
-  while (events_.size() > 1 &&
-         (events_.size() > limits_.max_events || bytes_ > limits_.max_bytes)) {
-    bytes_ -= events_.front().data->size();
-    events_.pop_front();
-  }
+  events_.Append(type, std::move(data), end_state != PlanState::kRunning);
 }
 
 bool PlanSession::Cancel() {
@@ -163,31 +156,12 @@ bool PlanSession::Cancel() {
 }
 
 void PlanSession::Stop() {
-  absl::MutexLock lock(&mu_);
-  stopped_ = true;
-  if (call_) call_->TryCancel();
-}
-
-bool PlanSession::WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
-                                size_t max_bytes) {
-  absl::MutexLock lock(&mu_);
-  auto ready = [this, after_id]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-    return last_id_ > after_id || state_ != PlanState::kRunning || stopped_;
-  };
-  mu_.AwaitWithDeadline(absl::Condition(&ready), deadline);
-  if (stopped_) return true;
-  size_t bytes = 0;
-  bool all = true;
-  for (const PlanEvent& e : events_) {
-    if (e.id <= after_id) continue;
-    if (bytes >= max_bytes) {
-      all = false;
-      break;
-    }
-    out->push_back(e);
-    bytes += e.data->size();
+  {
+    absl::MutexLock lock(&mu_);
+    stopped_ = true;
+    if (call_) call_->TryCancel();
   }
-  return all && state_ != PlanState::kRunning;
+  events_.Stop();
 }
 
 PlanState PlanSession::state() const {
@@ -197,16 +171,9 @@ PlanState PlanSession::state() const {
 
 bool PlanSession::ended() const { return state() != PlanState::kRunning; }
 
-uint64_t PlanSession::last_event_id() const {
-  absl::MutexLock lock(&mu_);
-  return last_id_;
-}
+uint64_t PlanSession::last_event_id() const { return events_.last_event_id(); }
 
-std::pair<uint64_t, uint64_t> PlanSession::kept_range() const {
-  absl::MutexLock lock(&mu_);
-  if (events_.empty()) return {0, 0};
-  return {events_.front().id, events_.back().id};
-}
+std::pair<uint64_t, uint64_t> PlanSession::kept_range() const { return events_.kept_range(); }
 
 PlanRegistry::PlanRegistry(v1::Planner::Stub* stub, PlanRegistryLimits limits)
     : stub_(stub), limits_(limits) {}

@@ -25,11 +25,12 @@
 #include "absl/time/time.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
+#include "web/event_log.h"
 #include "web/mission_file.h"
 
 namespace riskplan::web {
 
-// One event of a plan, as sent to viewers. The types:
+// The events of a plan (EventLog), as sent to viewers. The types:
 //   "update"    an improvement: {"gateway_ms": T, "update": PlanUpdate}
 //   "final"     the final PlanUpdate, same form; the stream ends after it
 //   "failed"    the call failed: {"code": "INVALID_ARGUMENT", "message":
@@ -42,23 +43,6 @@ namespace riskplan::web {
 // field names (docs/api.md; 64-bit integers are JSON strings), its display
 // path (Trajectory.path, path_wgs84: for drawing only) rounded to the
 // centimetre, which halves an event; the waypoints keep every digit.
-struct PlanEvent {
-  uint64_t id = 0;  // 1, 2, 3, ... within the plan
-  std::string type;
-  // JSON, one line. Shared, never copied: an event of a long trajectory is
-  // tens of kilobytes, and every viewer sends the same one.
-  std::shared_ptr<const std::string> data;
-};
-
-// Bounds of a session's memory.
-struct PlanEventLimits {
-  // Events kept; past either bound the oldest improvements are dropped (the
-  // newest improvement always holds the whole best trajectory, and the
-  // terminal event is always kept), so a viewer resuming from an id older
-  // than the oldest kept gets what is left.
-  size_t max_events = 2000;
-  size_t max_bytes = size_t{8} << 20;
-};
 
 enum class PlanState { kRunning, kFinished, kFailed, kCancelled };
 
@@ -113,7 +97,10 @@ class PlanSession {
   // event will ever come after those: the plan ended and `*out` ends with
   // its last event (or it ended before `after_id`), or the session is stopped.
   bool WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
-                     size_t max_bytes = size_t{256} << 10);
+                     size_t max_bytes = size_t{256} << 10) {
+    return events_.WaitForEvents(after_id, deadline, out, max_bytes);
+  }
+  EventLog& events() { return events_; }
 
   // Wakes every waiting viewer for good (the gateway is shutting down) and
   // cancels the call.
@@ -142,14 +129,11 @@ class PlanSession {
 
   const std::string id_;
   const v1::PlanRequest request_;
-  const PlanEventLimits limits_;
   const std::shared_ptr<const MissionPlan> mission_;
+  EventLog events_;
   std::thread thread_;
 
   mutable absl::Mutex mu_;
-  std::deque<PlanEvent> events_ ABSL_GUARDED_BY(mu_);
-  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
-  uint64_t last_id_ ABSL_GUARDED_BY(mu_) = 0;
   PlanState state_ ABSL_GUARDED_BY(mu_) = PlanState::kRunning;
   bool cancel_requested_ ABSL_GUARDED_BY(mu_) = false;
   bool stopped_ ABSL_GUARDED_BY(mu_) = false;

@@ -323,6 +323,7 @@ Gateway::Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel,
     : options_(std::move(options)),
       client_(std::move(channel)),
       plans_(&client_.stub(), options_.plans),
+      flights_(options_.flights),
       http_(std::move(http)) {
   // One thread per connection for as long as it lives: event streams hold
   // theirs, so the pool is sized for every viewer plus the other requests.
@@ -390,6 +391,7 @@ void Gateway::Stop() {
   // Ends the event streams (their waits wake up) and the plans, then the
   // HTTP server, which joins its threads once their streams returned.
   plans_.StopAll();
+  flights_.StopAll();
   http_->stop();
 }
 
@@ -469,6 +471,11 @@ void Gateway::Routes() {
   http_->Post("/api/mission/parse", route(&Gateway::PostMissionParse));
   http_->Post("/api/mission/plans", route(&Gateway::PostMissionPlan));
   http_->Post("/api/mission/export", route(&Gateway::PostMissionExport));
+  http_->Post("/api/flights", route(&Gateway::PostFlight));
+  http_->Get(R"(/api/flights/([0-9a-f-]+))", route(&Gateway::GetFlight));
+  http_->Get(R"(/api/flights/([0-9a-f-]+)/events)", route(&Gateway::GetFlightEvents));
+  http_->Post(R"(/api/flights/([0-9a-f-]+)/inputs)", route(&Gateway::PostFlightInput));
+  http_->Post(R"(/api/flights/([0-9a-f-]+)/end)", route(&Gateway::PostFlightEnd));
 }
 
 // Browsers ask for /favicon.ico whatever the page links; the page's own
@@ -577,6 +584,8 @@ void Gateway::GetStatus(const httplib::Request&, httplib::Response& res) {
                      {"viewers", viewers_.load()},
                      {"max_viewers", options_.max_viewers},
                      {"running_plans", plans_.running()},
+                     {"flights", flights_.running()},
+                     {"max_flights", options_.flights.max_running},
                      {"max_running_plans", options_.plans.max_running}}
                     .dump());
 }
@@ -772,6 +781,12 @@ void Gateway::PostPlanCancel(const httplib::Request& req, httplib::Response& res
 void Gateway::GetPlanEvents(const httplib::Request& req, httplib::Response& res) {
   std::shared_ptr<PlanSession> session = FindPlan(req, res);
   if (!session) return;
+  // The log lives as long as the stream holds it, and its session with it.
+  ServeEvents(std::shared_ptr<EventLog>(session, &session->events()), req, res);
+}
+
+void Gateway::ServeEvents(std::shared_ptr<EventLog> log, const httplib::Request& req,
+                          httplib::Response& res) {
   std::string last = req.get_header_value("Last-Event-ID");
   if (last.empty()) last = req.get_param_value("last_event_id");
   const std::optional<uint64_t> after = ParseLastEventId(last);
@@ -784,12 +799,12 @@ void Gateway::GetPlanEvents(const httplib::Request& req, httplib::Response& res)
   }
   // A browser reconnects on its own whenever a stream ends; 204 is how
   // the standard tells it that there is nothing more, ever.
-  if (session->ended() && *after >= session->last_event_id()) {
+  if (log->ended() && *after >= log->last_event_id()) {
     res.status = 204;
     return;
   }
   if (!AdmitViewer(res)) return;
-  StreamEvents(std::move(session), *after, res);
+  StreamEvents(std::move(log), *after, res);
 }
 
 bool Gateway::AdmitViewer(httplib::Response& res) {
@@ -809,10 +824,10 @@ bool Gateway::AdmitViewer(httplib::Response& res) {
   return true;
 }
 
-void Gateway::StreamEvents(std::shared_ptr<PlanSession> session, uint64_t after,
+void Gateway::StreamEvents(std::shared_ptr<EventLog> session, uint64_t after,
                            httplib::Response& res) {
   struct Viewer {
-    std::shared_ptr<PlanSession> session;
+    std::shared_ptr<EventLog> session;
     uint64_t after = 0;
     bool started = false;
   };
@@ -1068,6 +1083,96 @@ void Gateway::PostMissionExport(const httplib::Request& req, httplib::Response& 
                  absl::StrFormat("attachment; filename=\"riskplan-mission-%s.plan\"",
                                  request.map()));
   res.set_content(std::move(*text), "application/json");
+}
+
+// ---------------------------------------------------------------------------
+// Flights (docs/web.md, "Flight"): a Fly session the gateway flies itself.
+
+// POST /api/flights, body: {"open": FlightOpen (its plan a PlanRequest with
+// the page's start and goal), "speedup": flight seconds per real second}.
+// 201 {id, events}.
+void Gateway::PostFlight(const httplib::Request& req, httplib::Response& res) {
+  Json body = Json::parse(req.body, nullptr, /*allow_exceptions=*/false);
+  if (!body.is_object()) {
+    return SendGatewayError(res, absl::InvalidArgumentError(
+                                     "the body must be a JSON object with the fields open, "
+                                     "speedup"));
+  }
+  for (auto it = body.begin(); it != body.end(); ++it) {
+    if (it.key() != "open" && it.key() != "speedup") {
+      return SendGatewayError(
+          res, absl::InvalidArgumentError(absl::StrFormat(
+                   "unknown field '%s'; the body has the fields open, speedup", it.key())));
+    }
+  }
+  v1::FlightOpen open;
+  if (!body.contains("open")) {
+    return SendGatewayError(res, absl::InvalidArgumentError(
+                                     "'open' is required: the FlightOpen of the session"));
+  }
+  if (absl::Status s = MessageField(body, "open", &open); !s.ok()) return SendGatewayError(res, s);
+  double speedup = 10.0;
+  if (body.contains("speedup")) {
+    if (!body["speedup"].is_number()) {
+      return SendGatewayError(res, absl::InvalidArgumentError("'speedup' must be a number"));
+    }
+    speedup = body["speedup"].get<double>();
+  }
+  // What the gateway can know of the mission, as for a plan (a start
+  // outside the map, an unknown map, the budget), named as open.plan's.
+  if (absl::Status s = CheckPlan(open.plan()); !s.ok()) {
+    return SendGatewayError(res, absl::Status(s.code(), absl::StrCat("open.plan: ", s.message())));
+  }
+  open.mutable_plan()->set_include_tree(false);
+  auto session = flights_.Start(std::move(open), speedup, client_.channel());
+  if (!session.ok()) return SendGatewayError(res, session.status());
+  const std::string& id = (*session)->id();
+  SendJson(res, Json{{"id", id}, {"events", absl::StrCat("/api/flights/", id, "/events")}}.dump(),
+           201);
+}
+
+std::shared_ptr<FlightSession> Gateway::FindFlight(const httplib::Request& req,
+                                                   httplib::Response& res) {
+  std::shared_ptr<FlightSession> session = flights_.Find(req.matches[1]);
+  if (!session) {
+    SendError(res, 404, "NOT_FOUND",
+              absl::StrCat("no flight '", std::string(req.matches[1]), "' on this gateway"),
+              "gateway");
+  }
+  return session;
+}
+
+void Gateway::GetFlight(const httplib::Request& req, httplib::Response& res) {
+  std::shared_ptr<FlightSession> session = FindFlight(req, res);
+  if (!session) return;
+  SendJson(res, Json{{"id", session->id()},
+                     {"state", session->state()},
+                     {"last_event_id", session->events().last_event_id()}}
+                    .dump());
+}
+
+void Gateway::GetFlightEvents(const httplib::Request& req, httplib::Response& res) {
+  std::shared_ptr<FlightSession> session = FindFlight(req, res);
+  if (!session) return;
+  ServeEvents(std::shared_ptr<EventLog>(session, &session->events()), req, res);
+}
+
+// POST /api/flights/ID/inputs, body: a FlightInput with add_zone,
+// remove_zone or wind. 200 {"sent": true}; the server's answer (a new
+// version, or a refusal) arrives as an event.
+void Gateway::PostFlightInput(const httplib::Request& req, httplib::Response& res) {
+  std::shared_ptr<FlightSession> session = FindFlight(req, res);
+  if (!session) return;
+  v1::FlightInput input;
+  if (absl::Status s = FromJson(req.body, &input); !s.ok()) return SendGatewayError(res, s);
+  if (absl::Status s = session->Input(input); !s.ok()) return SendGatewayError(res, s);
+  SendJson(res, Json{{"sent", true}}.dump());
+}
+
+void Gateway::PostFlightEnd(const httplib::Request& req, httplib::Response& res) {
+  std::shared_ptr<FlightSession> session = FindFlight(req, res);
+  if (!session) return;
+  SendJson(res, Json{{"ended", session->End()}}.dump());
 }
 
 }  // namespace riskplan::web

@@ -89,6 +89,11 @@ void FlightSession::AppendJson(const std::string& type, const std::string& field
 }
 
 void FlightSession::OnOutput(const v1::FlightOutput& out) {
+  {
+    absl::MutexLock lock(&mu_);
+    if (out.has_plan()) alert_in_force_ = false;
+    if (out.has_alert()) alert_in_force_ = true;
+  }
   if (out.has_plan()) {
     v1::FlightPlanVersion v = out.plan();
     RoundDisplayPath(v.mutable_route());
@@ -171,7 +176,16 @@ void FlightSession::Run(std::shared_ptr<grpc::Channel> channel) {
     const double speed = v->route().flight_time_s() > 0.0
                              ? v->route().length_m() / v->route().flight_time_s()
                              : 0.0;
-    if (progress >= total - 1e-6) {
+    bool alert;
+    {
+      absl::MutexLock lock(&mu_);
+      alert = alert_in_force_;
+    }
+    // With an alert in force the remainder is not to be flown: the
+    // aircraft goes no further than the commit point (a real one would
+    // divert to the alert's landing site) until a new version comes.
+    const double reach = alert ? std::min(total, v->committed_until_m()) : total;
+    if (!alert && progress >= total - 1e-6) {
       why = "the aircraft reached the goal";
       break;
     }
@@ -182,7 +196,7 @@ void FlightSession::Run(std::shared_ptr<grpc::Channel> channel) {
     }
     if (!Wait(limits_.report_every)) break;
     t += dt;
-    progress = std::min(total, progress + speed * dt);
+    progress = std::max(progress, std::min(reach, progress + speed * dt));
     v1::FlightInput report;
     report.mutable_position()->set_time_s(t);
     report.mutable_position()->set_progress_m(progress);

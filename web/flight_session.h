@@ -3,7 +3,10 @@
 // aircraft along the session's plan, as `riskplan fly --scenario` does: at
 // the plan's mean ground speed (the route's length over its flight time),
 // `speedup` times faster than real time, a position report every
-// FlightGatewayLimits::report_every of real time; the page adds and removes
+// FlightGatewayLimits::report_every of real time (while an alert is in
+// force it goes no further than the commit point: the remainder is not to be
+// flown; a real aircraft would divert to the alert's landing site); the page
+// adds and removes
 // zones (and may change the wind), and sees the server's plan versions,
 // alerts and refusals as events. The stream goes through the client
 // library's FlightLink, which resumes the session on a replica when a
@@ -116,6 +119,7 @@ class FlightSession {
   bool end_requested_ ABSL_GUARDED_BY(mu_) = false;
   bool stopped_ ABSL_GUARDED_BY(mu_) = false;
   bool failed_ ABSL_GUARDED_BY(mu_) = false;
+  bool alert_in_force_ ABSL_GUARDED_BY(mu_) = false;  // an alert came after the latest version
   std::set<std::string> zones_ ABSL_GUARDED_BY(mu_);  // added from the page, not removed
   double tokens_ ABSL_GUARDED_BY(mu_);                // the change rate's bucket
   absl::Time tokens_at_ ABSL_GUARDED_BY(mu_);

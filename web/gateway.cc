@@ -274,6 +274,16 @@ absl::Status CheckGatewayOptions(const GatewayOptions& o) {
     return absl::InvalidArgumentError(
         absl::StrFormat("--max_viewers has value %d; it must be in [1, 4096]", o.max_viewers));
   }
+  if (o.flights.max_running < 0 || o.flights.max_running > 64) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--max_flights has value %d; it must be in [0, 64] (0: no flights)",
+        o.flights.max_running));
+  }
+  if (o.flights.max_zones < 1 || o.flights.max_zones > 64) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--max_flight_zones has value %d; it must be in [1, 64] (the server's default bound)",
+        o.flights.max_zones));
+  }
   if (o.request_threads < 2 || o.request_threads > 1024) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "--request_threads has value %d; it must be in [2, 1024]", o.request_threads));

@@ -413,6 +413,102 @@ def _read_json(path):
         return None
 
 
+# The route's display path (local metres) with the arc length of each point:
+# [[x, y, s], ...] (straight lines between samples, as the page splits it).
+ROUTE_ARC_JS = """(route) => { let s = 0; return route.path.map((p, k) => {
+  if (k > 0) { const q = route.path[k - 1]; s += Math.hypot(p.x - q.x, p.y - q.y, p.z - q.z); }
+  return [p.x, p.y, s]; }); }"""
+
+
+def check_flight(driver):
+    """Flight mode on the local map: the gateway flies the page's start and
+    goal; a zone placed by a click across the route ahead gives a new version
+    whose route avoids it and whose committed prefix begins with the one
+    before; a zone on the goal raises an alert with its emergency landing
+    site; the flight ends from the page."""
+    set_value(driver, "budget-ms", 1000)
+    set_value(driver, "budget-iterations", 0)
+    set_value(driver, "flight-speedup", 4)
+    set_value(driver, "zone-radius", 120)
+    click(driver, "fly")
+    wf.wait_for(lambda: js(driver, "rp.flight && (rp.flight.versions.length > 0 || rp.flight.ended)"),
+                120, "the flight's first plan version")
+    check(js(driver, "rp.flight.ended") is None and
+          js(driver, "rp.flight.versions[0].reason") == "FLIGHT_REASON_OPENED",
+          "the flight opened with its first plan version")
+    wf.wait_for(lambda: js(driver, "rp.flight.position && rp.flight.position.progress_m > 0 && "
+                                   "document.querySelectorAll('path.aircraft').length === 1"),
+                60, "the aircraft to move")
+    check(js(driver, "document.querySelectorAll('path.flight-committed').length") == 1 and
+          js(driver, "document.querySelectorAll('path.flight-remainder').length") == 1,
+          "the committed prefix and the remainder are drawn, each its own line")
+
+    # A zone across the route ahead: on the latest route, half way between
+    # the commit point and the goal.
+    v = js(driver, "rp.flight.versions[rp.flight.versions.length - 1]")
+    arc = driver.execute_script(f"return ({ROUTE_ARC_JS})(arguments[0]);", v["route"])
+    total = arc[-1][2]
+    target = v["committed_until_m"] + 0.5 * (total - v["committed_until_m"])
+    centre = min(arc, key=lambda p: abs(p[2] - target))
+    check(total - v["committed_until_m"] > 600,
+          f"the remainder ahead is {total - v['committed_until_m']:.0f} m long")
+    click(driver, "place-zone")
+    click_drag(driver, (centre[1], centre[0]), (0, 0))
+    wf.wait_for(lambda: js(driver, "rp.flight.zones['zone-1'] !== undefined"), 60, "the zone to be sent")
+    zone = js(driver, "rp.flight.zones['zone-1']")
+    check(math.dist((zone["x"], zone["y"]), centre[:2]) < 5 and zone["radius_m"] == 120 and
+          js(driver, "document.querySelectorAll('path.flight-zone').length") == 1,
+          f"a zone of 120 m placed by a click at ({zone['x']:.0f}, {zone['y']:.0f}), on the route "
+          f"{target - v['committed_until_m']:.0f} m past the commit point")
+    before = [p for p in arc if math.dist(p[:2], (zone["x"], zone["y"])) <= zone["radius_m"]]
+    check(len(before) > 0, f"the route before it crossed the zone ({len(before)} path points inside)")
+    index = wf.wait_for(lambda: js(driver, "(() => { const k = rp.flight.versions.findIndex((v) => "
+                                           "v.active_zones.includes('zone-1')); return k > 0 ? k : null; })()")
+                        or (js(driver, "rp.flight.ended") and -1), 120,
+                        "a plan version with the zone")
+    check(index > 0, f"version {index + 1} came with the zone in force")
+    new, old = js(driver, f"[rp.flight.versions[{index}], rp.flight.versions[{index - 1}]]")
+    check(new["reason"] == "FLIGHT_REASON_ZONE_ADDED", f"made because the zone was added ({new['reason']})")
+    inside = [p for p in new["route"]["path"]
+              if math.dist((p["x"], p["y"]), (zone["x"], zone["y"])) <= zone["radius_m"]]
+    check(not inside, f"its route avoids the zone: none of its {len(new['route']['path'])} path points "
+                      f"within {zone['radius_m']} m of the centre")
+    check(len(new["committed"]) >= len(old["committed"]) and
+          new["committed"][:len(old["committed"])] == old["committed"],
+          f"the committed prefix is unchanged: the new version's {len(new['committed'])} committed "
+          f"poses begin with the {len(old['committed'])} before")
+    wf.wait_for(lambda: "a zone was added" in js(driver, "document.getElementById('flight-state').textContent")
+                or js(driver, "rp.flight.versions.length") > index + 1, 30, "the page to show the version")
+    check(js(driver, "document.querySelectorAll('path.flight-committed').length") == 1 and
+          js(driver, "document.querySelectorAll('path.flight-remainder').length") == 1,
+          "the new version drawn: committed prefix and remainder")
+
+    # A zone on the goal: no remainder can reach it; the alert names the
+    # emergency landing site.
+    if not js(driver, "rp.flight.ended"):
+        driver.execute_script(f"rp.addZoneAt({wf.SMALL_CITY_GOAL[0]!r}, {wf.SMALL_CITY_GOAL[1]!r});")
+        alert = wf.wait_for(lambda: js(driver, "rp.flight.alerts.length > 0 && rp.flight.alerts[0]")
+                            or js(driver, "rp.flight.ended"), 120, "an alert")
+        check(isinstance(alert, dict) and alert.get("kind") == "FLIGHT_ALERT_NO_REMAINDER" and
+              "NO_FLY_ZONE" in alert["detail"], f"an alert: {alert.get('detail') if isinstance(alert, dict) else alert}")
+        shown = wf.wait_for(lambda: js(driver, "document.getElementById('flight-alerts').textContent"), 30,
+                            "the alert on the page")
+        landing = alert.get("landing")
+        if landing and landing.get("site_pose"):
+            check("emergency landing at" in shown and
+                  js(driver, "document.querySelectorAll('path.emergency-landing').length") == 1,
+                  f"the page shows the alert and its emergency landing site: {shown!r}")
+        else:
+            check(shown.startswith("ALERT"), f"the page shows the alert: {shown!r}")
+
+    if not js(driver, "rp.flight.ended"):
+        click(driver, "end-flight")
+    ended = wf.wait_for(lambda: js(driver, "rp.flight.ended"), 60, "the flight to end")
+    check(ended.get("message") in ("ended from the page", "the aircraft reached the goal"),
+          f"the flight ended: {ended}")
+    check(js(driver, "document.getElementById('fly').disabled") is False, "and may fly again")
+
+
 def main():
     bin_dir, out_dir = sys.argv[1], sys.argv[2]
     os.makedirs(out_dir, exist_ok=True)
@@ -559,6 +655,9 @@ def main():
 
         # 3b. Endurance, target level of safety and the risk-time front.
         check_limits_and_front(driver)
+
+        # 3c. Flight mode: zones placed in flight, versions, an alert.
+        check_flight(driver)
 
         # 4. A polyline drawn by clicks, evaluated.
         driver.execute_script("rp.profile = null; document.getElementById('evaluation').textContent = '';")

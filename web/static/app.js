@@ -10,7 +10,8 @@
 // functions: api.js (rp, calls and errors), colours.js, frames.js, map.js
 // (the map and its layers), endpoints.js (start and goal), plans.js (the
 // live view), evaluate.js (profiles, polylines, downloads), mission.js
-// (QGroundControl missions uploaded and downloaded), and this one,
+// (QGroundControl missions uploaded and downloaded), flight.js (flight
+// mode), wind.js, and this one,
 // which starts the page once every other is loaded.
 'use strict';
 
@@ -43,6 +44,9 @@ async function init() {
   $('download-geojson').onclick = () => guarded(() => download('geojson'));
   $('download-plan').onclick = () => guarded(() => download('plan'));
   $('download-kml').onclick = () => guarded(() => download('kml'));
+  $('fly').onclick = () => guarded(startFlight);
+  $('end-flight').onclick = () => guarded(endFlight);
+  $('place-zone').onclick = togglePlacingZone;
   $('mission-file').onchange = (e) => {
     const file = e.target.files[0];
     e.target.value = '';  // the same file chosen again is a new upload

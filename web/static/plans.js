@@ -213,6 +213,25 @@ function watch(id) {
   };
 }
 
+// The PlanRequest of the page's fields: map, start, goal, algorithm,
+// budget, seed, update interval, wind and limits (a flight's FlightOpen.plan
+// too).
+function planRequest() {
+  const request = {
+    map: rp.map.name,
+    [apiField('start', endpoints.start)]: endpoints.start, [apiField('goal', endpoints.goal)]: endpoints.goal,
+    algorithm: $('algorithm').value,
+    budget: { time_ms: String(Number($('budget-ms').value)), iterations: String(Number($('budget-iterations').value)) },
+    seed: String(Number($('seed').value)),
+    // The server coalesces what it finds in between (newest wins): more
+    // than about 20 pictures a second is more than anyone can follow.
+    min_update_interval_ms: String(Number($('update-interval').value)),
+  };
+  Object.assign(request, windFields());
+  Object.assign(request, limitFields());
+  return request;
+}
+
 async function startPlan() {
   if (!endpoints.start || !endpoints.goal) throw new ApiError('INVALID_ARGUMENT', 'set a start and a goal on the map first', 'page');
   rp.targetLevelOfSafety = targetLevelOfSafety();
@@ -230,18 +249,7 @@ async function startPlan() {
   $('iterations').textContent = '0'; $('improvements').textContent = '0'; $('risk').textContent = '–';
   setState('starting');
   try {
-    const request = {
-      map: rp.map.name,
-      [apiField('start', endpoints.start)]: endpoints.start, [apiField('goal', endpoints.goal)]: endpoints.goal,
-      algorithm: $('algorithm').value,
-      budget: { time_ms: String(Number($('budget-ms').value)), iterations: String(Number($('budget-iterations').value)) },
-      seed: String(Number($('seed').value)),
-      // The server coalesces what it finds in between (newest wins): more
-      // than about 20 pictures a second is more than anyone can follow.
-      min_update_interval_ms: String(Number($('update-interval').value)),
-    };
-    Object.assign(request, windFields());
-    Object.assign(request, limitFields());
+    const request = planRequest();
     rp.lastPlanRequest = request;
     const r = rp.mission ? await startMissionPlan(request) : await api('POST', '/api/plans', request);
     rp.planId = r.id;

@@ -90,8 +90,12 @@ void FlightSession::AppendJson(const std::string& type, const std::string& field
 
 void FlightSession::OnOutput(const v1::FlightOutput& out) {
   {
+    // Before the event is seen: a page that saw a version may send zones.
     absl::MutexLock lock(&mu_);
-    if (out.has_plan()) alert_in_force_ = false;
+    if (out.has_plan()) {
+      alert_in_force_ = false;
+      opened_ = true;
+    }
     if (out.has_alert()) alert_in_force_ = true;
   }
   if (out.has_plan()) {
@@ -159,11 +163,6 @@ void FlightSession::Run(std::shared_ptr<grpc::Channel> channel) {
     }
     if (!Wait(absl::Milliseconds(20))) break;
   }
-  {
-    absl::MutexLock lock(&mu_);
-    opened_ = true;
-  }
-
   const double t0 = open_.time_s();
   double t = t0;
   double progress = open_.progress_m();

@@ -115,7 +115,7 @@ class FlightSession {
   std::thread thread_;
 
   mutable absl::Mutex mu_;
-  bool opened_ ABSL_GUARDED_BY(mu_) = false;  // a first version came
+  bool opened_ ABSL_GUARDED_BY(mu_) = false;  // a first version came (set before its event)
   bool end_requested_ ABSL_GUARDED_BY(mu_) = false;
   bool stopped_ ABSL_GUARDED_BY(mu_) = false;
   bool failed_ ABSL_GUARDED_BY(mu_) = false;

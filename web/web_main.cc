@@ -156,8 +156,10 @@ int main(int argc, char** argv) {
   help.usage =
       "the web view of riskplan: a gRPC client of riskplan-server and an HTTP server for "
       "browsers, with a page that shows the maps and the risk layer, plans live (every "
-      "improvement as the server streams it), evaluates drawn polylines and downloads "
-      "trajectories (GeoJSON, QGroundControl .plan, KML).\n"
+      "improvement as the server streams it), evaluates drawn polylines, downloads "
+      "trajectories (GeoJSON, QGroundControl .plan, KML), plans uploaded QGroundControl "
+      "missions leg by leg and flies plans in an in-flight session with a simulated "
+      "aircraft and zones placed by clicks.\n"
       "\n"
       "  riskplan-web --listen=127.0.0.1:8080 --server=127.0.0.1:50051\n";
   help.footer =

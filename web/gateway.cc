@@ -5,7 +5,6 @@
 #include <sys/stat.h>
 #include <zlib.h>
 
-#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -21,17 +20,18 @@
 #include "absl/strings/str_join.h"
 #include "absl/time/clock.h"
 #include "client/exports.h"
-#include "client/mission.h"
 #include "geo/export/geojson.h"
 #include "geo/export/kml.h"
-#include "geo/export/qgc_mission.h"
 #include "geo/export/qgc_plan.h"
 #include "nlohmann/json.hpp"
-#include "web/mission_file.h"
+#include "web/gateway_internal.h"
 #include "web/proto_json.h"
 #include "web/sse.h"
 
 namespace riskplan::web {
+
+using namespace gateway_internal;  // NOLINT: the route files' shared helpers
+
 namespace {
 
 using Json = nlohmann::json;
@@ -70,6 +70,113 @@ std::string Gzip(const std::string& text) {
   deflateEnd(&z);
   return result == Z_STREAM_END ? out : "";
 }
+
+// A route that is one unary RPC: the body is the request's JSON form, the
+// answer the response's.
+template <typename RpcRequest, typename RpcResponse, typename Call>
+void ForwardUnary(const httplib::Request& req, httplib::Response& res, Call call) {
+  RpcRequest request;
+  if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+  RpcResponse response;
+  const grpc::Status status = call(request, &response);
+  if (!status.ok()) return SendServerError(res, status);
+  SendJsonTo(req, res, ToJson(response));
+}
+
+// The file of an export in `format` (geojson, plan or kml; checked by the
+// caller) and its content type.
+absl::StatusOr<std::string> ExportText(const std::string& format,
+                                       const geo::ExportTrajectory& trajectory,
+                                       std::string* content_type) {
+  if (format == "geojson") {
+    *content_type = "application/geo+json";
+    return geo::TrajectoryGeoJson(trajectory);
+  }
+  if (format == "plan") {
+    *content_type = "application/json";
+    return geo::QgcPlanJson(trajectory);
+  }
+  *content_type = "application/vnd.google-earth.kml+xml";
+  return geo::TrajectoryKml(trajectory);
+}
+
+// "HOST:PORT", "[V6]:PORT".
+absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& address) {
+  const size_t colon = address.rfind(':');
+  int port = -1;
+  if (colon == std::string::npos || colon == 0 ||
+      !absl::SimpleAtoi(address.substr(colon + 1), &port) || port < 0 || port > 65535) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--listen has value '%s'; it must be HOST:PORT, port in [0, 65535]", address));
+  }
+  std::string host = address.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+    host = host.substr(1, host.size() - 2);
+  }
+  return std::make_pair(host, port);
+}
+
+// A map's fingerprint: its name and a hash of its MapInfo (a map replaced
+// on the server under the same name has another).
+std::string Fingerprint(const v1::MapInfo& info) {
+  return absl::StrCat(info.name(), "#", std::hash<std::string>{}(info.SerializeAsString()));
+}
+
+
+// Whether (lon, lat) lies inside the convex quadrilateral of `corners`
+// (south-west, south-east, north-east, north-west), on or off its edges.
+bool InsideCorners(const v1::GeoBounds& bounds, double lat, double lon) {
+  if (bounds.corners_size() != 4) return true;  // nothing to check against
+  int sign = 0;
+  for (int k = 0; k < 4; ++k) {
+    const v1::GeoPoint2& a = bounds.corners(k);
+    const v1::GeoPoint2& b = bounds.corners((k + 1) % 4);
+    const double cross = (b.lon_deg() - a.lon_deg()) * (lat - a.lat_deg()) -
+                         (b.lat_deg() - a.lat_deg()) * (lon - a.lon_deg());
+    const int s = cross > 0 ? 1 : (cross < 0 ? -1 : 0);
+    if (s != 0) {
+      if (sign != 0 && s != sign) return false;
+      sign = s;
+    }
+  }
+  return true;
+}
+
+// Start or goal of `request` against `map`'s area; `which` is "start" or
+// "goal".
+absl::Status CheckEndpoint(const v1::MapInfo& map, const char* which, const v1::Pose* local,
+                           const v1::GeoPose* wgs84) {
+  if (local != nullptr) {
+    const double x0 = map.x0_m(), x1 = map.x0_m() + map.width_m();
+    const double y0 = map.y0_m(), y1 = map.y0_m() + map.height_m();
+    if (!(local->x() >= x0 && local->x() <= x1 && local->y() >= y0 && local->y() <= y1)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s (x, y) = (%.1f, %.1f) m is outside map '%s' (x %.1f .. %.1f m, y %.1f .. %.1f m)",
+          which, local->x(), local->y(), map.name(), x0, x1, y0, y1));
+    }
+  } else if (wgs84 != nullptr && map.has_bounds_wgs84()) {
+    if (!std::isfinite(wgs84->lat_deg()) || !std::isfinite(wgs84->lon_deg()) ||
+        !InsideCorners(map.bounds_wgs84(), wgs84->lat_deg(), wgs84->lon_deg())) {
+      const v1::GeoBounds& b = map.bounds_wgs84();
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s_wgs84 (lat, lon) = (%.6f, %.6f) deg is outside map '%s' (lat %.6f .. %.6f, lon "
+          "%.6f .. %.6f deg)",
+          which, wgs84->lat_deg(), wgs84->lon_deg(), map.name(), b.min_lat_deg(),
+          b.max_lat_deg(), b.min_lon_deg(), b.max_lon_deg()));
+    }
+  }
+  return absl::OkStatus();
+}
+
+// The page's files and the libraries' directories must exist.
+bool IsDirectory(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+}  // namespace
+
+namespace gateway_internal {
 
 // What the page sees of a failed request: the code, the message exactly as
 // its author wrote it, and who wrote it ("server" or "gateway").
@@ -132,7 +239,7 @@ void SendGatewayError(httplib::Response& res, const absl::Status& status) {
             std::string(status.message()), "gateway");
 }
 
-void SendJson(httplib::Response& res, std::string json, int http_status = 200) {
+void SendJson(httplib::Response& res, std::string json, int http_status) {
   res.status = http_status;
   res.set_header("Cache-Control", "no-store");
   res.set_content(std::move(json), "application/json");
@@ -141,7 +248,7 @@ void SendJson(httplib::Response& res, std::string json, int http_status = 200) {
 // The same, gzipped (`gzip`, or made here when empty) when the browser
 // takes gzip and the answer is worth it.
 void SendJsonTo(const httplib::Request& req, httplib::Response& res, std::string json,
-                std::string gzip = "") {
+                std::string gzip) {
   if (json.size() >= kMinGzipBytes && AcceptsGzip(req)) {
     if (gzip.empty()) gzip = Gzip(json);
     if (!gzip.empty()) {
@@ -156,57 +263,6 @@ void SendJsonTo(const httplib::Request& req, httplib::Response& res, std::string
   SendJson(res, std::move(json));
 }
 
-// A route that is one unary RPC: the body is the request's JSON form, the
-// answer the response's.
-template <typename RpcRequest, typename RpcResponse, typename Call>
-void ForwardUnary(const httplib::Request& req, httplib::Response& res, Call call) {
-  RpcRequest request;
-  if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
-  RpcResponse response;
-  const grpc::Status status = call(request, &response);
-  if (!status.ok()) return SendServerError(res, status);
-  SendJsonTo(req, res, ToJson(response));
-}
-
-// The file of an export in `format` (geojson, plan or kml; checked by the
-// caller) and its content type.
-absl::StatusOr<std::string> ExportText(const std::string& format,
-                                       const geo::ExportTrajectory& trajectory,
-                                       std::string* content_type) {
-  if (format == "geojson") {
-    *content_type = "application/geo+json";
-    return geo::TrajectoryGeoJson(trajectory);
-  }
-  if (format == "plan") {
-    *content_type = "application/json";
-    return geo::QgcPlanJson(trajectory);
-  }
-  *content_type = "application/vnd.google-earth.kml+xml";
-  return geo::TrajectoryKml(trajectory);
-}
-
-// "HOST:PORT", "[V6]:PORT".
-absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& address) {
-  const size_t colon = address.rfind(':');
-  int port = -1;
-  if (colon == std::string::npos || colon == 0 ||
-      !absl::SimpleAtoi(address.substr(colon + 1), &port) || port < 0 || port > 65535) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "--listen has value '%s'; it must be HOST:PORT, port in [0, 65535]", address));
-  }
-  std::string host = address.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
-    host = host.substr(1, host.size() - 2);
-  }
-  return std::make_pair(host, port);
-}
-
-// A map's fingerprint: its name and a hash of its MapInfo (a map replaced
-// on the server under the same name has another).
-std::string Fingerprint(const v1::MapInfo& info) {
-  return absl::StrCat(info.name(), "#", std::hash<std::string>{}(info.SerializeAsString()));
-}
-
 const v1::MapInfo* FindMap(const v1::ListMapsResponse& maps, const std::string& name) {
   for (const v1::MapInfo& m : maps.maps()) {
     if (m.name() == name) return &m;
@@ -214,58 +270,19 @@ const v1::MapInfo* FindMap(const v1::ListMapsResponse& maps, const std::string& 
   return nullptr;
 }
 
-// Whether (lon, lat) lies inside the convex quadrilateral of `corners`
-// (south-west, south-east, north-east, north-west), on or off its edges.
-bool InsideCorners(const v1::GeoBounds& bounds, double lat, double lon) {
-  if (bounds.corners_size() != 4) return true;  // nothing to check against
-  int sign = 0;
-  for (int k = 0; k < 4; ++k) {
-    const v1::GeoPoint2& a = bounds.corners(k);
-    const v1::GeoPoint2& b = bounds.corners((k + 1) % 4);
-    const double cross = (b.lon_deg() - a.lon_deg()) * (lat - a.lat_deg()) -
-                         (b.lat_deg() - a.lat_deg()) * (lon - a.lon_deg());
-    const int s = cross > 0 ? 1 : (cross < 0 ? -1 : 0);
-    if (s != 0) {
-      if (sign != 0 && s != sign) return false;
-      sign = s;
-    }
+absl::Status JsonMessageField(const nlohmann::json& root, const char* key,
+                              google::protobuf::Message* message) {
+  if (!root.contains(key)) return absl::OkStatus();
+  if (!root[key].is_object()) {
+    return absl::InvalidArgumentError(absl::StrFormat("'%s' must be a JSON object", key));
   }
-  return true;
-}
-
-// Start or goal of `request` against `map`'s area; `which` is "start" or
-// "goal".
-absl::Status CheckEndpoint(const v1::MapInfo& map, const char* which, const v1::Pose* local,
-                           const v1::GeoPose* wgs84) {
-  if (local != nullptr) {
-    const double x0 = map.x0_m(), x1 = map.x0_m() + map.width_m();
-    const double y0 = map.y0_m(), y1 = map.y0_m() + map.height_m();
-    if (!(local->x() >= x0 && local->x() <= x1 && local->y() >= y0 && local->y() <= y1)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s (x, y) = (%.1f, %.1f) m is outside map '%s' (x %.1f .. %.1f m, y %.1f .. %.1f m)",
-          which, local->x(), local->y(), map.name(), x0, x1, y0, y1));
-    }
-  } else if (wgs84 != nullptr && map.has_bounds_wgs84()) {
-    if (!std::isfinite(wgs84->lat_deg()) || !std::isfinite(wgs84->lon_deg()) ||
-        !InsideCorners(map.bounds_wgs84(), wgs84->lat_deg(), wgs84->lon_deg())) {
-      const v1::GeoBounds& b = map.bounds_wgs84();
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s_wgs84 (lat, lon) = (%.6f, %.6f) deg is outside map '%s' (lat %.6f .. %.6f, lon "
-          "%.6f .. %.6f deg)",
-          which, wgs84->lat_deg(), wgs84->lon_deg(), map.name(), b.min_lat_deg(),
-          b.max_lat_deg(), b.min_lon_deg(), b.max_lon_deg()));
-    }
+  if (absl::Status s = FromJson(root[key].dump(), message); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrFormat("'%s': %s", key, s.message()));
   }
   return absl::OkStatus();
 }
 
-// The page's files and the libraries' directories must exist.
-bool IsDirectory(const std::string& path) {
-  struct stat st;
-  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-}  // namespace
+}  // namespace gateway_internal
 
 absl::Status CheckGatewayOptions(const GatewayOptions& o) {
   if (auto hp = SplitHostPort(o.listen); !hp.ok()) return hp.status();
@@ -872,317 +889,6 @@ void Gateway::StreamEvents(std::shared_ptr<EventLog> session, uint64_t after,
       },
       // The viewer admitted by AdmitViewer leaves when its stream ends.
       [this](bool /*success*/) { viewers_.fetch_sub(1); });
-}
-
-// ---------------------------------------------------------------------------
-// QGroundControl missions (docs/web.md, "Missions"). The .plan is read by
-// geo/export's ParseQgcPlan and cut into legs by client/mission.h, as
-// `riskplan plan --mission` does; the page never parses a .plan itself.
-
-namespace {
-
-// The most legs a mission planned through the gateway may have: each is a
-// plan of the page's budget, one after the other.
-constexpr size_t kMaxMissionLegs = 100;
-
-// The JSON object of a mission route's body, its keys checked against
-// `known` ("unknown field 'x'" naming the route's fields).
-absl::StatusOr<Json> MissionBody(const std::string& body, const std::vector<std::string>& known) {
-  Json root = Json::parse(body, nullptr, /*allow_exceptions=*/false);
-  if (!root.is_object()) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "the body must be a JSON object with the fields %s", absl::StrJoin(known, ", ")));
-  }
-  for (auto it = root.begin(); it != root.end(); ++it) {
-    if (std::find(known.begin(), known.end(), it.key()) == known.end()) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "unknown field '%s'; the body has the fields %s", it.key(), absl::StrJoin(known, ", ")));
-    }
-  }
-  if (!root.contains("plan") || !root["plan"].is_string()) {
-    return absl::InvalidArgumentError("'plan' is required: the text of the QGroundControl .plan");
-  }
-  return root;
-}
-
-// `root[key]` (an object) as the API message `*message`; absent: left as is.
-absl::Status MessageField(const Json& root, const char* key, google::protobuf::Message* message) {
-  if (!root.contains(key)) return absl::OkStatus();
-  if (!root[key].is_object()) {
-    return absl::InvalidArgumentError(absl::StrFormat("'%s' must be a JSON object", key));
-  }
-  if (absl::Status s = FromJson(root[key].dump(), message); !s.ok()) {
-    return absl::InvalidArgumentError(absl::StrFormat("'%s': %s", key, s.message()));
-  }
-  return absl::OkStatus();
-}
-
-absl::StatusOr<std::shared_ptr<const WebMission>> ReadMissionOf(const std::string& text) {
-  absl::StatusOr<WebMission> mission = ReadMissionFile(text);
-  if (!mission.ok()) return mission.status();
-  if (mission->legs.size() > kMaxMissionLegs) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        ".plan: the mission has %d legs; this gateway plans missions of at most %d legs",
-        mission->legs.size(), kMaxMissionLegs));
-  }
-  return std::make_shared<const WebMission>(*std::move(mission));
-}
-
-}  // namespace
-
-// POST /api/mission/parse, body: the .plan's text. The mission for the form.
-void Gateway::PostMissionParse(const httplib::Request& req, httplib::Response& res) {
-  absl::StatusOr<std::shared_ptr<const WebMission>> mission = ReadMissionOf(req.body);
-  if (!mission.ok()) return SendGatewayError(res, mission.status());
-  SendJsonTo(req, res, MissionJson(**mission));
-}
-
-absl::Status Gateway::CheckMissionMap(const std::string& name) {
-  absl::StatusOr<std::shared_ptr<const v1::ListMapsResponse>> maps = Maps(false);
-  if (!maps.ok()) return absl::OkStatus();  // the server will say what is wrong
-  const v1::MapInfo* map = FindMap(**maps, name);
-  if (map == nullptr) {
-    maps = Maps(true);
-    if (!maps.ok()) return absl::OkStatus();
-    map = FindMap(**maps, name);
-  }
-  if (map == nullptr) return absl::OkStatus();  // CheckPlan names the maps there are
-  if (!map->has_bounds_wgs84()) {
-    return absl::FailedPreconditionError(absl::StrFormat(
-        "map '%s' has no geo-reference: a QGroundControl mission is in WGS84; choose a "
-        "geo-referenced map",
-        name));
-  }
-  return absl::OkStatus();
-}
-
-// POST /api/mission/plans, body: {"plan": the .plan's text, "request": a
-// PlanRequest without start and goal (map, algorithm, budget per leg, seed,
-// wind, limits of the whole mission)}. 201 {id, events, legs}.
-void Gateway::PostMissionPlan(const httplib::Request& req, httplib::Response& res) {
-  absl::StatusOr<Json> body = MissionBody(req.body, {"plan", "request"});
-  if (!body.ok()) return SendGatewayError(res, body.status());
-  v1::PlanRequest request;
-  if (absl::Status s = MessageField(*body, "request", &request); !s.ok()) {
-    return SendGatewayError(res, s);
-  }
-  if (request.start_frame_case() != v1::PlanRequest::START_FRAME_NOT_SET ||
-      request.goal_frame_case() != v1::PlanRequest::GOAL_FRAME_NOT_SET) {
-    return SendGatewayError(res, absl::InvalidArgumentError(
-                                     "request: start and goal are the mission's points; leave "
-                                     "them out"));
-  }
-  absl::StatusOr<std::shared_ptr<const WebMission>> mission =
-      ReadMissionOf((*body)["plan"].get<std::string>());
-  if (!mission.ok()) return SendGatewayError(res, mission.status());
-  request.set_include_tree(false);
-  if (absl::Status s = CheckMissionMap(request.map()); !s.ok()) return SendGatewayError(res, s);
-  // What CheckPlan refuses of a plan, for each leg: a point outside the map
-  // names its mission item.
-  for (size_t i = 0; i < (*mission)->legs.size(); ++i) {
-    v1::PlanRequest leg = request;
-    *leg.mutable_start_wgs84() = (*mission)->legs[i].start;
-    *leg.mutable_goal_wgs84() = (*mission)->legs[i].goal;
-    absl::Status s = CheckPlan(leg);
-    if (s.ok()) continue;
-    if (absl::StrContains(s.message(), "_wgs84 (lat, lon)")) {
-      s = absl::Status(s.code(), LegEndpointError(**mission, i, std::string(s.message())));
-    }
-    return SendGatewayError(res, s);
-  }
-  auto plan = std::make_shared<MissionPlan>();
-  plan->mission = *mission;
-  plan->whole = request.limits();
-  request.clear_limits();
-  auto session = plans_.Start(std::move(request), std::move(plan));
-  if (!session.ok()) return SendGatewayError(res, session.status());
-  const std::string& id = (*session)->id();
-  SendJson(res,
-           Json{{"id", id},
-                {"events", absl::StrCat("/api/plans/", id, "/events")},
-                {"legs", (*mission)->legs.size()}}
-               .dump(),
-           201);
-}
-
-// POST /api/mission/export, body: {"plan": the .plan's text, "request": an
-// EvaluateRiskRequest of the whole mission's waypoints (map, model, wind),
-// "leg_ends": the index of each leg's last waypoint (the final event's
-// mission.leg_ends), "limits": the mission's FlightLimits (optional, kept in
-// the file's "riskplan" section)}. The planned mission as a .plan.
-void Gateway::PostMissionExport(const httplib::Request& req, httplib::Response& res) {
-  absl::StatusOr<Json> body = MissionBody(req.body, {"plan", "request", "leg_ends", "limits"});
-  if (!body.ok()) return SendGatewayError(res, body.status());
-  v1::EvaluateRiskRequest request;
-  v1::FlightLimits limits;
-  if (absl::Status s = MessageField(*body, "request", &request); !s.ok()) {
-    return SendGatewayError(res, s);
-  }
-  if (absl::Status s = MessageField(*body, "limits", &limits); !s.ok()) {
-    return SendGatewayError(res, s);
-  }
-  absl::StatusOr<std::shared_ptr<const WebMission>> mission =
-      ReadMissionOf((*body)["plan"].get<std::string>());
-  if (!mission.ok()) return SendGatewayError(res, mission.status());
-  const WebMission& m = **mission;
-  const int poses = request.waypoints().poses_size();
-  if (request.trajectory_case() != v1::EvaluateRiskRequest::kWaypoints || poses < 2) {
-    return SendGatewayError(res, absl::InvalidArgumentError(
-                                     "request.waypoints: the planned mission's waypoints (at "
-                                     "least 2) are required"));
-  }
-  // The legs' ends: one per leg, increasing, the last the last waypoint.
-  std::vector<int> ends;
-  const Json& leg_ends = body->contains("leg_ends") ? (*body)["leg_ends"] : Json();
-  bool good = leg_ends.is_array() && leg_ends.size() == m.legs.size();
-  for (size_t i = 0; good && i < leg_ends.size(); ++i) {
-    good = leg_ends[i].is_number_integer();
-    if (good) ends.push_back(leg_ends[i].get<int>());
-    good = good && ends.back() > (i == 0 ? 0 : ends[i - 1]) && ends.back() < poses;
-  }
-  if (!good || ends.back() != poses - 1) {
-    return SendGatewayError(
-        res, absl::InvalidArgumentError(absl::StrFormat(
-                 "leg_ends must give the index of each leg's last waypoint: %d increasing "
-                 "integers in (0, %d], the last %d (the mission has %d legs and %d waypoints)",
-                 m.legs.size(), poses - 1, poses - 1, m.legs.size(), poses)));
-  }
-  constexpr double kSpacingM = 25.0;
-  const std::string description = absl::StrFormat(
-      "riskplan-web mission on %s: %d legs", request.map(), m.legs.size());
-  std::vector<geo::ExportTrajectory> paths;
-  for (size_t i = 0; i < ends.size(); ++i) {
-    v1::EvaluateRiskRequest leg = request;
-    const int from = i == 0 ? 0 : ends[i - 1];
-    leg.mutable_waypoints()->mutable_poses()->Clear();
-    for (int k = from; k <= ends[i]; ++k) {
-      *leg.mutable_waypoints()->add_poses() = request.waypoints().poses(k);
-    }
-    leg.set_path_spacing_m(kSpacingM);
-    leg.set_include_samples(false);
-    v1::EvaluateRiskResponse path;
-    const grpc::Status status = client_.EvaluateRisk(leg, &path, options_.rpc_timeout);
-    if (!status.ok()) return SendServerError(res, status);
-    auto t = client::ExportTrajectoryOf(path, request.map(), description, kSpacingM);
-    if (!t.ok()) return SendGatewayError(res, t.status());
-    paths.push_back(*std::move(t));
-  }
-  absl::StatusOr<client::JoinedRoute> joined = client::JoinLegs(paths);
-  if (!joined.ok()) return SendGatewayError(res, joined.status());
-  v1::EvaluateRiskRequest whole = request;
-  whole.set_include_samples(false);
-  whole.set_path_spacing_m(0);
-  v1::EvaluateRiskResponse total;
-  if (const grpc::Status status = client_.EvaluateRisk(whole, &total, options_.rpc_timeout);
-      !status.ok()) {
-    return SendServerError(res, status);
-  }
-  geo::ExportTrajectory& route = joined->route;
-  route.risk = total.risk();
-  route.length_m = total.length_m();
-  route.flight_time_s = total.flight_time_s();
-  route.risk_per_flight_hour = total.risk_per_flight_hour();
-  absl::StatusOr<std::string> text =
-      geo::QgcMissionPlanJson(m.mission, route, joined->leg_end_sample);
-  if (!text.ok()) return SendGatewayError(res, text.status());
-  if (body->contains("limits")) {
-    text = WithMissionLimits(*text, limits);
-    if (!text.ok()) return SendGatewayError(res, text.status());
-  }
-  res.set_header("Content-Disposition",
-                 absl::StrFormat("attachment; filename=\"riskplan-mission-%s.plan\"",
-                                 request.map()));
-  res.set_content(std::move(*text), "application/json");
-}
-
-// ---------------------------------------------------------------------------
-// Flights (docs/web.md, "Flight"): a Fly session the gateway flies itself.
-
-// POST /api/flights, body: {"open": FlightOpen (its plan a PlanRequest with
-// the page's start and goal), "speedup": flight seconds per real second}.
-// 201 {id, events}.
-void Gateway::PostFlight(const httplib::Request& req, httplib::Response& res) {
-  Json body = Json::parse(req.body, nullptr, /*allow_exceptions=*/false);
-  if (!body.is_object()) {
-    return SendGatewayError(res, absl::InvalidArgumentError(
-                                     "the body must be a JSON object with the fields open, "
-                                     "speedup"));
-  }
-  for (auto it = body.begin(); it != body.end(); ++it) {
-    if (it.key() != "open" && it.key() != "speedup") {
-      return SendGatewayError(
-          res, absl::InvalidArgumentError(absl::StrFormat(
-                   "unknown field '%s'; the body has the fields open, speedup", it.key())));
-    }
-  }
-  v1::FlightOpen open;
-  if (!body.contains("open")) {
-    return SendGatewayError(res, absl::InvalidArgumentError(
-                                     "'open' is required: the FlightOpen of the session"));
-  }
-  if (absl::Status s = MessageField(body, "open", &open); !s.ok()) return SendGatewayError(res, s);
-  double speedup = 10.0;
-  if (body.contains("speedup")) {
-    if (!body["speedup"].is_number()) {
-      return SendGatewayError(res, absl::InvalidArgumentError("'speedup' must be a number"));
-    }
-    speedup = body["speedup"].get<double>();
-  }
-  // What the gateway can know of the mission, as for a plan (a start
-  // outside the map, an unknown map, the budget), named as open.plan's.
-  if (absl::Status s = CheckPlan(open.plan()); !s.ok()) {
-    return SendGatewayError(res, absl::Status(s.code(), absl::StrCat("open.plan: ", s.message())));
-  }
-  open.mutable_plan()->set_include_tree(false);
-  auto session = flights_.Start(std::move(open), speedup, client_.channel());
-  if (!session.ok()) return SendGatewayError(res, session.status());
-  const std::string& id = (*session)->id();
-  SendJson(res, Json{{"id", id}, {"events", absl::StrCat("/api/flights/", id, "/events")}}.dump(),
-           201);
-}
-
-std::shared_ptr<FlightSession> Gateway::FindFlight(const httplib::Request& req,
-                                                   httplib::Response& res) {
-  std::shared_ptr<FlightSession> session = flights_.Find(req.matches[1]);
-  if (!session) {
-    SendError(res, 404, "NOT_FOUND",
-              absl::StrCat("no flight '", std::string(req.matches[1]), "' on this gateway"),
-              "gateway");
-  }
-  return session;
-}
-
-void Gateway::GetFlight(const httplib::Request& req, httplib::Response& res) {
-  std::shared_ptr<FlightSession> session = FindFlight(req, res);
-  if (!session) return;
-  SendJson(res, Json{{"id", session->id()},
-                     {"state", session->state()},
-                     {"last_event_id", session->events().last_event_id()}}
-                    .dump());
-}
-
-void Gateway::GetFlightEvents(const httplib::Request& req, httplib::Response& res) {
-  std::shared_ptr<FlightSession> session = FindFlight(req, res);
-  if (!session) return;
-  ServeEvents(std::shared_ptr<EventLog>(session, &session->events()), req, res);
-}
-
-// POST /api/flights/ID/inputs, body: a FlightInput with add_zone,
-// remove_zone or wind. 200 {"sent": true}; the server's answer (a new
-// version, or a refusal) arrives as an event.
-void Gateway::PostFlightInput(const httplib::Request& req, httplib::Response& res) {
-  std::shared_ptr<FlightSession> session = FindFlight(req, res);
-  if (!session) return;
-  v1::FlightInput input;
-  if (absl::Status s = FromJson(req.body, &input); !s.ok()) return SendGatewayError(res, s);
-  if (absl::Status s = session->Input(input); !s.ok()) return SendGatewayError(res, s);
-  SendJson(res, Json{{"sent", true}}.dump());
-}
-
-void Gateway::PostFlightEnd(const httplib::Request& req, httplib::Response& res) {
-  std::shared_ptr<FlightSession> session = FindFlight(req, res);
-  if (!session) return;
-  SendJson(res, Json{{"ended", session->End()}}.dump());
 }
 
 }  // namespace riskplan::web

@@ -265,7 +265,10 @@ absl::Status FlightSession::Input(const v1::FlightInput& input) {
   }
   grpc::Status s = link_->Send(input);
   if (!s.ok()) {
-    return absl::Status(static_cast<absl::StatusCode>(s.error_code()), s.error_message());
+    // The flight's stream is gone (its "failed" event follows).
+    return absl::UnavailableError(absl::StrFormat("the flight's link to the server failed: %s: %s",
+                                                  client::StatusCodeName(s.error_code()),
+                                                  s.error_message()));
   }
   return absl::OkStatus();
 }

@@ -483,6 +483,27 @@ def check_flight(driver):
           js(driver, "document.querySelectorAll('path.flight-remainder').length") == 1,
           "the new version drawn: committed prefix and remainder")
 
+    # A polygon zone by three clicks, off the route (the map's north-west
+    # corner): sent in the map's frame, drawn, and in force in a later version.
+    if not js(driver, "rp.flight.ended"):
+        click(driver, "polygon-zone")
+        triangle = [(150.0, 1750.0), (350.0, 1750.0), (250.0, 1900.0)]
+        for x, y in triangle:
+            click_drag(driver, (y, x), (0, 0))
+        check(js(driver, "document.getElementById('polygon-zone').textContent") ==
+              "Send the polygon (3 vertices)", "three vertices drawn")
+        click(driver, "polygon-zone")
+        wf.wait_for(lambda: js(driver, "rp.flight.zones['zone-2'] !== undefined"), 60,
+                    "the polygon zone to be sent")
+        vertices = js(driver, "rp.flight.zones['zone-2'].vertices")
+        check(len(vertices) == 3 and all(math.dist((v["x"], v["y"]), w) < 5 for v, w in zip(vertices, triangle)) and
+              js(driver, "document.querySelectorAll('path.flight-zone').length") == 2,
+              f"a polygon zone of 3 vertices placed by clicks: {[(round(v['x']), round(v['y'])) for v in vertices]}")
+        wf.wait_for(lambda: js(driver, "rp.flight.versions.some((v) => v.active_zones.includes('zone-2'))")
+                    or js(driver, "rp.flight.ended"), 120, "a version with the polygon zone")
+        check(js(driver, "rp.flight.versions.some((v) => v.active_zones.includes('zone-2'))"),
+              "a later version has the polygon zone in force")
+
     # A zone on the goal: no remainder can reach it; the alert names the
     # emergency landing site.
     if not js(driver, "rp.flight.ended"):

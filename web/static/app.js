@@ -47,6 +47,7 @@ async function init() {
   $('fly').onclick = () => guarded(startFlight);
   $('end-flight').onclick = () => guarded(endFlight);
   $('place-zone').onclick = togglePlacingZone;
+  $('polygon-zone').onclick = () => guarded(togglePolygonZone);
   $('mission-file').onchange = (e) => {
     const file = e.target.files[0];
     e.target.value = '';  // the same file chosen again is a new upload

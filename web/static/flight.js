@@ -13,6 +13,7 @@ rp.flight = null;  // {id, versions: [], alerts: [], refusals: [], position, end
 let flightSource = null;
 let placingZone = false;
 let zoneCounter = 0;
+let polygonZone = null;  // the vertices (LatLngs) of a polygon zone being drawn
 
 const FLIGHT_REASONS = {
   FLIGHT_REASON_OPENED: 'the first plan',
@@ -33,6 +34,8 @@ function setFlightButtons(flying) {
   $('fly').disabled = flying;
   $('end-flight').disabled = !flying;
   $('place-zone').disabled = !flying;
+  $('polygon-zone').disabled = !flying;
+  if (!flying) stopPolygonZone();
 }
 
 function closeFlightSource() { if (flightSource) { flightSource.close(); flightSource = null; } }
@@ -176,6 +179,7 @@ function stopPlacingZone() {
 
 function togglePlacingZone() {
   if (placingZone) { stopPlacingZone(); return; }
+  if (polygonZone) stopPolygonZone();
   placingZone = true;
   $('place-zone').textContent = 'Placing: click on the map';
   $('map').style.cursor = 'crosshair';
@@ -184,29 +188,67 @@ function togglePlacingZone() {
 // The local point of a LatLng (zones are in the map's local frame).
 function localOf(at) { return frame.toLocal ? frame.toLocal(at) : { x: at.lng, y: at.lat }; }
 
-async function addZone(at) {
-  const radius = Number($('zone-radius').value);
-  const c = localOf(at);
-  const id = `zone-${++zoneCounter}`;
-  const zone = { id, circle: { x: c.x, y: c.y, radius_m: radius } };
+// A zone sent, drawn, and removed by a click on it.
+async function sendZone(zone, shape) {
   await api('POST', `/api/flights/${rp.flight.id}/inputs`, { add_zone: zone });
-  rp.flight.zones[id] = zone.circle;
-  const circle = L.circle(at, { radius, color: '#c00', fillColor: '#f00', fillOpacity: 0.25, weight: 2, className: 'flight-zone' })
-    .bindTooltip(`${id}: ${radius} m (click to remove)`).addTo(zoneLayer);
-  circle.on('click', (e) => {
+  rp.flight.zones[zone.id] = zone.circle || zone.polygon;
+  shape.addTo(zoneLayer);
+  shape.on('click', (e) => {
     L.DomEvent.stopPropagation(e);
     guarded(async () => {
-      await api('POST', `/api/flights/${rp.flight.id}/inputs`, { remove_zone: { id } });
-      delete rp.flight.zones[id];
-      zoneLayer.removeLayer(circle);
+      await api('POST', `/api/flights/${rp.flight.id}/inputs`, { remove_zone: { id: zone.id } });
+      delete rp.flight.zones[zone.id];
+      zoneLayer.removeLayer(shape);
     });
   });
 }
 
+async function addZone(at) {
+  const radius = Number($('zone-radius').value);
+  const c = localOf(at);
+  const id = `zone-${++zoneCounter}`;
+  await sendZone({ id, circle: { x: c.x, y: c.y, radius_m: radius } },
+    L.circle(at, { radius, color: '#c00', fillColor: '#f00', fillOpacity: 0.25, weight: 2, className: 'flight-zone' })
+      .bindTooltip(`${id}: ${radius} m (click to remove)`));
+}
+
 function placeZoneAt(e) {
+  if (polygonZone && rp.flight && !rp.flight.ended) {
+    polygonZone.push(e.latlng);
+    polygonPreview.setLatLngs(polygonZone);
+    if (!zoneLayer.hasLayer(polygonPreview)) polygonPreview.addTo(zoneLayer);
+    $('polygon-zone').textContent = `Send the polygon (${polygonZone.length} vertices)`;
+    return;
+  }
   if (!placingZone || !rp.flight || rp.flight.ended) return;
   stopPlacingZone();
   guarded(() => addZone(e.latlng));
+}
+
+// A polygon zone: the button starts it, clicks on the map add its vertices
+// (in either order, not closed), the button again sends it.
+const polygonPreview = L.polygon([], { color: '#c00', dashArray: '4 4', fillOpacity: 0.1, weight: 1 });
+function stopPolygonZone() {
+  polygonZone = null;
+  if (zoneLayer && zoneLayer.hasLayer(polygonPreview)) zoneLayer.removeLayer(polygonPreview);
+  $('polygon-zone').textContent = 'Draw a polygon zone';
+  if (!placingZone) $('map').style.cursor = '';
+}
+async function togglePolygonZone() {
+  if (!polygonZone) {
+    stopPlacingZone();
+    polygonZone = [];
+    $('polygon-zone').textContent = 'Send the polygon (0 vertices)';
+    $('map').style.cursor = 'crosshair';
+    return;
+  }
+  const vertices = polygonZone;
+  stopPolygonZone();
+  if (vertices.length < 3) throw new ApiError('INVALID_ARGUMENT', `a polygon zone needs at least 3 vertices; ${vertices.length} given`, 'page');
+  const id = `zone-${++zoneCounter}`;
+  await sendZone({ id, polygon: { vertices: vertices.map((at) => localOf(at)) } },
+    L.polygon(vertices, { color: '#c00', fillColor: '#f00', fillOpacity: 0.25, weight: 2, className: 'flight-zone' })
+      .bindTooltip(`${id}: a polygon of ${vertices.length} vertices (click to remove)`));
 }
 
 // For scripts: a zone placed at a local point exactly, as a click there would.

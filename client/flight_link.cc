@@ -45,6 +45,7 @@ grpc::Status FlightLink::OpenStream(const v1::FlightOpen& open) {
   {
     absl::MutexLock lock(&state_mu_);
     broken_ = false;
+    ended_status_.reset();
   }
   Stream* raw = stream.get();
   stream->reader = std::thread([this, raw, number] { ReadLoop(raw, number); });
@@ -65,6 +66,7 @@ void FlightLink::ReadLoop(Stream* stream, int number) {
   absl::MutexLock lock(&state_mu_);
   stream->done = true;
   broken_ = true;
+  ended_status_ = stream->status;
 }
 
 grpc::Status FlightLink::CloseStream() {
@@ -192,6 +194,11 @@ void FlightLink::Break() {
 std::optional<v1::FlightPlanVersion> FlightLink::latest() const {
   absl::MutexLock lock(&state_mu_);
   return latest_;
+}
+
+std::optional<grpc::Status> FlightLink::ended_status() const {
+  absl::MutexLock lock(&state_mu_);
+  return ended_status_;
 }
 
 int FlightLink::streams() const {

@@ -54,6 +54,10 @@ class FlightLink {
   // Breaks the stream as a failing link would (tests, scripted flights).
   void Break();
 
+  // The status the current stream ended with, once its reader saw it end
+  // (a refused opening: the server's INVALID_ARGUMENT naming the field);
+  // nullopt while the stream is open.
+  std::optional<grpc::Status> ended_status() const;
   // The latest plan version received (on any stream), if any.
   std::optional<v1::FlightPlanVersion> latest() const;
   int streams() const;
@@ -97,6 +101,7 @@ class FlightLink {
   mutable absl::Mutex state_mu_;
   std::optional<v1::FlightPlanVersion> latest_ ABSL_GUARDED_BY(state_mu_);
   bool broken_ ABSL_GUARDED_BY(state_mu_) = false;
+  std::optional<grpc::Status> ended_status_ ABSL_GUARDED_BY(state_mu_);
 };
 
 }  // namespace riskplan::client

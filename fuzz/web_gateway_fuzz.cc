@@ -157,6 +157,7 @@ web::GatewayOptions FuzzGatewayOptions() {
   options.plans.max_kept = 4;
   options.plans.events.max_events = 64;
   options.plans.events.max_bytes = size_t{1} << 20;
+  options.flights.max_running = 1;  // a flight read from its start runs to its end
   options.max_body_bytes = size_t{64} << 10;
   options.rpc_timeout = absl::Seconds(20);
   return options;
@@ -228,7 +229,7 @@ void CheckJson(const Response& r) {
 
 // The SSE framing of an event stream (the WHATWG HTML standard's
 // text/event-stream), as a browser's EventSource reads it; the number of
-// terminal events ("final", "cancelled", "failed") it held.
+// terminal events ("final", "cancelled", "failed"; a flight's "ended") it held.
 int CheckEventStream(const std::string& body) {
   uint64_t last_id = 0;
   bool any_id = false;
@@ -244,7 +245,9 @@ int CheckEventStream(const std::string& body) {
         }
         Json json = Json::parse(data, nullptr, /*allow_exceptions=*/false);
         if (!json.is_object()) Fail("an event whose data is not a JSON object");
-        if (type == "final" || type == "cancelled" || type == "failed") ++terminal;
+        if (type == "final" || type == "cancelled" || type == "failed" || type == "ended") {
+          ++terminal;
+        }
         if (type == "failed") {
           const std::string code = json.value("code", "");
           if (code.empty() || code == "INTERNAL" || code == "UNKNOWN") {

@@ -24,10 +24,14 @@
 #include "geo/export/kml.h"
 #include "geo/export/qgc_plan.h"
 #include "nlohmann/json.hpp"
+#include "web/gateway_internal.h"
 #include "web/proto_json.h"
 #include "web/sse.h"
 
 namespace riskplan::web {
+
+using namespace gateway_internal;  // NOLINT: the route files' shared helpers
+
 namespace {
 
 using Json = nlohmann::json;
@@ -66,6 +70,113 @@ std::string Gzip(const std::string& text) {
   deflateEnd(&z);
   return result == Z_STREAM_END ? out : "";
 }
+
+// A route that is one unary RPC: the body is the request's JSON form, the
+// answer the response's.
+template <typename RpcRequest, typename RpcResponse, typename Call>
+void ForwardUnary(const httplib::Request& req, httplib::Response& res, Call call) {
+  RpcRequest request;
+  if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
+  RpcResponse response;
+  const grpc::Status status = call(request, &response);
+  if (!status.ok()) return SendServerError(res, status);
+  SendJsonTo(req, res, ToJson(response));
+}
+
+// The file of an export in `format` (geojson, plan or kml; checked by the
+// caller) and its content type.
+absl::StatusOr<std::string> ExportText(const std::string& format,
+                                       const geo::ExportTrajectory& trajectory,
+                                       std::string* content_type) {
+  if (format == "geojson") {
+    *content_type = "application/geo+json";
+    return geo::TrajectoryGeoJson(trajectory);
+  }
+  if (format == "plan") {
+    *content_type = "application/json";
+    return geo::QgcPlanJson(trajectory);
+  }
+  *content_type = "application/vnd.google-earth.kml+xml";
+  return geo::TrajectoryKml(trajectory);
+}
+
+// "HOST:PORT", "[V6]:PORT".
+absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& address) {
+  const size_t colon = address.rfind(':');
+  int port = -1;
+  if (colon == std::string::npos || colon == 0 ||
+      !absl::SimpleAtoi(address.substr(colon + 1), &port) || port < 0 || port > 65535) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--listen has value '%s'; it must be HOST:PORT, port in [0, 65535]", address));
+  }
+  std::string host = address.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+    host = host.substr(1, host.size() - 2);
+  }
+  return std::make_pair(host, port);
+}
+
+// A map's fingerprint: its name and a hash of its MapInfo (a map replaced
+// on the server under the same name has another).
+std::string Fingerprint(const v1::MapInfo& info) {
+  return absl::StrCat(info.name(), "#", std::hash<std::string>{}(info.SerializeAsString()));
+}
+
+
+// Whether (lon, lat) lies inside the convex quadrilateral of `corners`
+// (south-west, south-east, north-east, north-west), on or off its edges.
+bool InsideCorners(const v1::GeoBounds& bounds, double lat, double lon) {
+  if (bounds.corners_size() != 4) return true;  // nothing to check against
+  int sign = 0;
+  for (int k = 0; k < 4; ++k) {
+    const v1::GeoPoint2& a = bounds.corners(k);
+    const v1::GeoPoint2& b = bounds.corners((k + 1) % 4);
+    const double cross = (b.lon_deg() - a.lon_deg()) * (lat - a.lat_deg()) -
+                         (b.lat_deg() - a.lat_deg()) * (lon - a.lon_deg());
+    const int s = cross > 0 ? 1 : (cross < 0 ? -1 : 0);
+    if (s != 0) {
+      if (sign != 0 && s != sign) return false;
+      sign = s;
+    }
+  }
+  return true;
+}
+
+// Start or goal of `request` against `map`'s area; `which` is "start" or
+// "goal".
+absl::Status CheckEndpoint(const v1::MapInfo& map, const char* which, const v1::Pose* local,
+                           const v1::GeoPose* wgs84) {
+  if (local != nullptr) {
+    const double x0 = map.x0_m(), x1 = map.x0_m() + map.width_m();
+    const double y0 = map.y0_m(), y1 = map.y0_m() + map.height_m();
+    if (!(local->x() >= x0 && local->x() <= x1 && local->y() >= y0 && local->y() <= y1)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s (x, y) = (%.1f, %.1f) m is outside map '%s' (x %.1f .. %.1f m, y %.1f .. %.1f m)",
+          which, local->x(), local->y(), map.name(), x0, x1, y0, y1));
+    }
+  } else if (wgs84 != nullptr && map.has_bounds_wgs84()) {
+    if (!std::isfinite(wgs84->lat_deg()) || !std::isfinite(wgs84->lon_deg()) ||
+        !InsideCorners(map.bounds_wgs84(), wgs84->lat_deg(), wgs84->lon_deg())) {
+      const v1::GeoBounds& b = map.bounds_wgs84();
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s_wgs84 (lat, lon) = (%.6f, %.6f) deg is outside map '%s' (lat %.6f .. %.6f, lon "
+          "%.6f .. %.6f deg)",
+          which, wgs84->lat_deg(), wgs84->lon_deg(), map.name(), b.min_lat_deg(),
+          b.max_lat_deg(), b.min_lon_deg(), b.max_lon_deg()));
+    }
+  }
+  return absl::OkStatus();
+}
+
+// The page's files and the libraries' directories must exist.
+bool IsDirectory(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+}  // namespace
+
+namespace gateway_internal {
 
 // What the page sees of a failed request: the code, the message exactly as
 // its author wrote it, and who wrote it ("server" or "gateway").
@@ -128,7 +239,7 @@ void SendGatewayError(httplib::Response& res, const absl::Status& status) {
             std::string(status.message()), "gateway");
 }
 
-void SendJson(httplib::Response& res, std::string json, int http_status = 200) {
+void SendJson(httplib::Response& res, std::string json, int http_status) {
   res.status = http_status;
   res.set_header("Cache-Control", "no-store");
   res.set_content(std::move(json), "application/json");
@@ -137,7 +248,7 @@ void SendJson(httplib::Response& res, std::string json, int http_status = 200) {
 // The same, gzipped (`gzip`, or made here when empty) when the browser
 // takes gzip and the answer is worth it.
 void SendJsonTo(const httplib::Request& req, httplib::Response& res, std::string json,
-                std::string gzip = "") {
+                std::string gzip) {
   if (json.size() >= kMinGzipBytes && AcceptsGzip(req)) {
     if (gzip.empty()) gzip = Gzip(json);
     if (!gzip.empty()) {
@@ -152,57 +263,6 @@ void SendJsonTo(const httplib::Request& req, httplib::Response& res, std::string
   SendJson(res, std::move(json));
 }
 
-// A route that is one unary RPC: the body is the request's JSON form, the
-// answer the response's.
-template <typename RpcRequest, typename RpcResponse, typename Call>
-void ForwardUnary(const httplib::Request& req, httplib::Response& res, Call call) {
-  RpcRequest request;
-  if (absl::Status s = FromJson(req.body, &request); !s.ok()) return SendGatewayError(res, s);
-  RpcResponse response;
-  const grpc::Status status = call(request, &response);
-  if (!status.ok()) return SendServerError(res, status);
-  SendJsonTo(req, res, ToJson(response));
-}
-
-// The file of an export in `format` (geojson, plan or kml; checked by the
-// caller) and its content type.
-absl::StatusOr<std::string> ExportText(const std::string& format,
-                                       const geo::ExportTrajectory& trajectory,
-                                       std::string* content_type) {
-  if (format == "geojson") {
-    *content_type = "application/geo+json";
-    return geo::TrajectoryGeoJson(trajectory);
-  }
-  if (format == "plan") {
-    *content_type = "application/json";
-    return geo::QgcPlanJson(trajectory);
-  }
-  *content_type = "application/vnd.google-earth.kml+xml";
-  return geo::TrajectoryKml(trajectory);
-}
-
-// "HOST:PORT", "[V6]:PORT".
-absl::StatusOr<std::pair<std::string, int>> SplitHostPort(const std::string& address) {
-  const size_t colon = address.rfind(':');
-  int port = -1;
-  if (colon == std::string::npos || colon == 0 ||
-      !absl::SimpleAtoi(address.substr(colon + 1), &port) || port < 0 || port > 65535) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "--listen has value '%s'; it must be HOST:PORT, port in [0, 65535]", address));
-  }
-  std::string host = address.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
-    host = host.substr(1, host.size() - 2);
-  }
-  return std::make_pair(host, port);
-}
-
-// A map's fingerprint: its name and a hash of its MapInfo (a map replaced
-// on the server under the same name has another).
-std::string Fingerprint(const v1::MapInfo& info) {
-  return absl::StrCat(info.name(), "#", std::hash<std::string>{}(info.SerializeAsString()));
-}
-
 const v1::MapInfo* FindMap(const v1::ListMapsResponse& maps, const std::string& name) {
   for (const v1::MapInfo& m : maps.maps()) {
     if (m.name() == name) return &m;
@@ -210,58 +270,19 @@ const v1::MapInfo* FindMap(const v1::ListMapsResponse& maps, const std::string& 
   return nullptr;
 }
 
-// Whether (lon, lat) lies inside the convex quadrilateral of `corners`
-// (south-west, south-east, north-east, north-west), on or off its edges.
-bool InsideCorners(const v1::GeoBounds& bounds, double lat, double lon) {
-  if (bounds.corners_size() != 4) return true;  // nothing to check against
-  int sign = 0;
-  for (int k = 0; k < 4; ++k) {
-    const v1::GeoPoint2& a = bounds.corners(k);
-    const v1::GeoPoint2& b = bounds.corners((k + 1) % 4);
-    const double cross = (b.lon_deg() - a.lon_deg()) * (lat - a.lat_deg()) -
-                         (b.lat_deg() - a.lat_deg()) * (lon - a.lon_deg());
-    const int s = cross > 0 ? 1 : (cross < 0 ? -1 : 0);
-    if (s != 0) {
-      if (sign != 0 && s != sign) return false;
-      sign = s;
-    }
+absl::Status JsonMessageField(const nlohmann::json& root, const char* key,
+                              google::protobuf::Message* message) {
+  if (!root.contains(key)) return absl::OkStatus();
+  if (!root[key].is_object()) {
+    return absl::InvalidArgumentError(absl::StrFormat("'%s' must be a JSON object", key));
   }
-  return true;
-}
-
-// Start or goal of `request` against `map`'s area; `which` is "start" or
-// "goal".
-absl::Status CheckEndpoint(const v1::MapInfo& map, const char* which, const v1::Pose* local,
-                           const v1::GeoPose* wgs84) {
-  if (local != nullptr) {
-    const double x0 = map.x0_m(), x1 = map.x0_m() + map.width_m();
-    const double y0 = map.y0_m(), y1 = map.y0_m() + map.height_m();
-    if (!(local->x() >= x0 && local->x() <= x1 && local->y() >= y0 && local->y() <= y1)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s (x, y) = (%.1f, %.1f) m is outside map '%s' (x %.1f .. %.1f m, y %.1f .. %.1f m)",
-          which, local->x(), local->y(), map.name(), x0, x1, y0, y1));
-    }
-  } else if (wgs84 != nullptr && map.has_bounds_wgs84()) {
-    if (!std::isfinite(wgs84->lat_deg()) || !std::isfinite(wgs84->lon_deg()) ||
-        !InsideCorners(map.bounds_wgs84(), wgs84->lat_deg(), wgs84->lon_deg())) {
-      const v1::GeoBounds& b = map.bounds_wgs84();
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s_wgs84 (lat, lon) = (%.6f, %.6f) deg is outside map '%s' (lat %.6f .. %.6f, lon "
-          "%.6f .. %.6f deg)",
-          which, wgs84->lat_deg(), wgs84->lon_deg(), map.name(), b.min_lat_deg(),
-          b.max_lat_deg(), b.min_lon_deg(), b.max_lon_deg()));
-    }
+  if (absl::Status s = FromJson(root[key].dump(), message); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrFormat("'%s': %s", key, s.message()));
   }
   return absl::OkStatus();
 }
 
-// The page's files and the libraries' directories must exist.
-bool IsDirectory(const std::string& path) {
-  struct stat st;
-  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-}  // namespace
+}  // namespace gateway_internal
 
 absl::Status CheckGatewayOptions(const GatewayOptions& o) {
   if (auto hp = SplitHostPort(o.listen); !hp.ok()) return hp.status();
@@ -269,6 +290,16 @@ absl::Status CheckGatewayOptions(const GatewayOptions& o) {
   if (o.max_viewers < 1 || o.max_viewers > 4096) {
     return absl::InvalidArgumentError(
         absl::StrFormat("--max_viewers has value %d; it must be in [1, 4096]", o.max_viewers));
+  }
+  if (o.flights.max_running < 0 || o.flights.max_running > 64) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--max_flights has value %d; it must be in [0, 64] (0: no flights)",
+        o.flights.max_running));
+  }
+  if (o.flights.max_zones < 1 || o.flights.max_zones > 64) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--max_flight_zones has value %d; it must be in [1, 64] (the server's default bound)",
+        o.flights.max_zones));
   }
   if (o.request_threads < 2 || o.request_threads > 1024) {
     return absl::InvalidArgumentError(absl::StrFormat(
@@ -319,6 +350,7 @@ Gateway::Gateway(GatewayOptions options, std::shared_ptr<grpc::Channel> channel,
     : options_(std::move(options)),
       client_(std::move(channel)),
       plans_(&client_.stub(), options_.plans),
+      flights_(options_.flights),
       http_(std::move(http)) {
   // One thread per connection for as long as it lives: event streams hold
   // theirs, so the pool is sized for every viewer plus the other requests.
@@ -386,6 +418,7 @@ void Gateway::Stop() {
   // Ends the event streams (their waits wake up) and the plans, then the
   // HTTP server, which joins its threads once their streams returned.
   plans_.StopAll();
+  flights_.StopAll();
   http_->stop();
 }
 
@@ -406,6 +439,15 @@ void Gateway::Routes() {
       std::string value = it->second;
       headers.erase("Accept-Encoding");
       headers.emplace(kAcceptEncodingSeen, std::move(value));
+    }
+    // No route reads form fields, and cpp-httplib refuses a form body over
+    // 8 KiB with a bare 413 (curl's --data-binary sends a .plan as a form):
+    // a body is read as the text it is, bounded by max_body_bytes only.
+    const auto type = headers.find("Content-Type");
+    if (type != headers.end() &&
+        absl::StartsWith(type->second, "application/x-www-form-urlencoded")) {
+      headers.erase(type);
+      headers.emplace("Content-Type", "text/plain");
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });
@@ -453,6 +495,14 @@ void Gateway::Routes() {
   http_->Post(R"(/api/plans/([0-9a-f-]+)/cancel)", route(&Gateway::PostPlanCancel));
   http_->Get(R"(/api/plans/([0-9a-f-]+)/events)", route(&Gateway::GetPlanEvents));
   http_->Get("/favicon.ico", route(&Gateway::GetFavicon));
+  http_->Post("/api/mission/parse", route(&Gateway::PostMissionParse));
+  http_->Post("/api/mission/plans", route(&Gateway::PostMissionPlan));
+  http_->Post("/api/mission/export", route(&Gateway::PostMissionExport));
+  http_->Post("/api/flights", route(&Gateway::PostFlight));
+  http_->Get(R"(/api/flights/([0-9a-f-]+))", route(&Gateway::GetFlight));
+  http_->Get(R"(/api/flights/([0-9a-f-]+)/events)", route(&Gateway::GetFlightEvents));
+  http_->Post(R"(/api/flights/([0-9a-f-]+)/inputs)", route(&Gateway::PostFlightInput));
+  http_->Post(R"(/api/flights/([0-9a-f-]+)/end)", route(&Gateway::PostFlightEnd));
 }
 
 // Browsers ask for /favicon.ico whatever the page links; the page's own
@@ -561,6 +611,8 @@ void Gateway::GetStatus(const httplib::Request&, httplib::Response& res) {
                      {"viewers", viewers_.load()},
                      {"max_viewers", options_.max_viewers},
                      {"running_plans", plans_.running()},
+                     {"flights", flights_.running()},
+                     {"max_flights", options_.flights.max_running},
                      {"max_running_plans", options_.plans.max_running}}
                     .dump());
 }
@@ -756,6 +808,12 @@ void Gateway::PostPlanCancel(const httplib::Request& req, httplib::Response& res
 void Gateway::GetPlanEvents(const httplib::Request& req, httplib::Response& res) {
   std::shared_ptr<PlanSession> session = FindPlan(req, res);
   if (!session) return;
+  // The log lives as long as the stream holds it, and its session with it.
+  ServeEvents(std::shared_ptr<EventLog>(session, &session->events()), req, res);
+}
+
+void Gateway::ServeEvents(std::shared_ptr<EventLog> log, const httplib::Request& req,
+                          httplib::Response& res) {
   std::string last = req.get_header_value("Last-Event-ID");
   if (last.empty()) last = req.get_param_value("last_event_id");
   const std::optional<uint64_t> after = ParseLastEventId(last);
@@ -768,12 +826,12 @@ void Gateway::GetPlanEvents(const httplib::Request& req, httplib::Response& res)
   }
   // A browser reconnects on its own whenever a stream ends; 204 is how
   // the standard tells it that there is nothing more, ever.
-  if (session->ended() && *after >= session->last_event_id()) {
+  if (log->ended() && *after >= log->last_event_id()) {
     res.status = 204;
     return;
   }
   if (!AdmitViewer(res)) return;
-  StreamEvents(std::move(session), *after, res);
+  StreamEvents(std::move(log), *after, res);
 }
 
 bool Gateway::AdmitViewer(httplib::Response& res) {
@@ -793,10 +851,10 @@ bool Gateway::AdmitViewer(httplib::Response& res) {
   return true;
 }
 
-void Gateway::StreamEvents(std::shared_ptr<PlanSession> session, uint64_t after,
+void Gateway::StreamEvents(std::shared_ptr<EventLog> session, uint64_t after,
                            httplib::Response& res) {
   struct Viewer {
-    std::shared_ptr<PlanSession> session;
+    std::shared_ptr<EventLog> session;
     uint64_t after = 0;
     bool started = false;
   };

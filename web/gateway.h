@@ -29,6 +29,8 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "client/client.h"
+#include "web/event_log.h"
+#include "web/flight_session.h"
 #include "web/plan_session.h"
 #include "web/server_link.h"
 
@@ -52,6 +54,7 @@ struct GatewayOptions {
   absl::Duration heartbeat = absl::Seconds(5);  // comment on an idle event stream
   int retry_ms = 1000;                          // the browsers' reconnection delay
   PlanRegistryLimits plans;
+  FlightGatewayLimits flights;  // --max_flights, --max_flight_zones
   size_t max_body_bytes = size_t{4} << 20;
   absl::Duration rpc_timeout = absl::Seconds(60);  // unary calls' deadline
   // A plan's time budget above this is refused with 400 before the plan
@@ -106,6 +109,18 @@ class Gateway {
   void PostPlanCancel(const httplib::Request& req, httplib::Response& res);
   void GetPlanEvents(const httplib::Request& req, httplib::Response& res);
   void GetFavicon(const httplib::Request& req, httplib::Response& res);
+  // QGroundControl missions (docs/web.md, "Missions"): a .plan read for the
+  // page, planned leg by leg, and written back with its route.
+  void PostMissionParse(const httplib::Request& req, httplib::Response& res);
+  void PostMissionPlan(const httplib::Request& req, httplib::Response& res);
+  void PostMissionExport(const httplib::Request& req, httplib::Response& res);
+  // Flights (docs/web.md, "Flight"): a Fly session with a simulated aircraft.
+  void PostFlight(const httplib::Request& req, httplib::Response& res);
+  void GetFlight(const httplib::Request& req, httplib::Response& res);
+  void GetFlightEvents(const httplib::Request& req, httplib::Response& res);
+  void PostFlightInput(const httplib::Request& req, httplib::Response& res);
+  void PostFlightEnd(const httplib::Request& req, httplib::Response& res);
+  std::shared_ptr<FlightSession> FindFlight(const httplib::Request& req, httplib::Response& res);
 
   // The server's maps (ListMaps), kept from the last call: each map's
   // fingerprint (its MapInfo's bytes) keys the layer cache, and its bounds
@@ -116,6 +131,9 @@ class Gateway {
   // "Refused before the plan starts"): InvalidArgument or NotFound naming
   // the field.
   absl::Status CheckPlan(const v1::PlanRequest& request);
+  // FailedPrecondition when the map `name` has no geo-reference (a mission
+  // is in WGS84); an unknown map is CheckPlan's to name.
+  absl::Status CheckMissionMap(const std::string& name);
 
   // A map layer as JSON and gzip (level 1), made once per map, layer and
   // side and kept (kMaxCachedLayers, the least recently used dropped).
@@ -142,12 +160,17 @@ class Gateway {
   // Counts one more open event stream; false, with the 503 sent, when
   // max_viewers are open already.
   bool AdmitViewer(httplib::Response& res);
-  // Streams `session`'s events after `after` as Server-Sent Events.
-  void StreamEvents(std::shared_ptr<PlanSession> session, uint64_t after, httplib::Response& res);
+  // A session's event stream: Last-Event-ID (or ?last_event_id=) read, 204
+  // when nothing more will come, the viewer admitted, then StreamEvents.
+  void ServeEvents(std::shared_ptr<EventLog> log, const httplib::Request& req,
+                   httplib::Response& res);
+  // Streams `log`'s events after `after` as Server-Sent Events.
+  void StreamEvents(std::shared_ptr<EventLog> log, uint64_t after, httplib::Response& res);
 
   const GatewayOptions options_;
   client::RiskplanClient client_;
   PlanRegistry plans_;
+  FlightRegistry flights_;
   std::unique_ptr<httplib::Server> http_;
   // The listening socket (set by cpp-httplib's socket-options callback).
   int listen_socket_ = -1;

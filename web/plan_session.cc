@@ -29,12 +29,50 @@ const char* PlanStateName(PlanState state) {
   return "unknown";
 }
 
-PlanSession::PlanSession(std::string id, v1::PlanRequest request, PlanEventLimits limits)
-    : id_(std::move(id)), request_(std::move(request)), limits_(limits) {}
+PlanSession::PlanSession(std::string id, v1::PlanRequest request, PlanEventLimits limits,
+                         std::shared_ptr<const MissionPlan> mission)
+    : id_(std::move(id)),
+      request_(std::move(request)),
+      mission_(std::move(mission)),
+      events_(limits) {}
 
 PlanSession::~PlanSession() {
-  context_.TryCancel();
+  {
+    absl::MutexLock lock(&mu_);
+    stopped_ = true;
+    if (call_) call_->TryCancel();
+  }
   if (thread_.joinable()) thread_.join();
+}
+
+std::shared_ptr<grpc::ClientContext> PlanSession::NewCall() {
+  absl::MutexLock lock(&mu_);
+  if (cancel_requested_ || stopped_) return nullptr;
+  call_ = std::make_shared<grpc::ClientContext>();
+  return call_;
+}
+
+void PlanSession::EndBeforeCall() {
+  if (EndIfCancelled(grpc::Status(grpc::StatusCode::CANCELLED, ""))) return;
+  Append("failed",
+         nlohmann::json{{"code", "CANCELLED"}, {"message", "the gateway is shutting down"}}.dump(),
+         PlanState::kFailed);
+}
+
+bool PlanSession::EndIfCancelled(const grpc::Status& status) {
+  bool cancelled;
+  {
+    absl::MutexLock lock(&mu_);
+    cancelled = cancel_requested_;
+  }
+  if (!cancelled || (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED)) {
+    return false;
+  }
+  Append(
+      "cancelled",
+      nlohmann::json{{"message", "cancelled from the page; the server stopped the plan"}}.dump(),
+      PlanState::kCancelled);
+  return true;
 }
 
 void PlanSession::Start(v1::Planner::Stub* stub) {
@@ -44,6 +82,8 @@ void PlanSession::Start(v1::Planner::Stub* stub) {
 namespace {
 
 double Round(double v, double unit) { return std::round(v / unit) * unit; }
+
+}  // namespace
 
 // The display path is for drawing ("not for evaluation", says the API): to
 // the centimetre and the ten-thousandth of a radian (1e-7 degrees in WGS84,
@@ -65,11 +105,12 @@ void RoundDisplayPath(v1::Trajectory* t) {
   }
 }
 
-}  // namespace
-
 void PlanSession::Run(v1::Planner::Stub* stub) {
+  if (mission_ != nullptr) return RunMission(stub);
+  std::shared_ptr<grpc::ClientContext> context = NewCall();
+  if (context == nullptr) return EndBeforeCall();
   std::unique_ptr<grpc::ClientReader<v1::PlanUpdate>> reader =
-      stub->PlanTrajectory(&context_, request_);
+      stub->PlanTrajectory(context.get(), request_);
   v1::PlanUpdate update;
   bool got_final = false;
   while (reader->Read(&update)) {
@@ -88,18 +129,7 @@ void PlanSession::Run(v1::Planner::Stub* stub) {
   }
   const grpc::Status status = reader->Finish();
   if (got_final && status.ok()) return;
-  bool cancelled;
-  {
-    absl::MutexLock lock(&mu_);
-    cancelled = cancel_requested_;
-  }
-  if (cancelled && status.error_code() == grpc::StatusCode::CANCELLED) {
-    Append(
-        "cancelled",
-        nlohmann::json{{"message", "cancelled from the page; the server stopped the plan"}}.dump(),
-        PlanState::kCancelled);
-    return;
-  }
+  if (!status.ok() && EndIfCancelled(status)) return;
   // The server's own words, untouched: the page shows them as they are.
   Append("failed",
          nlohmann::json{{"code", client::StatusCodeName(status.error_code())},
@@ -109,28 +139,19 @@ void PlanSession::Run(v1::Planner::Stub* stub) {
 }
 
 void PlanSession::Append(const std::string& type, std::string data, PlanState end_state) {
+  // The state changes before the event is seen: a viewer woken by the
+  // terminal event reads the session ended.
   absl::MutexLock lock(&mu_);
   if (state_ != PlanState::kRunning) return;  // nothing after the terminal event
-  PlanEvent event{++last_id_, type, std::make_shared<const std::string>(std::move(data))};
-  bytes_ += event.data->size();
-  events_.push_back(std::move(event));
   state_ = end_state;
-  // Drop the oldest events beyond the bounds; never the newest (the best
-  // trajectory, or the terminal event).
-  while (events_.size() > 1 &&
-         (events_.size() > limits_.max_events || bytes_ > limits_.max_bytes)) {
-    bytes_ -= events_.front().data->size();
-    events_.pop_front();
-  }
+  events_.Append(type, std::move(data), end_state != PlanState::kRunning);
 }
 
 bool PlanSession::Cancel() {
-  {
-    absl::MutexLock lock(&mu_);
-    if (state_ != PlanState::kRunning) return false;
-    cancel_requested_ = true;
-  }
-  context_.TryCancel();
+  absl::MutexLock lock(&mu_);
+  if (state_ != PlanState::kRunning) return false;
+  cancel_requested_ = true;
+  if (call_) call_->TryCancel();
   return true;
 }
 
@@ -138,30 +159,9 @@ void PlanSession::Stop() {
   {
     absl::MutexLock lock(&mu_);
     stopped_ = true;
+    if (call_) call_->TryCancel();
   }
-  context_.TryCancel();
-}
-
-bool PlanSession::WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
-                                size_t max_bytes) {
-  absl::MutexLock lock(&mu_);
-  auto ready = [this, after_id]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-    return last_id_ > after_id || state_ != PlanState::kRunning || stopped_;
-  };
-  mu_.AwaitWithDeadline(absl::Condition(&ready), deadline);
-  if (stopped_) return true;
-  size_t bytes = 0;
-  bool all = true;
-  for (const PlanEvent& e : events_) {
-    if (e.id <= after_id) continue;
-    if (bytes >= max_bytes) {
-      all = false;
-      break;
-    }
-    out->push_back(e);
-    bytes += e.data->size();
-  }
-  return all && state_ != PlanState::kRunning;
+  events_.Stop();
 }
 
 PlanState PlanSession::state() const {
@@ -171,16 +171,9 @@ PlanState PlanSession::state() const {
 
 bool PlanSession::ended() const { return state() != PlanState::kRunning; }
 
-uint64_t PlanSession::last_event_id() const {
-  absl::MutexLock lock(&mu_);
-  return last_id_;
-}
+uint64_t PlanSession::last_event_id() const { return events_.last_event_id(); }
 
-std::pair<uint64_t, uint64_t> PlanSession::kept_range() const {
-  absl::MutexLock lock(&mu_);
-  if (events_.empty()) return {0, 0};
-  return {events_.front().id, events_.back().id};
-}
+std::pair<uint64_t, uint64_t> PlanSession::kept_range() const { return events_.kept_range(); }
 
 PlanRegistry::PlanRegistry(v1::Planner::Stub* stub, PlanRegistryLimits limits)
     : stub_(stub), limits_(limits) {}
@@ -194,7 +187,8 @@ std::string PlanRegistry::NewId() {
   return absl::StrFormat("%x-%016x", ++counter_, generator());
 }
 
-absl::StatusOr<std::shared_ptr<PlanSession>> PlanRegistry::Start(v1::PlanRequest request) {
+absl::StatusOr<std::shared_ptr<PlanSession>> PlanRegistry::Start(
+    v1::PlanRequest request, std::shared_ptr<const MissionPlan> mission) {
   std::shared_ptr<PlanSession> session;
   std::vector<std::shared_ptr<PlanSession>> dropped;  // destroyed outside the lock
   {
@@ -218,7 +212,8 @@ absl::StatusOr<std::shared_ptr<PlanSession>> PlanRegistry::Start(v1::PlanRequest
         ++it;
       }
     }
-    session = std::make_shared<PlanSession>(NewId(), std::move(request), limits_.events);
+    session = std::make_shared<PlanSession>(NewId(), std::move(request), limits_.events,
+                                            std::move(mission));
     sessions_.push_back(session);
   }
   session->Start(stub_);

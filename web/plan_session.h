@@ -25,10 +25,12 @@
 #include "absl/time/time.h"
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.grpc.pb.h"
+#include "web/event_log.h"
+#include "web/mission_file.h"
 
 namespace riskplan::web {
 
-// One event of a plan, as sent to viewers. The types:
+// The events of a plan (EventLog), as sent to viewers. The types:
 //   "update"    an improvement: {"gateway_ms": T, "update": PlanUpdate}
 //   "final"     the final PlanUpdate, same form; the stream ends after it
 //   "failed"    the call failed: {"code": "INVALID_ARGUMENT", "message":
@@ -41,30 +43,39 @@ namespace riskplan::web {
 // field names (docs/api.md; 64-bit integers are JSON strings), its display
 // path (Trajectory.path, path_wgs84: for drawing only) rounded to the
 // centimetre, which halves an event; the waypoints keep every digit.
-struct PlanEvent {
-  uint64_t id = 0;  // 1, 2, 3, ... within the plan
-  std::string type;
-  // JSON, one line. Shared, never copied: an event of a long trajectory is
-  // tens of kilobytes, and every viewer sends the same one.
-  std::shared_ptr<const std::string> data;
-};
-
-// Bounds of a session's memory.
-struct PlanEventLimits {
-  // Events kept; past either bound the oldest improvements are dropped (the
-  // newest improvement always holds the whole best trajectory, and the
-  // terminal event is always kept), so a viewer resuming from an id older
-  // than the oldest kept gets what is left.
-  size_t max_events = 2000;
-  size_t max_bytes = size_t{8} << 20;
-};
 
 enum class PlanState { kRunning, kFinished, kFailed, kCancelled };
+
+// A QGroundControl mission planned leg by leg, as `riskplan plan --mission`
+// plans it (docs/api.md, "Missions with waypoints"): every leg's ends checked
+// by the server first (a one-iteration plan each, a refusal naming the
+// mission item), then each leg a PlanTrajectory call with the session's
+// request (its budget per leg) between consecutive mission points, the whole
+// mission's limits shared among the legs (client::LegLimits). The events:
+//   "update"  {"gateway_ms", "leg": i (from 0), "legs": n, "update": the
+//             leg's PlanUpdate}, its elapsed_s, iterations and improvements
+//             counted on from the legs before (the leg's final message is
+//             an "update" too);
+//   "final"   {"gateway_ms", "update": the mission's final PlanUpdate (its
+//             trajectory: every leg's waypoints and display paths joined, the
+//             risk, length and flight time of one EvaluateRisk of them all),
+//             "mission": {"legs": n, "leg_ends": index in the waypoints of
+//             each leg's last}}; when a leg finds nothing within its share of
+//             the limits, no trajectory and limits.note naming the leg, and
+//             "mission": {"legs": n, "failed_leg": i};
+//   "failed", "cancelled" as for a plan (a leg's refusal names the leg).
+struct MissionPlan {
+  std::shared_ptr<const WebMission> mission;
+  v1::FlightLimits whole;  // the whole mission's limits (the request's)
+};
 const char* PlanStateName(PlanState state);
 
 class PlanSession {
  public:
-  PlanSession(std::string id, v1::PlanRequest request, PlanEventLimits limits);
+  // `mission` set: a mission planned leg by leg with `request` as every
+  // leg's base (its start, goal and limits replaced).
+  PlanSession(std::string id, v1::PlanRequest request, PlanEventLimits limits,
+              std::shared_ptr<const MissionPlan> mission = nullptr);
   // Cancels the call if it still runs and joins its thread.
   ~PlanSession();
   PlanSession(const PlanSession&) = delete;
@@ -86,7 +97,10 @@ class PlanSession {
   // event will ever come after those: the plan ended and `*out` ends with
   // its last event (or it ended before `after_id`), or the session is stopped.
   bool WaitForEvents(uint64_t after_id, absl::Time deadline, std::vector<PlanEvent>* out,
-                     size_t max_bytes = size_t{256} << 10);
+                     size_t max_bytes = size_t{256} << 10) {
+    return events_.WaitForEvents(after_id, deadline, out, max_bytes);
+  }
+  EventLog& events() { return events_; }
 
   // Wakes every waiting viewer for good (the gateway is shutting down) and
   // cancels the call.
@@ -102,22 +116,33 @@ class PlanSession {
 
  private:
   void Run(v1::Planner::Stub* stub);
+  void RunMission(v1::Planner::Stub* stub);  // web/mission_session.cc
   void Append(const std::string& type, std::string data, PlanState end_state);
+  // The context of the session's next call, the one Cancel and Stop cancel;
+  // null when the session was cancelled or stopped already.
+  std::shared_ptr<grpc::ClientContext> NewCall();
+  // After a call ended with `status`: appends "cancelled" and returns true
+  // when it ended because the page cancelled it.
+  bool EndIfCancelled(const grpc::Status& status);
+  // NewCall gave null: "cancelled", or "failed" when the gateway stops.
+  void EndBeforeCall();
 
   const std::string id_;
   const v1::PlanRequest request_;
-  const PlanEventLimits limits_;
-  grpc::ClientContext context_;  // TryCancel is thread-safe
+  const std::shared_ptr<const MissionPlan> mission_;
+  EventLog events_;
   std::thread thread_;
 
   mutable absl::Mutex mu_;
-  std::deque<PlanEvent> events_ ABSL_GUARDED_BY(mu_);
-  size_t bytes_ ABSL_GUARDED_BY(mu_) = 0;
-  uint64_t last_id_ ABSL_GUARDED_BY(mu_) = 0;
   PlanState state_ ABSL_GUARDED_BY(mu_) = PlanState::kRunning;
   bool cancel_requested_ ABSL_GUARDED_BY(mu_) = false;
   bool stopped_ ABSL_GUARDED_BY(mu_) = false;
+  std::shared_ptr<grpc::ClientContext> call_ ABSL_GUARDED_BY(mu_);  // TryCancel is thread-safe
 };
+
+// The display path (Trajectory.path, path_wgs84) rounded to the centimetre,
+// as every event carries it (PlanEvent).
+void RoundDisplayPath(v1::Trajectory* t);
 
 struct PlanRegistryLimits {
   int max_running = 4;  // plans running at once; more: ResourceExhausted
@@ -133,7 +158,8 @@ class PlanRegistry {
 
   // Starts a plan. ResourceExhausted (naming the limit) when max_running
   // plans already run.
-  absl::StatusOr<std::shared_ptr<PlanSession>> Start(v1::PlanRequest request);
+  absl::StatusOr<std::shared_ptr<PlanSession>> Start(
+      v1::PlanRequest request, std::shared_ptr<const MissionPlan> mission = nullptr);
   // The session `id`, or nullptr.
   std::shared_ptr<PlanSession> Find(const std::string& id) const;
   int running() const;

@@ -42,6 +42,12 @@ ABSL_FLAG(int, max_events_per_plan, 2000,
 ABSL_FLAG(int, heartbeat_ms, 5000,
           "Comment sent on an idle event stream, which also finds viewers that left");
 ABSL_FLAG(int, rpc_timeout_ms, 60000, "Deadline of the unary calls to the server");
+ABSL_FLAG(int, max_flights, 2,
+          "Flights (Fly sessions with a simulated aircraft) this gateway flies at once; more are "
+          "refused with 429");
+ABSL_FLAG(int, max_flight_zones, 16,
+          "Zones the page may hold on one flight at once (the server's --max_flight_zones bounds "
+          "them too)");
 ABSL_FLAG(int64_t, max_plan_time_ms, 600000,
           "A plan whose time budget is above this is refused (400) before it starts: the "
           "server's --max_plan_time_ms");
@@ -87,6 +93,9 @@ int Run() {
   options.plans.max_kept = absl::GetFlag(FLAGS_max_kept_plans);
   const int max_events = absl::GetFlag(FLAGS_max_events_per_plan);
   options.plans.events.max_events = max_events < 1 ? 0 : static_cast<size_t>(max_events);
+  options.flights.max_running = absl::GetFlag(FLAGS_max_flights);
+  options.flights.max_zones = absl::GetFlag(FLAGS_max_flight_zones);
+  options.flights.events = options.plans.events;
   options.heartbeat = absl::Milliseconds(absl::GetFlag(FLAGS_heartbeat_ms));
   options.rpc_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_rpc_timeout_ms));
   options.max_plan_time_ms = absl::GetFlag(FLAGS_max_plan_time_ms);
@@ -147,8 +156,10 @@ int main(int argc, char** argv) {
   help.usage =
       "the web view of riskplan: a gRPC client of riskplan-server and an HTTP server for "
       "browsers, with a page that shows the maps and the risk layer, plans live (every "
-      "improvement as the server streams it), evaluates drawn polylines and downloads "
-      "trajectories (GeoJSON, QGroundControl .plan, KML).\n"
+      "improvement as the server streams it), evaluates drawn polylines, downloads "
+      "trajectories (GeoJSON, QGroundControl .plan, KML), plans uploaded QGroundControl "
+      "missions leg by leg and flies plans in an in-flight session with a simulated "
+      "aircraft and zones placed by clicks.\n"
       "\n"
       "  riskplan-web --listen=127.0.0.1:8080 --server=127.0.0.1:50051\n";
   help.footer =

@@ -208,7 +208,8 @@ TEST(HelpTest, RiskplanWeb) {
   ExpectHelp({"riskplan-web",
               {"listen", "server", "assets_dir", "leaflet_dir", "chartjs_dir", "max_viewers",
                "request_threads", "max_running_plans", "max_kept_plans", "max_events_per_plan",
-               "heartbeat_ms", "rpc_timeout_ms", "max_plan_time_ms"},
+               "heartbeat_ms", "rpc_timeout_ms", "max_plan_time_ms", "max_flights",
+               "max_flight_zones"},
               {}});
 }
 

@@ -191,6 +191,345 @@ def plan_and_check(driver, iterations):
     return risks
 
 
+def run_plan(driver, iterations):
+    """Plans with an iteration budget and waits for the end; the page's state."""
+    set_value(driver, "budget-ms", 0)
+    set_value(driver, "budget-iterations", iterations)
+    driver.execute_script("rp.profile = null;")
+    click(driver, "plan")
+    wf.wait_for(lambda: js(driver, "rp.state") in ("finished", "failed"), 300,
+                "the plan to finish")
+    error_text = js(driver, "document.getElementById('error').hidden ? '' : "
+                            "document.getElementById('error').textContent")
+    check(js(driver, "rp.state") == "finished", f"the plan finished (page error: {error_text!r})")
+
+
+def check_limits_and_front(driver):
+    """Endurance, the enforced target level of safety and the risk-time front
+    set on the page: every trajectory shown honours them, the front has
+    points and a click on one draws its route; an endurance no route can
+    meet ends with the server's note on the page."""
+    from selenium.webdriver.common.by import By
+
+    endurance_s, tls = 130, 8e-6
+    set_value(driver, "max-flight-time", endurance_s)
+    set_value(driver, "target-los", tls)
+    driver.execute_script("document.getElementById('enforce-los').checked = true;"
+                          "document.getElementById('pareto').checked = true;")
+    run_plan(driver, 3000)
+    limits = js(driver, "rp.lastPlanRequest.limits")
+    check(limits == {"max_flight_time_s": endurance_s, "max_risk_per_flight_hour": tls,
+                     "pareto": True}, f"the plan was sent with the page's limits: {limits}")
+    improvements = js(driver, "rp.improvements")
+    check(len(improvements) >= 1, f"{len(improvements)} improvements within the limits")
+    for i in improvements:
+        if not (i["flight_time_s"] <= endurance_s and i["risk_per_flight_hour"] <= tls):
+            raise AssertionError(f"an improvement outside the limits: {i}")
+    check(True, f"every improvement flies at most {endurance_s} s (longest "
+                f"{max(i['flight_time_s'] for i in improvements):.1f} s) and carries at most "
+                f"{tls:g} per flight hour (highest "
+                f"{max(i['risk_per_flight_hour'] for i in improvements):.2e})")
+    final = js(driver, "rp.finalTrajectory")
+    shown = js(driver, "document.getElementById('risk').textContent")
+    shown_time = float(shown.split("flight time ")[1].split(" s")[0])
+    shown_rph = float(shown.split(" s, ")[1].split(" per flight hour")[0])
+    check(shown_time <= endurance_s and abs(shown_time - final["flight_time_s"]) <= 0.05 and
+          shown_rph <= tls, f"the page shows a flight time within the endurance and a risk per "
+                            f"flight hour within the target: {shown!r}")
+    target = js(driver, "Chart.getChart('risk-chart').data.datasets[1]")
+    check(f"target level of safety {tls:.0e}".replace("e-06", "e-6") in target["label"] and
+          abs(target["data"][-1]["y"] - tls * final["flight_time_s"] / 3600) <=
+          1e-9 * target["data"][-1]["y"],
+          f"the risk chart draws the enforced target ({target['label']})")
+    front = js(driver, "rp.front.map((t) => ({t: t.flight_time_s, r: t.risk, "
+                       "n: t.path.length}))")
+    circles = driver.find_elements(By.CSS_SELECTOR, "#front-chart circle.front-point")
+    check(js(driver, "!document.getElementById('front-box').hidden") and len(front) >= 2 and
+          len(circles) == len(front),
+          f"the front chart shows {len(circles)} points ({len(front)} in the final front)")
+    check(all(p["t"] <= endurance_s and p["r"] / (p["t"] / 3600) <= tls * (1 + 1e-9)
+              for p in front), "every point of the front is within the limits")
+    check(all(a["t"] <= b["t"] and a["r"] >= b["r"] for a, b in zip(front, front[1:])),
+          "the front goes by increasing flight time and decreasing risk")
+    k = len(circles) // 2
+    circles[k].click()
+    wf.wait_for(lambda: js(driver, "rp.frontShown") == k, 30, "the clicked point's route")
+    drawn = js(driver, "rp.frontLayer.getLayers()[0].getLatLngs().map((p) => [p.lat, p.lng])")
+    want = js(driver, f"frame.pathOf(rp.front[{k}]).map((p) => Array.isArray(p) ? p : [p.lat, p.lng])")
+    check(drawn == want and len(drawn) == front[k]["n"] and
+          js(driver, "document.querySelectorAll('path.front-route').length") == 1,
+          f"clicking front point {k + 1} of {len(front)} ({front[k]['t']:.1f} s, risk "
+          f"{front[k]['r']:.3e}) draws that route ({len(drawn)} points) in blue")
+    other = (k + 1) % len(circles)
+    circles[other].click()
+    wf.wait_for(lambda: js(driver, "rp.frontShown") == other, 30, "another point's route")
+    check(js(driver, "document.querySelectorAll('path.front-route').length") == 1,
+          "a click on another point replaces the route shown")
+
+    # An endurance below any route's flight time: the server's note, no trajectory.
+    set_value(driver, "max-flight-time", 60)
+    driver.execute_script("document.getElementById('enforce-los').checked = false;"
+                          "document.getElementById('pareto').checked = false;")
+    run_plan(driver, 3000)
+    note = js(driver, "document.getElementById('limits-note').hidden ? '' : "
+                      "document.getElementById('limits-note').textContent")
+    check(note.startswith("no trajectory within the endurance (max_flight_time_s = 60 s): "
+                          "the fastest trajectory found flies ") and
+          float(note.rsplit(" ", 2)[1]) > 60,
+          f"an endurance of 60 s is refused with the server's note: {note!r}")
+    check(js(driver, "rp.improvements.length") == 0 and
+          js(driver, "document.querySelectorAll('path.best-trajectory').length") == 0 and
+          js(driver, "document.getElementById('risk').textContent") == "\u2013",
+          "and no trajectory is drawn or shown")
+    state = js(driver, "document.getElementById('state').textContent")
+    check(state.startswith("finished: no admissible trajectory"), f"the end in words: {state!r}")
+    set_value(driver, "max-flight-time", 0)
+    set_value(driver, "target-los", "1e-6")
+
+
+def mission_plan(corners, waypoint_x=1000.0, riskplan=None):
+    """A QGroundControl .plan on the geo-referenced city: takeoff, a waypoint
+    (yaw null: riskplan chooses), land; `riskplan` as its riskplan section."""
+    def item(command, jump, x, y, alt):
+        lat, lon = wf.bilinear_wgs84(corners, x, y)
+        return {"type": "SimpleItem", "command": command, "frame": 0, "doJumpId": jump,
+                "autoContinue": True, "params": [0, 0, 0, None, lat, lon, alt]}
+    home = wf.bilinear_wgs84(corners, 300, 375)
+    plan = {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+            "mission": {"version": 2, "firmwareType": 12, "vehicleType": 1, "cruiseSpeed": 18,
+                        "hoverSpeed": 5, "plannedHomePosition": [home[0], home[1], 200],
+                        "items": [item(22, 1, 300, 375, 240), item(16, 2, waypoint_x, 900, 250),
+                                  item(21, 3, 1700, 1625, 250)]},
+            "geoFence": {"version": 2, "circles": [], "polygons": []},
+            "rallyPoints": {"version": 2, "points": []}}
+    if riskplan is not None:
+        plan["riskplan"] = riskplan
+    return plan
+
+
+def check_mission_upload_and_download(driver, work, downloads, corners, geo_name, local_name):
+    """A .plan uploaded on the page (shown on the local map: the page moves to
+    the geo-referenced map that holds it) fills the form with its limits and
+    is planned leg by leg through its waypoint; the planned mission downloads
+    as a .plan with the mission's own items and its limits, which the gateway
+    reads back as the same mission; a file with a loiter is refused naming
+    the item."""
+    from selenium.webdriver.common.by import By
+
+    select_map(driver, local_name)
+    path = os.path.join(work, "survey.plan")
+    with open(path, "w") as f:
+        json.dump(mission_plan(corners, riskplan={"limits": {"max_flight_time_s": 400}}), f)
+    set_value(driver, "budget-ms", 0)
+    set_value(driver, "budget-iterations", 800)
+    set_value(driver, "max-flight-time", 0)
+    driver.execute_script("rp.improvements = []; rp.finalTrajectory = null; rp.profile = null;")
+    driver.find_element(By.ID, "mission-file").send_keys(path)
+    wf.wait_for(lambda: js(driver, "rp.mission !== null && rp.mission.legEnds !== null") or
+                js(driver, "rp.state === 'failed'"), 300, "the uploaded mission to be planned")
+    error_text = js(driver, "document.getElementById('error').hidden ? '' : "
+                            "document.getElementById('error').textContent")
+    check(js(driver, "rp.state") == "finished" and not error_text,
+          f"the uploaded mission was planned (page error: {error_text!r})")
+    check(js(driver, "rp.map.name") == geo_name and js(driver, "rp.crs") == "EPSG:3857",
+          f"the page moved to {geo_name}, the geo-referenced map that holds the mission")
+    described = js(driver, "document.getElementById('mission-text').textContent")
+    check(described == "survey.plan: 3 points (1 takeoff, 1 waypoint, 1 land), 2 legs; limits "
+                       "from its riskplan section: endurance 400 s",
+          f"the page describes the mission: {described!r}")
+    check(js(driver, "document.getElementById('max-flight-time').value") == "400" and
+          js(driver, "rp.lastPlanRequest.limits") == {"max_flight_time_s": 400},
+          "the endurance of the file's riskplan section filled the form and went with the plan")
+    check(js(driver, "document.querySelectorAll('path.mission-point').length") == 3,
+          "the mission's three points are drawn on the map")
+    progress = js(driver, "document.getElementById('mission-progress').textContent")
+    check(progress == "the mission's 2 legs planned", f"the page says: {progress!r}")
+    t = js(driver, "rp.finalTrajectory")
+    ends = js(driver, "rp.mission.legEnds")
+    want = [wf.bilinear_wgs84(corners, x, y) for x, y in ((300, 375), (1000, 900), (1700, 1625))]
+    at = [0, ends[0], ends[1]]
+    off = [wf.ground_distance_m((t["waypoints_wgs84"][k]["lat_deg"], t["waypoints_wgs84"][k]["lon_deg"]), w)
+           for k, w in zip(at, want)]
+    check(len(ends) == 2 and ends[1] == len(t["waypoints"]) - 1 and max(off) < 1.0,
+          f"the trajectory flies from the takeoff through the waypoint to the landing "
+          f"(within {max(off):.2f} m of each)")
+    check(t["flight_time_s"] <= 400, f"the mission flies {t['flight_time_s']:.1f} s, within its "
+                                     "400 s endurance")
+    shown = js(driver, "document.getElementById('risk').textContent")
+    check(f"flight time {t['flight_time_s']:.1f} s" in shown, f"the page shows the mission: {shown!r}")
+    check(js(driver, "document.querySelectorAll('path.best-trajectory').length") == 1,
+          "the joined trajectory is drawn")
+
+    # Downloaded: the mission written back, with its limits.
+    for old in glob.glob(os.path.join(downloads, "*.plan")):
+        os.unlink(old)
+    click(driver, "download-plan")
+    path = wf.wait_for(lambda: [p for p in glob.glob(os.path.join(downloads, "*.plan"))
+                                if os.path.getsize(p) > 0], 60, "the .plan download")[0]
+    written = wf.wait_for(lambda: _read_json(path), 30, "the downloaded .plan to be complete")
+    items = written["mission"]["items"]
+    check(os.path.basename(path) == f"riskplan-mission-{geo_name}.plan" and
+          written["fileType"] == "Plan" and written["version"] == 1 and
+          written["mission"]["version"] == 2 and items[0]["command"] == 22 and
+          items[-1]["command"] == 21 and len(written["riskplan"]["mission_items"]) == 3,
+          f"the downloaded {os.path.basename(path)} holds the takeoff, {len(items) - 2} route "
+          "items and the landing, the mission's own three listed")
+    check(written["riskplan"]["limits"]["max_flight_time_s"] == 400, "and the mission's limits")
+    host_port = js(driver, "location.host")
+    answer = subprocess.run(
+        ["curl", "-s", "-H", "Content-Type: text/plain", "--data-binary", f"@{path}",
+         f"http://{host_port}/api/mission/parse"], check=True, capture_output=True).stdout
+    again = json.loads(answer)
+    check("points" in again, f"the gateway reads the downloaded file: {answer[:300]!r}")
+    check([p["kind"] for p in again["points"]] == ["takeoff", "waypoint", "land"] and
+          again["limits"]["max_flight_time_s"] == 400,
+          "the gateway reads it back as the same mission with its limits")
+
+    # A file riskplan cannot plan: the error names the item; nothing is planned.
+    bad = mission_plan(corners)
+    bad["mission"]["items"][1]["command"] = 19
+    path = os.path.join(work, "loiter.plan")
+    with open(path, "w") as f:
+        json.dump(bad, f)
+    plan_before = js(driver, "rp.planId")
+    driver.execute_script("document.getElementById('error').hidden = true;")
+    driver.find_element(By.ID, "mission-file").send_keys(path)
+    wf.wait_for(lambda: not js(driver, "document.getElementById('error').hidden"), 60,
+                "the loiter to be refused")
+    shown = js(driver, "document.getElementById('error-message').textContent")
+    check(shown.startswith("mission item 1 (doJumpId 2): command 19 (NAV_LOITER_TIME) cannot be "
+                           "planned by riskplan") and js(driver, "rp.planId") == plan_before and
+          js(driver, "document.getElementById('error-code').textContent") ==
+          "INVALID_ARGUMENT (gateway):", f"a loiter is refused naming the item: {shown!r}")
+    driver.execute_script("document.getElementById('error').hidden = true;")
+    set_value(driver, "max-flight-time", 0)
+
+
+def _read_json(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+# The route's display path (local metres) with the arc length of each point:
+# [[x, y, s], ...] (straight lines between samples, as the page splits it).
+ROUTE_ARC_JS = """(route) => { let s = 0; return route.path.map((p, k) => {
+  if (k > 0) { const q = route.path[k - 1]; s += Math.hypot(p.x - q.x, p.y - q.y, p.z - q.z); }
+  return [p.x, p.y, s]; }); }"""
+
+
+def check_flight(driver):
+    """Flight mode on the local map: the gateway flies the page's start and
+    goal; a zone placed by a click across the route ahead gives a new version
+    whose route avoids it and whose committed prefix begins with the one
+    before; a zone on the goal raises an alert with its emergency landing
+    site; the flight ends from the page."""
+    set_value(driver, "budget-ms", 1000)
+    set_value(driver, "budget-iterations", 0)
+    set_value(driver, "flight-speedup", 4)
+    set_value(driver, "zone-radius", 120)
+    click(driver, "fly")
+    wf.wait_for(lambda: js(driver, "rp.flight && (rp.flight.versions.length > 0 || rp.flight.ended)"),
+                120, "the flight's first plan version")
+    check(js(driver, "rp.flight.ended") is None and
+          js(driver, "rp.flight.versions[0].reason") == "FLIGHT_REASON_OPENED",
+          "the flight opened with its first plan version")
+    wf.wait_for(lambda: js(driver, "rp.flight.position && rp.flight.position.progress_m > 0 && "
+                                   "document.querySelectorAll('path.aircraft').length === 1"),
+                60, "the aircraft to move")
+    check(js(driver, "document.querySelectorAll('path.flight-committed').length") == 1 and
+          js(driver, "document.querySelectorAll('path.flight-remainder').length") == 1,
+          "the committed prefix and the remainder are drawn, each its own line")
+
+    # A zone across the route ahead: on the latest route, half way between
+    # the commit point and the goal.
+    v = js(driver, "rp.flight.versions[rp.flight.versions.length - 1]")
+    arc = driver.execute_script(f"return ({ROUTE_ARC_JS})(arguments[0]);", v["route"])
+    total = arc[-1][2]
+    target = v["committed_until_m"] + 0.5 * (total - v["committed_until_m"])
+    centre = min(arc, key=lambda p: abs(p[2] - target))
+    check(total - v["committed_until_m"] > 600,
+          f"the remainder ahead is {total - v['committed_until_m']:.0f} m long")
+    click(driver, "place-zone")
+    click_drag(driver, (centre[1], centre[0]), (0, 0))
+    wf.wait_for(lambda: js(driver, "rp.flight.zones['zone-1'] !== undefined"), 60, "the zone to be sent")
+    zone = js(driver, "rp.flight.zones['zone-1']")
+    check(math.dist((zone["x"], zone["y"]), centre[:2]) < 5 and zone["radius_m"] == 120 and
+          js(driver, "document.querySelectorAll('path.flight-zone').length") == 1,
+          f"a zone of 120 m placed by a click at ({zone['x']:.0f}, {zone['y']:.0f}), on the route "
+          f"{target - v['committed_until_m']:.0f} m past the commit point")
+    before = [p for p in arc if math.dist(p[:2], (zone["x"], zone["y"])) <= zone["radius_m"]]
+    check(len(before) > 0, f"the route before it crossed the zone ({len(before)} path points inside)")
+    index = wf.wait_for(lambda: js(driver, "(() => { const k = rp.flight.versions.findIndex((v) => "
+                                           "v.active_zones.includes('zone-1')); return k > 0 ? k : null; })()")
+                        or (js(driver, "rp.flight.ended") and -1), 120,
+                        "a plan version with the zone")
+    check(index > 0, f"version {index + 1} came with the zone in force")
+    new, old = js(driver, f"[rp.flight.versions[{index}], rp.flight.versions[{index - 1}]]")
+    check(new["reason"] == "FLIGHT_REASON_ZONE_ADDED", f"made because the zone was added ({new['reason']})")
+    inside = [p for p in new["route"]["path"]
+              if math.dist((p["x"], p["y"]), (zone["x"], zone["y"])) <= zone["radius_m"]]
+    check(not inside, f"its route avoids the zone: none of its {len(new['route']['path'])} path points "
+                      f"within {zone['radius_m']} m of the centre")
+    check(len(new["committed"]) >= len(old["committed"]) and
+          new["committed"][:len(old["committed"])] == old["committed"],
+          f"the committed prefix is unchanged: the new version's {len(new['committed'])} committed "
+          f"poses begin with the {len(old['committed'])} before")
+    wf.wait_for(lambda: "a zone was added" in js(driver, "document.getElementById('flight-state').textContent")
+                or js(driver, "rp.flight.versions.length") > index + 1, 30, "the page to show the version")
+    check(js(driver, "document.querySelectorAll('path.flight-committed').length") == 1 and
+          js(driver, "document.querySelectorAll('path.flight-remainder').length") == 1,
+          "the new version drawn: committed prefix and remainder")
+
+    # A polygon zone by three clicks, off the route (the map's north-west
+    # corner): sent in the map's frame, drawn, and in force in a later version.
+    if not js(driver, "rp.flight.ended"):
+        click(driver, "polygon-zone")
+        triangle = [(150.0, 1750.0), (350.0, 1750.0), (250.0, 1900.0)]
+        for x, y in triangle:
+            click_drag(driver, (y, x), (0, 0))
+        check(js(driver, "document.getElementById('polygon-zone').textContent") ==
+              "Send the polygon (3 vertices)", "three vertices drawn")
+        click(driver, "polygon-zone")
+        wf.wait_for(lambda: js(driver, "rp.flight.zones['zone-2'] !== undefined"), 60,
+                    "the polygon zone to be sent")
+        vertices = js(driver, "rp.flight.zones['zone-2'].vertices")
+        check(len(vertices) == 3 and all(math.dist((v["x"], v["y"]), w) < 5 for v, w in zip(vertices, triangle)) and
+              js(driver, "document.querySelectorAll('path.flight-zone').length") == 2,
+              f"a polygon zone of 3 vertices placed by clicks: {[(round(v['x']), round(v['y'])) for v in vertices]}")
+        wf.wait_for(lambda: js(driver, "rp.flight.versions.some((v) => v.active_zones.includes('zone-2'))")
+                    or js(driver, "rp.flight.ended"), 120, "a version with the polygon zone")
+        check(js(driver, "rp.flight.versions.some((v) => v.active_zones.includes('zone-2'))"),
+              "a later version has the polygon zone in force")
+
+    # A zone on the goal: no remainder can reach it; the alert names the
+    # emergency landing site.
+    if not js(driver, "rp.flight.ended"):
+        driver.execute_script(f"rp.addZoneAt({wf.SMALL_CITY_GOAL[0]!r}, {wf.SMALL_CITY_GOAL[1]!r});")
+        alert = wf.wait_for(lambda: js(driver, "rp.flight.alerts.length > 0 && rp.flight.alerts[0]")
+                            or js(driver, "rp.flight.ended"), 120, "an alert")
+        check(isinstance(alert, dict) and alert.get("kind") == "FLIGHT_ALERT_NO_REMAINDER" and
+              "NO_FLY_ZONE" in alert["detail"], f"an alert: {alert.get('detail') if isinstance(alert, dict) else alert}")
+        shown = wf.wait_for(lambda: js(driver, "document.getElementById('flight-alerts').textContent"), 30,
+                            "the alert on the page")
+        landing = alert.get("landing")
+        if landing and landing.get("site_pose"):
+            check("emergency landing at" in shown and
+                  js(driver, "document.querySelectorAll('path.emergency-landing').length") == 1,
+                  f"the page shows the alert and its emergency landing site: {shown!r}")
+        else:
+            check(shown.startswith("ALERT"), f"the page shows the alert: {shown!r}")
+
+    if not js(driver, "rp.flight.ended"):
+        click(driver, "end-flight")
+    ended = wf.wait_for(lambda: js(driver, "rp.flight.ended"), 60, "the flight to end")
+    check(ended.get("message") in ("ended from the page", "the aircraft reached the goal"),
+          f"the flight ended: {ended}")
+    check(js(driver, "document.getElementById('fly').disabled") is False, "and may fly again")
+
+
 def main():
     bin_dir, out_dir = sys.argv[1], sys.argv[2]
     os.makedirs(out_dir, exist_ok=True)
@@ -334,6 +673,12 @@ def main():
         check(abs(profile["risk"] - final_risk) <= 1e-9 * final_risk,
               f"EvaluateRisk of the final waypoints gives the plan's risk {final_risk:.6e}")
         check(final_risk == risks[-1], "the final risk is the last improvement's")
+
+        # 3b. Endurance, target level of safety and the risk-time front.
+        check_limits_and_front(driver)
+
+        # 3c. Flight mode: zones placed in flight, versions, an alert.
+        check_flight(driver)
 
         # 4. A polyline drawn by clicks, evaluated.
         driver.execute_script("rp.profile = null; document.getElementById('evaluation').textContent = '';")
@@ -587,6 +932,9 @@ def main():
         want = sum(math.dist(a, b) for a, b in zip(corners_m, corners_m[1:]))
         check(abs(length - want) < 4 * 2 * m_per_px,
               f"a 3-point polyline evaluated: {length:.1f} m (about {want:.1f} m)")
+
+        # 8b. A QGroundControl mission uploaded, planned, downloaded.
+        check_mission_upload_and_download(driver, work, downloads, corners, geo_name, map_name)
 
         # And back to the local map: CRS.Simple again.
         select_map(driver, map_name)

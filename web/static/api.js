@@ -15,6 +15,8 @@ const rp = window.rp = {
   improvements: [],     // {id, risk, iterations, elapsed_s} per drawn update
   latencies: [],        // ms from the gateway reading an update to the page drawing it
   finalTrajectory: null,
+  front: null,          // the newest risk-time front drawn (PlanUpdate.front)
+  frontShown: null,     // the index in it of the route drawn in blue, once clicked
   profile: null,        // the last EvaluateRisk response drawn as a profile
   bestPath: null,       // the newest trajectory as drawn: [lat, lng] per point
   lastPlanRequest: null,
@@ -35,11 +37,12 @@ class ApiError extends Error {
   constructor(code, message, source) { super(message); this.code = code; this.source = source; }
 }
 
-async function api(method, path, body) {
+// body: sent as JSON, or as it is when raw (a file's text).
+async function api(method, path, body, raw) {
   const init = { method, headers: {} };
   if (body !== undefined) {
-    init.body = JSON.stringify(body);
-    init.headers['Content-Type'] = 'application/json';
+    init.body = raw ? body : JSON.stringify(body);
+    init.headers['Content-Type'] = raw ? 'text/plain' : 'application/json';
   }
   const res = await fetch(path, init);
   const text = await res.text();

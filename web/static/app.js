@@ -9,12 +9,15 @@
 // earlier ones declare when it loads, and anything of any of them in its
 // functions: api.js (rp, calls and errors), colours.js, frames.js, map.js
 // (the map and its layers), endpoints.js (start and goal), plans.js (the
-// live view), evaluate.js (profiles, polylines, downloads), and this one,
+// live view), evaluate.js (profiles, polylines, downloads), mission.js
+// (QGroundControl missions uploaded and downloaded), flight.js (flight
+// mode), wind.js, and this one,
 // which starts the page once every other is loaded.
 'use strict';
 
 async function init() {
   const maps = (await api('GET', '/api/maps')).maps;
+  rp.maps = maps;
   const select = $('map-select');
   for (const m of maps) select.add(new Option(`${m.name}${m.geo ? ' (WGS84)' : ''}`, m.name));
   const wanted = new URLSearchParams(location.search).get('map');
@@ -29,6 +32,8 @@ async function init() {
     else rp.timings.mapSwitchMs.push(performance.now() - began);
   });
   select.addEventListener('change', show);
+  // For the mission upload: shows the map `name` as a choice in the selector would.
+  rp.showMap = async (name) => { select.value = name; await show(); };
   $('risk-show').onclick = () => guarded(showRiskLayer);
   $('set-start').onclick = () => pick('start');
   $('set-goal').onclick = () => pick('goal');
@@ -39,6 +44,15 @@ async function init() {
   $('download-geojson').onclick = () => guarded(() => download('geojson'));
   $('download-plan').onclick = () => guarded(() => download('plan'));
   $('download-kml').onclick = () => guarded(() => download('kml'));
+  $('fly').onclick = () => guarded(startFlight);
+  $('end-flight').onclick = () => guarded(endFlight);
+  $('place-zone').onclick = togglePlacingZone;
+  $('polygon-zone').onclick = () => guarded(togglePolygonZone);
+  $('mission-file').onchange = (e) => {
+    const file = e.target.files[0];
+    e.target.value = '';  // the same file chosen again is a new upload
+    if (file) guarded(() => uploadMission(file));
+  };
   await show();
   rp.ready = true;
 }

@@ -51,6 +51,8 @@ function releaseEndpoint(e) {
   const to = p0.distanceTo(p1) >= 5 ? e.latlng : null;
   endpoints[picking] = frame.pose(pressed, to, Number($('altitude').value));
   drawEndpoint(picking);
+  // A start or goal set by hand is a plan of its own, not the mission's.
+  if (rp.mission) clearMission();
   if (dragLine) map.removeLayer(dragLine);
   dragLine = null; pressed = null; picking = null;
   map.dragging.enable();

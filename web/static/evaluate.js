@@ -81,20 +81,30 @@ async function evaluatePolyline() {
 // Downloads: the server samples the path (in WGS84 on a geo-referenced map),
 // the gateway writes the file.
 
+// The wind fields of a request (the plan's), for a download in the same wind.
+function windOf(request) {
+  const out = {};
+  if (request && request.wind) out.wind = request.wind;
+  if (request && request.wind_wgs84) out.wind_wgs84 = request.wind_wgs84;
+  return out;
+}
+
 async function download(format) {
   const waypoints = rp.finalTrajectory ? rp.finalTrajectory.waypoints : rp.bestWaypoints;
   if (!waypoints) throw new ApiError('FAILED_PRECONDITION', 'plan a trajectory first', 'page');
-  const res = await fetch(`/api/export?format=${format}`, {
+  // A planned mission's .plan is the mission written back (mission.js).
+  const mission = format === 'plan' && rp.mission && rp.mission.legEnds && rp.finalTrajectory;
+  const res = mission ? await downloadMission() : await fetch(`/api/export?format=${format}`, {
     method: 'POST', headers: { 'Content-Type': 'application/json' },
     // In the plan's wind, so that the exported times are the plan's.
-    body: JSON.stringify({ map: rp.map.name, waypoints: { poses: waypoints }, path_spacing_m: 25,
-      wind: rp.lastPlanRequest && rp.lastPlanRequest.wind, wind_wgs84: rp.lastPlanRequest && rp.lastPlanRequest.wind_wgs84 }),
+    body: JSON.stringify(Object.assign({ map: rp.map.name, waypoints: { poses: waypoints }, path_spacing_m: 25 },
+      windOf(rp.lastPlanRequest))),
   });
   if (!res.ok) {
     const j = await res.json().catch(() => ({ code: 'HTTP_' + res.status, message: res.statusText }));
     throw new ApiError(j.code, j.message, j.source);
   }
-  const name = `riskplan-${rp.map.name}.${format}`;
+  const name = mission ? `riskplan-mission-${rp.map.name}.plan` : `riskplan-${rp.map.name}.${format}`;
   const url = URL.createObjectURL(await res.blob());
   const a = document.createElement('a');
   a.href = url; a.download = name;

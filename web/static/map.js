@@ -12,6 +12,8 @@ const overlays = rp.overlays;  // name -> Leaflet layer
 const legends = {};            // name -> HTML
 // Layer groups of the live map.
 let endpointLayers = null, trajectories = null, bestLayer = null, polylineLayer = null;
+let missionLayer = null, missionRouteLayer = null;  // an uploaded mission's points, its legs planned
+let flightLayer = null, zoneLayer = null, alertLayer = null;  // a flight: its route and aircraft, zones, alert
 
 function makeMap() {
   if (map) map.remove();  // and every layer on it
@@ -39,12 +41,18 @@ function makeMap() {
   trajectories = L.layerGroup().addTo(map);   // earlier improvements, faded
   bestLayer = L.layerGroup().addTo(map);      // the newest
   polylineLayer = L.layerGroup().addTo(map);  // a drawn polyline
+  missionLayer = L.layerGroup().addTo(map);
+  missionRouteLayer = L.layerGroup().addTo(map);
+  zoneLayer = L.layerGroup().addTo(map);
+  flightLayer = L.layerGroup().addTo(map);
+  alertLayer = L.layerGroup().addTo(map);
   map.on('overlayadd overlayremove', drawLegend);
   map.on('mousemove', (e) => { $('cursor').textContent = frame.cursorText(e.latlng); });
   map.on('mousedown', pressEndpoint);
   map.on('mousemove', dragEndpoint);
   map.on('mouseup', releaseEndpoint);
   map.on('click', addPolylinePoint);
+  map.on('click', placeZoneAt);
 }
 
 // What the page draws over the layers: the mission and the plan.
@@ -53,7 +61,12 @@ const ROUTE_LEGEND =
   '<div class="item"><span class="key" style="background:#a0a;border-radius:6px"></span>goal, its line the heading</div>' +
   '<div class="item"><span class="line" style="border-color:#d00"></span>best trajectory so far</div>' +
   '<div class="item"><span class="line" style="border-color:#aaa"></span>earlier improvements (fainter: older)</div>' +
-  '<div class="item"><span class="line" style="border-color:#06f;border-top-style:dashed"></span>drawn polyline</div>';
+  '<div class="item"><span class="line" style="border-color:#06f;border-top-style:dashed"></span>drawn polyline</div>' +
+  '<div class="item"><span class="key" style="background:#fc6;border-radius:6px"></span>mission point of an uploaded .plan</div>' +
+  '<div class="item"><span class="line" style="border-color:#036;border-top-width:5px"></span>flight: the committed prefix</div>' +
+  '<div class="item"><span class="line" style="border-color:#f60;border-top-style:dashed"></span>flight: the remainder, replanned as zones come</div>' +
+  '<div class="item"><span class="key" style="background:#fff;border:3px solid #000;border-radius:6px"></span>the aircraft</div>' +
+  '<div class="item"><span class="key" style="background:rgba(255,0,0,0.3);border-color:#c00;border-radius:6px"></span>no-fly zone placed in flight</div>';
 
 function drawLegend() {
   const parts = [ROUTE_LEGEND];
@@ -127,6 +140,7 @@ async function loadMap(info) {
   rp.layersDrawn = {};
   endpoints.start = endpoints.goal = null;
   drawEndpoint('start'); drawEndpoint('goal');
+  clearMission();  // its points were on the map shown before
   removeOverlay('risk layer');
   const b = frame.rect(info.x0_m, info.y0_m, info.width_m, info.height_m, info.bounds_wgs84);
   map.setMaxBounds(b.pad(0.5));

@@ -100,6 +100,7 @@ function limitFields() {
 // The front (PlanUpdate.front) as points of risk against flight time; a
 // click draws that point's route in blue.
 function drawFront(front) {
+  rp.front = front;
   const svg = $('front-chart');
   const W = 320, H = 170, pad = 36;
   const ts = front.map((t) => t.flight_time_s), rs = front.map((t) => t.risk);
@@ -119,13 +120,15 @@ function drawFront(front) {
     const c = document.createElementNS(ns, 'circle');
     c.setAttribute('cx', x(t.flight_time_s)); c.setAttribute('cy', y(t.risk)); c.setAttribute('r', 4);
     c.setAttribute('fill', '#36c'); c.style.cursor = 'pointer';
+    c.setAttribute('class', 'front-point'); c.dataset.index = k;
     const title = document.createElementNS(ns, 'title');
     title.textContent = `front ${k + 1}/${front.length}: ${t.flight_time_s.toFixed(1)} s, risk ${t.risk.toExponential(3)}, ${t.length_m.toFixed(0)} m`;
     c.appendChild(title);
     c.addEventListener('click', () => {
       if (!rp.frontLayer) rp.frontLayer = L.layerGroup().addTo(map);
       rp.frontLayer.clearLayers();
-      if (t.path && t.path.length) L.polyline(frame.pathOf(t), { color: '#36c', weight: 3 }).addTo(rp.frontLayer);
+      if (t.path && t.path.length) L.polyline(frame.pathOf(t), { color: '#36c', weight: 3, className: 'front-route' }).addTo(rp.frontLayer);
+      rp.frontShown = k;
     });
     svg.appendChild(c);
   });
@@ -143,20 +146,23 @@ function onUpdate(e) {
   $('improvements').textContent = u.improvements;
   if (u.front && u.front.length) drawFront(u.front);
   if (u.limits && u.limits.note) { $('limits-note').textContent = u.limits.note; $('limits-note').hidden = false; }
+  if (d.mission) onMissionFinal(d);
   const t = u.trajectory;
   if (t && t.path && t.path.length) {
     drawTrajectory(t);
     rp.bestWaypoints = t.waypoints;
-    $('risk').textContent = `${t.risk.toExponential(4)} (${t.length_m.toFixed(0)} m, ${t.risk_per_flight_hour.toExponential(2)} per flight hour)`;
+    $('risk').textContent = `${t.risk.toExponential(4)} (${t.length_m.toFixed(0)} m, flight time ${t.flight_time_s.toFixed(1)} s, ${t.risk_per_flight_hour.toExponential(2)} per flight hour)`;
     riskChart.data.datasets[0].data.push({ x: u.elapsed_s, y: t.risk });
     riskChart.data.datasets[1].data.push({ x: u.elapsed_s, y: rp.targetLevelOfSafety * t.flight_time_s / 3600 });
     showChart('risk', true);
     riskChart.update('none');
-    rp.improvements.push({ id, risk: t.risk, iterations: Number(u.iterations), elapsed_s: u.elapsed_s });
+    rp.improvements.push({ id, risk: t.risk, iterations: Number(u.iterations), elapsed_s: u.elapsed_s,
+      flight_time_s: t.flight_time_s, risk_per_flight_hour: t.risk_per_flight_hour, length_m: t.length_m });
     for (const b of ['download-geojson', 'download-plan', 'download-kml']) $(b).disabled = false;
     // Drawn: the first animation frame after the map and the plot changed.
     requestAnimationFrame(() => rp.latencies.push(nowMs() - d.gateway_ms));
   }
+  if (d.leg !== undefined) onMissionLeg(d, u);
   return u;
 }
 
@@ -207,6 +213,25 @@ function watch(id) {
   };
 }
 
+// The PlanRequest of the page's fields: map, start, goal, algorithm,
+// budget, seed, update interval, wind and limits (a flight's FlightOpen.plan
+// too).
+function planRequest() {
+  const request = {
+    map: rp.map.name,
+    [apiField('start', endpoints.start)]: endpoints.start, [apiField('goal', endpoints.goal)]: endpoints.goal,
+    algorithm: $('algorithm').value,
+    budget: { time_ms: String(Number($('budget-ms').value)), iterations: String(Number($('budget-iterations').value)) },
+    seed: String(Number($('seed').value)),
+    // The server coalesces what it finds in between (newest wins): more
+    // than about 20 pictures a second is more than anyone can follow.
+    min_update_interval_ms: String(Number($('update-interval').value)),
+  };
+  Object.assign(request, windFields());
+  Object.assign(request, limitFields());
+  return request;
+}
+
 async function startPlan() {
   if (!endpoints.start || !endpoints.goal) throw new ApiError('INVALID_ARGUMENT', 'set a start and a goal on the map first', 'page');
   rp.targetLevelOfSafety = targetLevelOfSafety();
@@ -219,24 +244,14 @@ async function startPlan() {
   showChart('risk', false);
   rp.improvements = []; rp.finalTrajectory = null;
   if (rp.frontLayer) rp.frontLayer.clearLayers();
+  rp.front = null; rp.frontShown = null;
   $('front-box').hidden = true; $('limits-note').hidden = true;
   $('iterations').textContent = '0'; $('improvements').textContent = '0'; $('risk').textContent = '–';
   setState('starting');
   try {
-    const request = {
-      map: rp.map.name,
-      [apiField('start', endpoints.start)]: endpoints.start, [apiField('goal', endpoints.goal)]: endpoints.goal,
-      algorithm: $('algorithm').value,
-      budget: { time_ms: String(Number($('budget-ms').value)), iterations: String(Number($('budget-iterations').value)) },
-      seed: String(Number($('seed').value)),
-      // The server coalesces what it finds in between (newest wins): more
-      // than about 20 pictures a second is more than anyone can follow.
-      min_update_interval_ms: String(Number($('update-interval').value)),
-    };
-    Object.assign(request, windFields());
-    Object.assign(request, limitFields());
+    const request = planRequest();
     rp.lastPlanRequest = request;
-    const r = await api('POST', '/api/plans', request);
+    const r = rp.mission ? await startMissionPlan(request) : await api('POST', '/api/plans', request);
     rp.planId = r.id;
     watch(r.id);
   } catch (err) { setState('failed'); throw err; }

@@ -118,6 +118,7 @@ absl::StatusOr<PlanResult> Plan(RiskEvaluator* evaluator, const PlanningProblem&
   callbacks.on_result = [&](size_t, absl::StatusOr<PlanResult> r) { result = std::move(r); };
   rrt_star::Run run(*problem.model, problem.goal, {{problem.start, options.budget}}, options.seed,
                     options.record_tree, *params, evaluator, cancel, std::move(callbacks));
+  run.SetLimits(options.limits);
   run.Execute();
   return result;
 }

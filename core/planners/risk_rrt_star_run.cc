@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
 #include "core/flight/dubins.h"
 #include "core/planners/risk_guide.h"
@@ -10,10 +9,9 @@
 namespace riskplan::rrt_star {
 
 namespace {
-int64_t kLimitedConnectEvery = [] {
-  const char* v = std::getenv("RP_CONNECT_EVERY");
-  return v ? std::atoll(v) : 16;
-}();
+// Under binding limits the start is connected again every this many
+// iterations (besides its goal-biased samples): each connection moves lambda.
+constexpr int64_t kLimitedConnectEvery = 16;
 }  // namespace
 
 bool Run::SampleUniform(Pose* q) {
@@ -249,12 +247,16 @@ absl::Status Run::Refine() {
       const double d_risk = edit.risk_in + edit.risk_out - old_risk;
       const double d_s = in_s + out_s - old_s;
       const double d_m = in_m + out_m - old_m;
-      if (!(d_risk + lambda_ * (penalise_length_ ? d_m : d_s) < 0.0)) continue;
       const RouteNumbers now = StartRoute(m);
-      if (Fits(now) &&
+      const bool fits_now = Fits(now);
+      if (fits_now &&
           !Fits(RouteNumbers{now.risk + d_risk, now.time_s + d_s, now.length_m + d_m})) {
         continue;
       }
+      // MIN_RISK on a fitting route: any edit that keeps it fitting (it
+      // lowers the risk), so the route uses the slack up to the limit.
+      const bool use_slack = fits_now && limits_.objective == PlanObjective::kMinRisk;
+      if (!use_slack && !(d_risk + lambda_ * (penalise_length_ ? d_m : d_s) < 0.0)) continue;
     }
     int32_t target = path_nodes_[edit.last];
     if (edit.has_waypoint) {
@@ -315,9 +317,7 @@ absl::Status Run::Iterate() {
     if (!Admissible(q_new)) return absl::OkStatus();
     if (absl::Status s = Extend(q_new); !s.ok()) return s;
   }
-  // Under binding limits the start is connected again every
-  // kLimitedConnectEvery iterations: each connection moves lambda.
-  if (limited_ && kLimitedConnectEvery > 0 && iterations_ % kLimitedConnectEvery == 0 &&
+  if (limited_ && iterations_ % kLimitedConnectEvery == 0 &&
       Running(0)) {
     if (absl::Status s = ConnectStart(0); !s.ok()) return s;
   }

@@ -380,6 +380,7 @@ class Run {
   bool penalise_length_ = false;  // C is the length (a length limit without an endurance)
   FlightLimits limits_;
   double lambda_ = 0.0;
+  double lambda_ref_ = 0.0;  // lambda's first value
   // Scratch buffers reused between iterations.
   std::vector<int32_t> path_nodes_;
   std::vector<Pose> path_poses_;

@@ -128,11 +128,11 @@ void Run::AdaptLambda(const RouteNumbers& key_best) {
   }
   // > 0: more weight on C.
   double push = excess;
-  if (limits_.objective == PlanObjective::kMinTime && !(excess > 0.0) &&
-      limits_.max_risk > 0.0) {
-    // The quickest route under the risk limit: more weight on time while the
-    // route has slack under it, less once it breaks it.
-    push = 1.0 - key_best.risk / limits_.max_risk;
+  if (limits_.objective == PlanObjective::kMinTime && !(excess > 0.0)) {
+    // The quickest route: under a risk limit more weight on time while the
+    // route has slack under it, less once it breaks it; without one, more
+    // weight on time (nothing to trade it against).
+    push = limits_.max_risk > 0.0 ? 1.0 - key_best.risk / limits_.max_risk : 1.0;
   }
   if (!std::isfinite(push)) return;
   const double c = penalise_length_ ? key_best.length_m : key_best.time_s;

@@ -137,6 +137,42 @@ TEST_F(RiskRrtStarLimitsTest, NodeTimesInAWindUseTheGroundSpeed) {
   ExpectNodeSumsAreTheTreePaths(**wind, out.nodes, std::max<size_t>(1, out.nodes.size() / 40));
 }
 
+TEST_F(RiskRrtStarLimitsTest, ALengthLimitAloneIsPricedByLength) {
+  FlightLimits limits;
+  limits.max_length_m = 10000.0;  // the safest route is about 14.6 km
+  const RunOutcome out = RunWith(*model_, limits, 1200);
+  ASSERT_TRUE(out.result.has_value());
+  ASSERT_TRUE(out.result->best.has_value());
+  EXPECT_GT(out.lambda, 0.0);
+  const TrajectoryEvaluation e = Evaluate(*model_, out.result->best->waypoints);
+  EXPECT_EQ(e.risk, out.result->best->risk);
+  EXPECT_EQ(e.length_m, out.result->best->length_m);
+  EXPECT_LE(e.length_m, limits.max_length_m);
+  ExpectNodeSumsAreTheTreePaths(*model_, out.nodes, std::max<size_t>(1, out.nodes.size() / 30));
+}
+
+TEST_F(RiskRrtStarLimitsTest, MinTimeUnderAnEnduranceReportsFallingTimes) {
+  FlightLimits limits;
+  limits.objective = PlanObjective::kMinTime;
+  limits.max_flight_time_s = 700.0;
+  const RunOutcome out = RunWith(*model_, limits, 1200);
+  ASSERT_TRUE(out.result.has_value());
+  ASSERT_TRUE(out.result->best.has_value());
+  const TrajectoryEvaluation e = Evaluate(*model_, out.result->best->waypoints);
+  EXPECT_LE(e.flight_time_s, limits.max_flight_time_s);
+  // Once one fits, each report is quicker than the one before.
+  std::optional<double> last;
+  for (const PlanImprovement& i : out.improvements) {
+    const double t = Evaluate(*model_, i.waypoints).flight_time_s;
+    if (last.has_value()) {
+      EXPECT_LT(t, *last);
+    }
+    if (t <= limits.max_flight_time_s) last = t;
+  }
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(*last, e.flight_time_s);
+}
+
 TEST_F(RiskRrtStarLimitsTest, NoBindingLimitLeavesTheTreeWithoutTimes) {
   // MIN_RISK under a risk limit alone, and the front, are not bound by time:
   // the tree is the unlimited planner's.

@@ -34,10 +34,12 @@ namespace riskplan {
 //
 // RISK_RRT_STAR with a limit on time or length, MIN_TIME or the front (and no
 // guide_cell_m of the caller's) runs in two passes through the same filter.
-// Its guide route alone tends to find the long safe route first and never a
-// quick one (on demo-city's README demo every guided trajectory flies more
-// than 780 s, while unguided ones sweep from 440 s to 700 s), so an
-// endurance could otherwise leave nothing to choose from:
+// Without the limits in its tree (the front) its guide route alone tends to
+// find the long safe route first and never a quick one (on demo-city's
+// README demo every guided trajectory of the plain planner flies more than
+// 780 s, while unguided ones sweep from 440 s to 700 s); with them (Run::
+// SetLimits, an endurance) the guided probe meets the limit and the guided
+// pass goes on:
 // - MIN_RISK without the front: a guided probe with a quarter of the budget;
 //   if one of its trajectories meets the limits, a guided pass with the other
 //   three quarters (a new tree, same seed), else an unguided one;

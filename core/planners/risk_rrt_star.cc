@@ -59,7 +59,7 @@ const std::vector<PlannerParamInfo>& ParamInfo() {
       {"nearest_candidates", 8, 1, 100,
        "Euclidean candidates ranked by Dubins length to find the nearest node"},
       {"max_nodes", 200000, 10, 300000,
-       "largest tree (about 130 bytes a node); the run ends when it is reached"},
+       "largest tree (about 160 bytes a node); the run ends when it is reached"},
       {"batch_chunk", 16, 0, 4096,
        "midpoints per candidate edge in one risk batch; a losing edge is dropped between "
        "batches (0: whole edges, one batch per step, up to 4096 midpoints of an edge each)"},
@@ -118,6 +118,7 @@ absl::StatusOr<PlanResult> Plan(RiskEvaluator* evaluator, const PlanningProblem&
   callbacks.on_result = [&](size_t, absl::StatusOr<PlanResult> r) { result = std::move(r); };
   rrt_star::Run run(*problem.model, problem.goal, {{problem.start, options.budget}}, options.seed,
                     options.record_tree, *params, evaluator, cancel, std::move(callbacks));
+  run.SetLimits(options.limits);
   run.Execute();
   return result;
 }

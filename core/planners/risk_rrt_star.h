@@ -29,6 +29,11 @@
 // Every reported risk stays the sum of exact piece risks: bit for bit what
 // EvaluateTrajectory gives for the reported waypoints.
 //
+// Under binding flight limits (an endurance or a length limit, or MIN_TIME
+// under a risk limit) the nodes also carry their flight time and length to
+// the goal and the tree minimises risk + lambda * time, lambda adapted during
+// the run (Run::SetLimits in core/planners/risk_rrt_star_run.h).
+//
 // Several missions to one goal share one such tree through
 // core/planners/shared_goal_tree.h; this planner is its one-mission case.
 #ifndef RISKPLAN_CORE_PLANNERS_RISK_RRT_STAR_H_

@@ -47,6 +47,19 @@ void Run::AddCandidate(const Pose& from, const Pose& to, int32_t node, double ba
       PieceRisk(TrajectoryPiece::Manoeuvre(from, to, mp.GroundTurnRadius(), mp.GroundClimbAngle()),
                 mp.sample_step_m, mp),
       base, limit);
+  if (!limited_ || lambda_ == 0.0) return;
+  // The Lagrangian's term of the edge: known now for a length and in still
+  // air (L / v, PieceRisk's flight time), so it prunes from the first chunk;
+  // in wind the time is known once the edge is complete.
+  CandidateEdge& e = edges->back();
+  const double length = e.rule.piece().Length();
+  if (penalise_length_) {
+    e.base += lambda_ * length;
+  } else if (mp.Calm()) {
+    e.base += lambda_ * (length / mp.airspeed_mps);
+  } else {
+    e.late_weight = lambda_;
+  }
 }
 
 absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
@@ -109,8 +122,17 @@ absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool sha
         continue;
       }
       e.risk = partial;
+      if (limited_) {
+        e.time_s = e.rule.FlightTimeS();
+        e.length_m = e.rule.piece().Length();
+        e.total = e.base + partial + e.late_weight * e.time_s;
+        if (!(e.total < limit)) {
+          e.alive = false;
+          continue;
+        }
+      }
       if (shared_limit) {
-        best = e.base + partial;
+        best = limited_ ? e.total : e.base + partial;
         if (winner != nullptr) *winner = static_cast<int32_t>(n);
       }
     }
@@ -119,9 +141,32 @@ absl::Status Run::EvaluateCandidates(std::vector<CandidateEdge>* edges, bool sha
   return absl::OkStatus();
 }
 
-void Run::SetParent(int32_t child, int32_t parent, double edge_risk) {
+void Run::SetParent(int32_t child, int32_t parent, double edge_risk, double edge_s,
+                    double edge_m) {
   const double new_cost = nodes_[parent].cost + edge_risk;
   Node& c = nodes_[child];
+  if (limited_) {
+    // The flight time and length to the goal, propagated like the risk.
+    const double new_s = nodes_[parent].to_goal_s + edge_s;
+    const double new_m = nodes_[parent].to_goal_m + edge_m;
+    const double delta_s = new_s - c.to_goal_s;
+    const double delta_m = new_m - c.to_goal_m;
+    const bool had_parent = c.parent >= 0;
+    c.edge_s = edge_s;
+    c.edge_m = edge_m;
+    c.to_goal_s = new_s;
+    c.to_goal_m = new_m;
+    if (had_parent && (delta_s != 0.0 || delta_m != 0.0)) {
+      std::vector<int32_t> stack(c.children.begin(), c.children.end());
+      while (!stack.empty()) {
+        const int32_t n = stack.back();
+        stack.pop_back();
+        nodes_[n].to_goal_s += delta_s;
+        nodes_[n].to_goal_m += delta_m;
+        stack.insert(stack.end(), nodes_[n].children.begin(), nodes_[n].children.end());
+      }
+    }
+  }
   c.edge_risk = edge_risk;
   if (c.parent >= 0) {
     std::vector<int32_t>& siblings = nodes_[c.parent].children;
@@ -143,51 +188,59 @@ void Run::SetParent(int32_t child, int32_t parent, double edge_risk) {
 }
 
 absl::Status Run::BestParent(const Pose& from, const std::vector<int32_t>& candidates, double bound,
-                             int32_t* parent, double* edge_risk) {
-  *parent = -1;
-  *edge_risk = kInf;
+                             EdgeChoice* choice) {
+  *choice = EdgeChoice{};
   // Branch and bound. Candidates go in order of R(n). A candidate whose R(n)
   // alone reaches the bound cannot win (edge risks are never negative). The
   // cheapest admissible candidate is evaluated first, in full, to set a bound;
   // the others are then evaluated chunk by chunk against the best total found
   // so far, so that a losing edge is dropped as soon as it is known to lose.
   // The winner is the one a full evaluation of every candidate would choose.
+  // Under binding limits the same with Key(n) for R(n) and the edge's
+  // R + lambda * C for its risk (flight times and lengths are never negative).
   std::vector<int32_t> order = candidates;
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int32_t a, int32_t b) { return nodes_[a].cost < nodes_[b].cost; });
+  if (limited_) {
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int32_t a, int32_t b) { return Key(a) < Key(b); });
+  } else {
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int32_t a, int32_t b) { return nodes_[a].cost < nodes_[b].cost; });
+  }
   std::vector<CandidateEdge> edges;
   size_t next = 0;
   double best = bound;
+  const auto take = [&](const CandidateEdge& e) {
+    choice->parent = e.node;
+    choice->risk = e.risk;
+    choice->time_s = e.time_s;
+    choice->length_m = e.length_m;
+  };
   // The first admissible candidate, alone.
   int32_t winner = -1;
   while (next < order.size()) {
     const int32_t n = order[next++];
-    if (nodes_[n].cost >= best) return absl::OkStatus();
+    if (Key(n) >= best) return absl::OkStatus();
     edges.clear();
-    AddCandidate(from, nodes_[n].pose, n, nodes_[n].cost, best, &edges);
+    AddCandidate(from, nodes_[n].pose, n, Key(n), best, &edges);
     if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/true, &winner); !s.ok()) {
       return s;
     }
     if (edges[0].admissible) break;
   }
   if (winner >= 0) {
-    *parent = edges[winner].node;
-    *edge_risk = edges[winner].risk;
-    best = nodes_[*parent].cost + *edge_risk;
+    take(edges[winner]);
+    best = limited_ ? edges[winner].total : nodes_[choice->parent].cost + choice->risk;
   }
   edges.clear();
   for (; next < order.size(); ++next) {
     const int32_t n = order[next];
-    if (nodes_[n].cost >= best) break;
-    AddCandidate(from, nodes_[n].pose, n, nodes_[n].cost, best, &edges);
+    if (Key(n) >= best) break;
+    AddCandidate(from, nodes_[n].pose, n, Key(n), best, &edges);
   }
   if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/true, &winner); !s.ok()) {
     return s;
   }
-  if (winner >= 0) {
-    *parent = edges[winner].node;
-    *edge_risk = edges[winner].risk;
-  }
+  if (winner >= 0) take(edges[winner]);
   return absl::OkStatus();
 }
 
@@ -197,7 +250,7 @@ std::vector<int32_t> Run::KNearestFrom(const Pose& from, const std::vector<int32
   const ModelParams& mp = model_.params();
   std::vector<std::pair<double, int32_t>> ranked;
   for (int32_t id : near) {
-    if (IsStart(id) || nodes_[id].cost >= max_cost) continue;
+    if (IsStart(id) || Key(id) >= max_cost) continue;
     const double length =
         DubinsAirplanePath(from, nodes_[id].pose, mp.GroundTurnRadius(), mp.GroundClimbAngle()).Length();
     ranked.push_back({length, id});

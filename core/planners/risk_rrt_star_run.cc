@@ -8,6 +8,12 @@
 
 namespace riskplan::rrt_star {
 
+namespace {
+// Under binding limits the start is connected again every this many
+// iterations (besides its goal-biased samples): each connection moves lambda.
+constexpr int64_t kLimitedConnectEvery = 16;
+}  // namespace
+
 bool Run::SampleUniform(Pose* q) {
   const RiskMap& map = model_.map();
   // A few tries: most of a city map is flyable; a miss just ends the iteration.
@@ -73,18 +79,55 @@ Pose Run::Sample(int* start_of) {
 }
 
 absl::Status Run::ConnectStart(size_t m) {
+  if (limited_) return ConnectStartLimited(m);
   const Pose& start = missions_[m].spec.start;
   const int32_t node = StartNode(m);
   // Only a parent that lowers this mission's own risk is of use to it.
   const double own = nodes_[node].cost;
-  int32_t parent = -1;
-  double edge_risk = kInf;
-  if (absl::Status s = BestParent(start, KNearestFrom(start, NearCandidates(start), own), own,
-                                  &parent, &edge_risk);
+  EdgeChoice choice;
+  if (absl::Status s =
+          BestParent(start, KNearestFrom(start, NearCandidates(start), own), own, &choice);
       !s.ok()) {
     return s;
   }
-  if (parent >= 0) SetParent(node, parent, edge_risk);
+  if (choice.parent >= 0) SetParent(node, choice.parent, choice.risk);
+  return absl::OkStatus();
+}
+
+absl::Status Run::ConnectStartLimited(size_t m) {
+  // Every one of the k nearest nodes in full: the start takes the route that
+  // ranks best (fitting the limits, best by the objective), and the route
+  // with the least R + lambda * C moves lambda.
+  const Pose& start = missions_[m].spec.start;
+  const int32_t node = StartNode(m);
+  std::vector<CandidateEdge> edges;
+  for (int32_t n : KNearestFrom(start, NearCandidates(start), kInf)) {
+    AddCandidate(start, nodes_[n].pose, n, Key(n), kInf, &edges);
+  }
+  if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/false, nullptr); !s.ok()) {
+    return s;
+  }
+  RouteNumbers current = StartRoute(m);
+  const CandidateEdge* chosen = nullptr;
+  const CandidateEdge* key_best = nullptr;
+  RouteNumbers key_best_route;
+  for (const CandidateEdge& e : edges) {
+    if (!e.alive) continue;
+    const Node& n = nodes_[e.node];
+    const RouteNumbers route{n.cost + e.risk, n.to_goal_s + e.time_s, n.to_goal_m + e.length_m};
+    if (key_best == nullptr || e.total < key_best->total) {
+      key_best = &e;
+      key_best_route = route;
+    }
+    if (RankBelow(route, current)) {
+      chosen = &e;
+      current = route;
+    }
+  }
+  if (chosen != nullptr) {
+    SetParent(node, chosen->node, chosen->risk, chosen->time_s, chosen->length_m);
+  }
+  if (key_best != nullptr) AdaptLambda(key_best_route);
   return absl::OkStatus();
 }
 
@@ -96,26 +139,32 @@ absl::Status Run::Extend(const Pose& q_new) {
   // risk; branch and bound: a node at or above every running mission's
   // solution is useless.
   const double bound = Bound();
-  int32_t parent = -1;
-  double edge_risk = kInf;
-  if (absl::Status s =
-          BestParent(q_new, KNearestFrom(q_new, near, bound), bound, &parent, &edge_risk);
+  EdgeChoice choice;
+  if (absl::Status s = BestParent(q_new, KNearestFrom(q_new, near, bound), bound, &choice);
       !s.ok()) {
     return s;
   }
+  const int32_t parent = choice.parent;
   if (parent < 0) return absl::OkStatus();
-  const double cost = nodes_[parent].cost + edge_risk;
+  const double cost = nodes_[parent].cost + choice.risk;
 
   const int32_t id = static_cast<int32_t>(nodes_.size());
   nodes_.push_back(Node{q_new, -1, kInf, kInf, {}});
-  SetParent(id, parent, edge_risk);
+  SetParent(id, parent, choice.risk, choice.time_s, choice.length_m);
   grid_.Insert(id, q_new.x, q_new.y);
+  const double key = Key(id);
 
   // Rewire: neighbours (running missions' starts included) that get cheaper
-  // through q_new.
+  // through q_new. Under binding limits: cheaper by Key, and a start is
+  // offered the route through q_new by its rank (ConnectStartLimited's rule).
   std::vector<std::pair<double, int32_t>> ranked;
   for (int32_t n : near) {
-    if (n == kGoal || n == parent || !(cost < nodes_[n].cost)) continue;
+    if (n == kGoal || n == parent) continue;
+    if (limited_) {
+      if (!IsStart(n) && !(key < Key(n))) continue;
+    } else if (!(cost < nodes_[n].cost)) {
+      continue;
+    }
     if (IsStart(n) && !Running(n - kFirstStart)) continue;  // its result is out
     const double length =
         DubinsAirplanePath(nodes_[n].pose, q_new, mp.GroundTurnRadius(), mp.GroundClimbAngle()).Length();
@@ -125,15 +174,31 @@ absl::Status Run::Extend(const Pose& q_new) {
   if (ranked.size() > static_cast<size_t>(params_.k_near)) ranked.resize(params_.k_near);
   std::vector<CandidateEdge> edges;
   for (const auto& [length, n] : ranked) {
-    AddCandidate(nodes_[n].pose, q_new, n, cost, nodes_[n].cost, &edges);
+    if (limited_) {
+      AddCandidate(nodes_[n].pose, q_new, n, key, IsStart(n) ? kInf : Key(n), &edges);
+    } else {
+      AddCandidate(nodes_[n].pose, q_new, n, cost, nodes_[n].cost, &edges);
+    }
   }
   if (absl::Status s = EvaluateCandidates(&edges, /*shared_limit=*/false, nullptr); !s.ok()) {
     return s;
   }
   for (const CandidateEdge& e : edges) {
     // Rewiring n cannot change q_new's cost: n costs more than q_new, so it is
-    // not one of q_new's ancestors.
-    if (e.alive && nodes_[id].cost + e.risk < nodes_[e.node].cost) SetParent(e.node, id, e.risk);
+    // not one of q_new's ancestors (nor is a start, never a parent).
+    if (!e.alive) continue;
+    if (!limited_) {
+      if (nodes_[id].cost + e.risk < nodes_[e.node].cost) SetParent(e.node, id, e.risk);
+      continue;
+    }
+    const Node& q = nodes_[id];
+    if (IsStart(e.node)) {
+      const RouteNumbers route{q.cost + e.risk, q.to_goal_s + e.time_s, q.to_goal_m + e.length_m};
+      if (!RankBelow(route, StartRoute(e.node - kFirstStart))) continue;
+    } else if (!(e.total < Key(e.node))) {
+      continue;
+    }
+    SetParent(e.node, id, e.risk, e.time_s, e.length_m);
   }
   return absl::OkStatus();
 }
@@ -159,18 +224,52 @@ absl::Status Run::Refine() {
     absl::StatusOr<bool> improved = refiner_.TryEdit(path_poses_, path_risks_, refine_rng_, &edit);
     if (!improved.ok()) return improved.status();
     if (!*improved) continue;
+    double in_s = 0.0;
+    double in_m = 0.0;
+    double out_s = 0.0;
+    double out_m = 0.0;
+    if (limited_) {
+      // Under binding limits an edit must lower R + lambda * C of the pieces
+      // it replaces, and keep the start's route within the limits if it was.
+      const Pose& to = edit.has_waypoint ? edit.waypoint : path_poses_[edit.last];
+      PieceTimeLength(path_poses_[edit.first], to, &in_s, &in_m);
+      if (edit.has_waypoint) {
+        PieceTimeLength(edit.waypoint, path_poses_[edit.last], &out_s, &out_m);
+      }
+      double old_risk = 0.0;
+      double old_s = 0.0;
+      double old_m = 0.0;
+      for (size_t i = edit.first; i < edit.last; ++i) {
+        old_risk += path_risks_[i];
+        old_s += path_s_[i];
+        old_m += path_m_[i];
+      }
+      const double d_risk = edit.risk_in + edit.risk_out - old_risk;
+      const double d_s = in_s + out_s - old_s;
+      const double d_m = in_m + out_m - old_m;
+      const RouteNumbers now = StartRoute(m);
+      const bool fits_now = Fits(now);
+      if (fits_now &&
+          !Fits(RouteNumbers{now.risk + d_risk, now.time_s + d_s, now.length_m + d_m})) {
+        continue;
+      }
+      // MIN_RISK on a fitting route: any edit that keeps it fitting (it
+      // lowers the risk), so the route uses the slack up to the limit.
+      const bool use_slack = fits_now && limits_.objective == PlanObjective::kMinRisk;
+      if (!use_slack && !(d_risk + lambda_ * (penalise_length_ ? d_m : d_s) < 0.0)) continue;
+    }
     int32_t target = path_nodes_[edit.last];
     if (edit.has_waypoint) {
       const int32_t id = static_cast<int32_t>(nodes_.size());
       nodes_.push_back(Node{edit.waypoint, -1, kInf, kInf, {}});
-      SetParent(id, target, edit.risk_out);
+      SetParent(id, target, edit.risk_out, out_s, out_m);
       grid_.Insert(id, edit.waypoint.x, edit.waypoint.y);
       target = id;
     }
     // The nodes between keep their other children; only the trajectory
     // leaves them. Their R, and that of every mission flying through them,
-    // only falls.
-    SetParent(path_nodes_[edit.first], target, edit.risk_in);
+    // only falls (under binding limits: their Key).
+    SetParent(path_nodes_[edit.first], target, edit.risk_in, in_s, in_m);
     traced = -1;
   }
   MaybeReport();
@@ -217,6 +316,10 @@ absl::Status Run::Iterate() {
                            : to_near.PoseAt(to_near.Length() - params_.step_m);
     if (!Admissible(q_new)) return absl::OkStatus();
     if (absl::Status s = Extend(q_new); !s.ok()) return s;
+  }
+  if (limited_ && iterations_ % kLimitedConnectEvery == 0 &&
+      Running(0)) {
+    if (absl::Status s = ConnectStart(0); !s.ok()) return s;
   }
   MaybeReport();
   return Refine();

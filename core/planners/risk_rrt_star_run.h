@@ -27,6 +27,7 @@
 #include "core/flight/piece_risk.h"
 #include "core/flight/trajectory.h"
 #include "core/planners/cost_to_go_field.h"
+#include "core/planners/flight_limits.h"
 #include "core/planners/path_refiner.h"
 #include "core/planners/planner.h"
 #include "core/planners/planner_support.h"
@@ -81,6 +82,14 @@ struct Node {
   // yet). Poses never change, so it stays valid until the node is re-parented.
   int32_t length_parent = -1;
   double edge_length = 0.0;
+  // Under binding limits only (Run::SetLimits; 0 otherwise): the flight time
+  // (PieceRisk::FlightTimeS, so in wind by ground speed) and the 3-D length
+  // of the edge to the parent, and their sums from here to the goal along
+  // the tree, kept up to date like `cost` when a node is re-parented.
+  double edge_s = 0.0;
+  double edge_m = 0.0;
+  double to_goal_s = 0.0;
+  double to_goal_m = 0.0;
 };
 
 // A candidate edge, evaluated progressively: its midpoints are generated,
@@ -100,6 +109,23 @@ struct CandidateEdge {
   bool alive = true;
   bool admissible = true;  // false once an inadmissible midpoint was found
   double risk = kInf;      // set when complete: exactly the piece risk of EvaluateTrajectory
+  // Under binding limits (Run::SetLimits) only: the Lagrangian weight of the
+  // edge's flight time when it is known only once complete (in wind; in
+  // still air and for a length it is in `base` from the start), and, set
+  // when complete, the edge's flight time, its length and base + risk +
+  // late_weight * time (the total the limit is compared with).
+  double late_weight = 0.0;
+  double time_s = 0.0;
+  double length_m = 0.0;
+  double total = kInf;
+};
+
+// A parent chosen for a configuration: the node (-1: none) and the edge to it.
+struct EdgeChoice {
+  int32_t parent = -1;
+  double risk = kInf;
+  double time_s = 0.0;    // under binding limits only
+  double length_m = 0.0;  // under binding limits only
 };
 
 // The refinement edits one tree iteration earns (Run::Refine) when
@@ -167,6 +193,23 @@ class Run {
       const CancellationToken& cancel, RunCallbacks callbacks,
       const GoalTree* initial_tree = nullptr);
 
+  // Flight limits for a single-mission run (the RISK_RRT_STAR planner; the
+  // limit filter still checks what it reports). When they bind (an
+  // endurance or a length limit, or MIN_TIME under a risk limit; not with
+  // the front) the tree carries each node's flight time and length to the
+  // goal, parents and rewiring minimise the Lagrangian R + lambda * C (C the
+  // flight time, or the length under a length limit alone) with lambda
+  // adapted while the run goes on, the start connects to the route that
+  // fits the limits and is best by the objective, and improvements are
+  // reported by the objective among routes that fit (docs/planners.md,
+  // "Limits"). Otherwise nothing changes. REQUIRES: one mission; before
+  // Execute().
+  void SetLimits(const FlightLimits& limits);
+  // After Execute() under binding limits: the last lambda (0 otherwise).
+  double lambda() const { return lambda_; }
+  // After Execute(): the tree's node n (0 the goal, 1 ... M the starts).
+  const std::vector<Node>& nodes() const { return nodes_; }
+
   // Plans until every mission has ended; each gets exactly one on_result:
   // its PlanResult, or the evaluator's error.
   void Execute();
@@ -188,6 +231,9 @@ class Run {
     // lower R of every mission through its nodes, so most reported
     // trajectories are never sampled before the next replaces them.
     std::vector<TrajectoryPiece> best_pieces;
+    // Under binding limits: whether best meets them, and its flight time.
+    bool best_fits = false;
+    double best_time_s = kInf;
   };
 
   bool Admissible(const Pose& q) const {
@@ -240,11 +286,40 @@ class Run {
   // the run's StopCondition is reached between two batches.
   absl::Status EvaluateCandidates(std::vector<CandidateEdge>* edges, bool shared_limit,
                                   int32_t* winner);
-  void SetParent(int32_t child, int32_t parent, double edge_risk);
-  // The candidate parent of `from` with the least R(n) + R(from -> n) below
-  // `bound`, as (node, edge risk); node -1 when none is admissible or below.
+  void SetParent(int32_t child, int32_t parent, double edge_risk, double edge_s = 0.0,
+                 double edge_m = 0.0);
+  // The candidate parent of `from` with the least R(n) + R(from -> n) (under
+  // binding limits the least Key(n) + the edge's R + lambda * C) below
+  // `bound`; choice->parent -1 when none is admissible or below.
   absl::Status BestParent(const Pose& from, const std::vector<int32_t>& candidates, double bound,
-                          int32_t* parent, double* edge_risk);
+                          EdgeChoice* choice);
+  // What branch and bound compares: R(n), or under binding limits
+  // R(n) + lambda * C(n).
+  double Key(int32_t n) const {
+    return limited_ ? nodes_[n].cost + lambda_ * Penalised(n) : nodes_[n].cost;
+  }
+  double Penalised(int32_t n) const {
+    return penalise_length_ ? nodes_[n].to_goal_m : nodes_[n].to_goal_s;
+  }
+  // Under binding limits. A route's rank at the start (lower is better):
+  // fitting routes before the others, fitting ones by the objective (then
+  // the other number), the others by R + lambda * C.
+  struct RouteNumbers {
+    double risk = kInf;
+    double time_s = kInf;
+    double length_m = kInf;
+  };
+  bool Fits(const RouteNumbers& r) const;
+  bool RankBelow(const RouteNumbers& a, const RouteNumbers& b) const;
+  RouteNumbers StartRoute(size_t m) const;
+  // Moves lambda after the start's connection found `key_best`, the route
+  // with the least R + lambda * C: up while it breaks the time or length
+  // limit (or, for MIN_TIME, while it has slack under the risk limit), down
+  // otherwise.
+  void AdaptLambda(const RouteNumbers& key_best);
+  // The flight time and length of the piece from -> to (PieceRisk's).
+  void PieceTimeLength(const Pose& from, const Pose& to, double* time_s, double* length_m) const;
+  absl::Status ConnectStartLimited(size_t m);
   std::vector<int32_t> KNearestFrom(const Pose& from, const std::vector<int32_t>& near,
                                     double max_cost) const;
   absl::Status ConnectStart(size_t m);
@@ -300,10 +375,18 @@ class Run {
   SpatialGrid grid_;
   std::vector<Node> nodes_;
   int64_t iterations_ = 0;
+  // Binding limits (SetLimits).
+  bool limited_ = false;
+  bool penalise_length_ = false;  // C is the length (a length limit without an endurance)
+  FlightLimits limits_;
+  double lambda_ = 0.0;
+  double lambda_ref_ = 0.0;  // lambda's first value
   // Scratch buffers reused between iterations.
   std::vector<int32_t> path_nodes_;
   std::vector<Pose> path_poses_;
   std::vector<double> path_risks_;
+  std::vector<double> path_s_;
+  std::vector<double> path_m_;
   std::vector<Pose> batch_poses_;
   std::vector<ConfigurationRisk> batch_risks_;
 };

@@ -290,8 +290,56 @@ absl::StatusOr<TrajectoryEvaluation> FlightSession::Evaluate(std::span<const Pos
   return EvaluateTrajectory(*model_, *pieces, {}, nullptr, stop);
 }
 
+absl::StatusOr<TrajectoryEvaluation> FlightSession::CommittedNumbers(
+    const StopCondition& stop) const {
+  if (committed_ < 2) return TrajectoryEvaluation{};
+  return Evaluate(std::span<const Pose>(route_.data(), committed_), stop);
+}
+
+absl::StatusOr<::riskplan::FlightLimits> FlightSession::RemainderLimits(
+    const TrajectoryEvaluation& committed) const {
+  ::riskplan::FlightLimits left = spec_.options.limits;
+  left.max_risk_per_flight_hour = 0.0;  // of the whole mission: RemainderFits
+  std::vector<std::string> spent;
+  const auto take = [&](const char* name, double limit, double used, const char* unit,
+                        double* out) {
+    if (limit <= 0.0) return;
+    *out = limit - used;
+    if (!(*out > 0.0)) {
+      spent.push_back(absl::StrFormat(
+          "the committed route (from the session's first pose to the commit point) already "
+          "uses %.6g%s of %s = %g%s",
+          used, unit, name, limit, unit));
+    }
+  };
+  take("max_flight_time_s", spec_.options.limits.max_flight_time_s, committed.flight_time_s,
+       " s", &left.max_flight_time_s);
+  take("max_length_m", spec_.options.limits.max_length_m, committed.length_m, " m",
+       &left.max_length_m);
+  take("max_risk", spec_.options.limits.max_risk, committed.risk, "", &left.max_risk);
+  if (!spent.empty()) {
+    return absl::FailedPreconditionError(
+        absl::StrCat("no remainder can meet the mission's flight limits: ",
+                     absl::StrJoin(spent, "; ")));
+  }
+  return left;
+}
+
+bool FlightSession::RemainderFits(const TrajectoryEvaluation& committed,
+                                  const TrajectoryEvaluation& remainder,
+                                  const ::riskplan::FlightLimits& left) const {
+  if (!CheckNumbers(remainder.risk, remainder.length_m, remainder.flight_time_s, left).meets) {
+    return false;
+  }
+  const double hour = spec_.options.limits.max_risk_per_flight_hour;
+  return hour <= 0.0 || RiskPerFlightHour(committed.risk + remainder.risk,
+                                          committed.flight_time_s + remainder.flight_time_s) <=
+                            hour;
+}
+
 std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
                                                          const PlannerBudget& budget,
+                                                         const ::riskplan::FlightLimits& limits,
                                                          const StopCondition& /*stop*/,
                                                          std::string* why) {
   PlanningProblem problem{model_, from, spec_.goal};
@@ -310,6 +358,7 @@ std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
   }
   PlanOptions options = spec_.options;
   options.budget = budget;
+  options.limits = limits;
   options.record_tree = false;
   // A seed of its own for every plan of the session, reproducible.
   options.seed = spec_.options.seed + version_ * 7919 + searches_;
@@ -324,6 +373,7 @@ std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
   if (!result->best.has_value()) {
     *why = absl::StrFormat("the planner found no admissible remainder in its budget (%s)",
                            StopReasonName(result->reason));
+    if (!result->limits.note.empty()) absl::StrAppend(why, ": ", result->limits.note);
     return std::nullopt;
   }
   return result->best->waypoints;
@@ -363,9 +413,26 @@ void FlightSession::Replan(v1::FlightReason reason, const StopCondition& stop, O
     if (absl::Status s = AddVersion(reason, out); !s.ok()) AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
     return;
   }
+  // The mission's flight limits: what the committed prefix leaves of them.
+  absl::StatusOr<TrajectoryEvaluation> committed_numbers = CommittedNumbers(stop);
+  if (!committed_numbers.ok()) {
+    searching_ = true;
+    AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(committed_numbers.status().message()),
+             out);
+    return;
+  }
+  absl::StatusOr<::riskplan::FlightLimits> left = RemainderLimits(*committed_numbers);
+  if (!left.ok()) {
+    searching_ = true;
+    AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(left.status().message()), out);
+    return;
+  }
+  const bool min_time = left->objective == PlanObjective::kMinTime;
   // The candidates: the current remainder, and the remainders of earlier
   // versions from this same commit point (so that a removed zone gives its
-  // route back), then a new plan from the commit point.
+  // route back), then a new plan from the commit point; each must fit what
+  // the limits leave, and the best by the objective (least risk, or least
+  // flight time) wins.
   const std::vector<Pose> current(route_.begin() + static_cast<std::ptrdiff_t>(committed_ - 1),
                                   route_.end());
   std::vector<std::vector<Pose>> candidates;
@@ -377,35 +444,56 @@ void FlightSession::Replan(v1::FlightReason reason, const StopCondition& stop, O
   }
   candidates.push_back(current);
   const size_t current_index = candidates.size() - 1;
+  // The objective's value of a candidate (risk, or flight time).
+  const auto value = [&](const TrajectoryEvaluation& e) {
+    return min_time ? e.flight_time_s : e.risk;
+  };
   std::optional<double> best_risk;
   size_t best = 0;
+  size_t unfit = 0;
   for (size_t c = 0; c < candidates.size(); ++c) {
     if (candidates[c].size() < 2) continue;
     absl::StatusOr<TrajectoryEvaluation> e = Evaluate(candidates[c], stop);
+    if (!e.ok() || !e->admissible) continue;
+    if (!RemainderFits(*committed_numbers, *e, *left)) {
+      ++unfit;
+      continue;
+    }
     // Ties keep the later candidate (the current remainder is last).
-    if (e.ok() && e->admissible && (!best_risk.has_value() || e->risk <= *best_risk)) {
-      best_risk = e->risk;
+    if (!best_risk.has_value() || value(*e) <= *best_risk) {
+      best_risk = value(*e);
       best = c;
     }
   }
   std::string why;
-  std::optional<std::vector<Pose>> fresh = PlanFrom(commit, budget, stop, &why);
+  std::optional<std::vector<Pose>> fresh = PlanFrom(commit, budget, *left, stop, &why);
   if (fresh.has_value()) {
     absl::StatusOr<TrajectoryEvaluation> e = Evaluate(*fresh, stop);
-    if (e.ok() && e->admissible) {
-      if (!best_risk.has_value() || e->risk < *best_risk) {
+    if (e.ok() && e->admissible && RemainderFits(*committed_numbers, *e, *left)) {
+      if (!best_risk.has_value() || value(*e) < *best_risk) {
         candidates.push_back(*std::move(fresh));
-        best_risk = e->risk;
+        best_risk = value(*e);
         best = candidates.size() - 1;
       }
+    } else if (e.ok() && e->admissible) {
+      ++unfit;
+      why = "the planner's remainder does not meet the mission's flight limits";
     } else {
       why = "the planner's remainder is not admissible under the session's zones";
     }
   }
   if (!best_risk.has_value()) {
     searching_ = true;
-    AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER,
-             absl::StrCat("no admissible remainder from the commit point yet: ", why), out);
+    std::string detail = absl::StrCat("no admissible remainder from the commit point yet: ", why);
+    if (spec_.options.limits.Active() && committed_numbers->length_m > 0.0) {
+      absl::StrAppend(&detail,
+                      absl::StrFormat(" (the committed route flies %.1f s, %.1f m, risk %.4g "
+                                      "of the mission's limits; %d admissible remainders did "
+                                      "not fit what is left)",
+                                      committed_numbers->flight_time_s,
+                                      committed_numbers->length_m, committed_numbers->risk, unfit));
+    }
+    AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::move(detail), out);
     return;
   }
   if (best != current_index) {
@@ -497,6 +585,35 @@ absl::Status FlightSession::AddVersion(v1::FlightReason reason, Outputs* out) {
   };
   if (absl::Status s = fill(route, v->mutable_route(), true); !s.ok()) return s;
   if (absl::Status s = fill(remainder, v->mutable_remainder(), false); !s.ok()) return s;
+  // The mission's numbers (issue 35): the committed prefix from the
+  // session's first pose, and with flight limits the whole mission (that
+  // prefix, then the remainder) against each limit.
+  absl::StatusOr<TrajectoryEvaluation> committed = CommittedNumbers(StopCondition());
+  if (!committed.ok()) return committed.status();
+  v->set_committed_flight_time_s(committed->flight_time_s);
+  v->set_committed_length_m(committed->length_m);
+  v->set_committed_risk(committed->risk);
+  const ::riskplan::FlightLimits& limits = spec_.options.limits;
+  if (limits.max_flight_time_s > 0.0 || limits.max_length_m > 0.0 || limits.max_risk > 0.0 ||
+      limits.max_risk_per_flight_hour > 0.0) {
+    absl::StatusOr<TrajectoryEvaluation> mission =
+        route_.size() >= 2 ? Evaluate(route_, StopCondition())
+                           : absl::StatusOr<TrajectoryEvaluation>(TrajectoryEvaluation{});
+    if (!mission.ok()) return mission.status();
+    const auto margin = [&](const char* name, double value, double bound) {
+      if (bound <= 0.0) return;
+      v1::FlightMargin* f = v->add_margins();
+      f->set_limit(name);
+      f->set_value(value);
+      f->set_bound(bound);
+      f->set_margin(bound - value);
+    };
+    margin("max_flight_time_s", mission->flight_time_s, limits.max_flight_time_s);
+    margin("max_length_m", mission->length_m, limits.max_length_m);
+    margin("max_risk", mission->risk, limits.max_risk);
+    margin("max_risk_per_flight_hour", RiskPerFlightHour(mission->risk, mission->flight_time_s),
+           limits.max_risk_per_flight_hour);
+  }
   v->set_version(++version_);
   v->set_reason(reason);
   for (size_t i = 0; i < committed_; ++i) SetPose(route_[i], v->add_committed());

@@ -125,10 +125,23 @@ class FlightSession {
   Pose AircraftPose() const;
   absl::StatusOr<TrajectoryEvaluation> Evaluate(std::span<const Pose> waypoints,
                                                 const StopCondition& stop) const;
-  // Plans from `from` to the goal with `budget`; nullopt (and *why) when no
-  // admissible trajectory was found.
+  // Plans from `from` to the goal with `budget` under `limits`; nullopt (and
+  // *why, with the limit filter's note) when no admissible trajectory was found.
   std::optional<std::vector<Pose>> PlanFrom(const Pose& from, const PlannerBudget& budget,
+                                            const ::riskplan::FlightLimits& limits,
                                             const StopCondition& stop, std::string* why);
+  // The opening request's flight limits apply to the whole mission (issue
+  // 35): from the session's first pose to the goal. The committed prefix
+  // (route_[0] ... the commit point): its exact numbers.
+  absl::StatusOr<TrajectoryEvaluation> CommittedNumbers(const StopCondition& stop) const;
+  // The limits a remainder from the commit point must meet: each mission
+  // limit minus what the committed prefix uses (time, length, risk; the
+  // per-hour target is checked on the whole mission by RemainderFits);
+  // FailedPrecondition with the detail when the prefix leaves nothing.
+  absl::StatusOr<::riskplan::FlightLimits> RemainderLimits(
+      const TrajectoryEvaluation& committed) const;
+  bool RemainderFits(const TrajectoryEvaluation& committed, const TrajectoryEvaluation& remainder,
+                     const ::riskplan::FlightLimits& left) const;
   // Replans from the commit point and sends a version, or an alert.
   void Replan(v1::FlightReason reason, const StopCondition& stop, Outputs* out,
               const PlannerBudget& budget);

@@ -8,6 +8,7 @@
 
 #include "core/flight/trajectory.h"
 #include "gtest/gtest.h"
+#include "server/api/proto_convert.h"
 #include "server/flight/emergency_landing.h"
 #include "server/flight/flight_session.h"
 #include "server/flight/flight_zones.h"
@@ -254,6 +255,108 @@ TEST_F(FlightSessionTest, TheFirstMessageMustOpenAndAnInputAfterTheEndIsRefused)
   ASSERT_TRUE(after.ok());
   ASSERT_EQ(after->size(), 1u);
   EXPECT_TRUE(after->front().has_refusal());
+}
+
+// The PlanRequest's flight limits apply to the whole mission (issue 35):
+// every version carries the committed prefix's numbers and the mission's
+// margins, and a remainder must fit what the committed prefix leaves.
+const v1::FlightMargin* FindMargin(const v1::FlightPlanVersion& v, const std::string& name) {
+  for (const v1::FlightMargin& m : v.margins()) {
+    if (m.limit() == name) return &m;
+  }
+  return nullptr;
+}
+
+TEST_F(FlightSessionTest, TheFlightLimitsApplyToTheWholeMission) {
+  // A first session with a generous endurance: the mission's margin.
+  v1::FlightInput open = Open();
+  open.mutable_open()->mutable_plan()->mutable_limits()->set_max_flight_time_s(1000.0);
+  FlightSession session(env_);
+  absl::StatusOr<std::vector<v1::FlightOutput>> opened = session.Handle(open, never_);
+  ASSERT_TRUE(opened.ok()) << opened.status();
+  ASSERT_EQ(opened->size(), 1u);
+  ASSERT_TRUE(opened->front().has_plan()) << opened->front().DebugString();
+  const v1::FlightPlanVersion& first = opened->front().plan();
+  {
+    // The commit point moved ahead of the start by the horizon.
+    std::vector<Pose> poses;
+    for (const v1::Pose& p : first.committed()) poses.push_back({p.x(), p.y(), p.z(), p.theta()});
+    ASSERT_GE(poses.size(), 2u);
+    ModelParams params;
+    std::shared_ptr<const RiskModel> model = *models_->Get(*registry_->Find("demo-city"), params);
+    const TrajectoryEvaluation e = *EvaluateTrajectory(*model, *PiecesFromWaypoints(poses, params));
+    EXPECT_EQ(first.committed_flight_time_s(), e.flight_time_s);
+    EXPECT_EQ(first.committed_length_m(), e.length_m);
+    EXPECT_EQ(first.committed_risk(), e.risk);
+  }
+  const v1::FlightMargin* margin = FindMargin(first, "max_flight_time_s");
+  ASSERT_NE(margin, nullptr);
+  EXPECT_EQ(margin->bound(), 1000.0);
+  EXPECT_EQ(margin->value(), first.route().flight_time_s());
+  EXPECT_EQ(margin->margin(), 1000.0 - first.route().flight_time_s());
+  EXPECT_LE(first.route().flight_time_s(), 1000.0);
+  EXPECT_EQ(FindMargin(first, "max_length_m"), nullptr);  // not set
+
+  // The route resumed with most of it committed: the committed prefix's
+  // numbers, exact.
+  const std::vector<Pose> route = Waypoints(first.route());
+  ASSERT_GE(route.size(), 4u);
+  const size_t committed = route.size() - 1;
+  ModelParams params;
+  std::shared_ptr<const RiskModel> model = *models_->Get(*registry_->Find("demo-city"), params);
+  const TrajectoryEvaluation prefix = *EvaluateTrajectory(
+      *model, *PiecesFromWaypoints(std::vector<Pose>(route.begin(), route.begin() + committed),
+                                   params));
+  ASSERT_GT(prefix.flight_time_s, 0.0);
+  const auto resumed = [&](double endurance) {
+    v1::FlightInput in = Open();
+    in.mutable_open()->mutable_plan()->mutable_limits()->set_max_flight_time_s(endurance);
+    in.mutable_open()->set_resume(true);
+    for (const Pose& p : route) PoseToProto(p, in.mutable_open()->add_route());
+    in.mutable_open()->set_committed_count(static_cast<uint32_t>(committed));
+    FlightSession s(env_);
+    absl::StatusOr<std::vector<v1::FlightOutput>> out = s.Handle(in, never_);
+    EXPECT_TRUE(out.ok()) << out.status();
+    EXPECT_EQ(out->size(), 1u);
+    return out->front();
+  };
+  {
+    const v1::FlightOutput out = resumed(first.route().flight_time_s() + 1.0);
+    ASSERT_TRUE(out.has_plan()) << out.DebugString();
+    const v1::FlightPlanVersion& v = out.plan();
+    EXPECT_EQ(v.committed_flight_time_s(), prefix.flight_time_s);
+    EXPECT_EQ(v.committed_length_m(), prefix.length_m);
+    EXPECT_EQ(v.committed_risk(), prefix.risk);
+    // The remainder fits what the prefix leaves, so the mission fits.
+    EXPECT_LE(v.remainder().flight_time_s(),
+              first.route().flight_time_s() + 1.0 - prefix.flight_time_s);
+    const v1::FlightMargin* m = FindMargin(v, "max_flight_time_s");
+    ASSERT_NE(m, nullptr);
+    EXPECT_GE(m->margin(), 0.0);
+  }
+  {
+    // The committed prefix alone breaks the endurance: nothing can fit.
+    const v1::FlightOutput out = resumed(prefix.flight_time_s - 1.0);
+    ASSERT_TRUE(out.has_alert()) << out.DebugString();
+    EXPECT_EQ(out.alert().kind(), v1::FLIGHT_ALERT_NO_REMAINDER);
+    EXPECT_NE(out.alert().detail().find("already uses"), std::string::npos)
+        << out.alert().detail();
+    EXPECT_NE(out.alert().detail().find("max_flight_time_s"), std::string::npos)
+        << out.alert().detail();
+  }
+  {
+    // What is left is less than half the straight line from the commit
+    // point: the planner's note says so.
+    const Pose& c = route[committed - 1];
+    const Pose goal{1700, 1625, 250, 0.785};
+    const double straight =
+        std::hypot(goal.x - c.x, goal.y - c.y) / params.airspeed_mps;
+    const v1::FlightOutput out = resumed(prefix.flight_time_s + 0.5 * straight);
+    ASSERT_TRUE(out.has_alert()) << out.DebugString();
+    EXPECT_EQ(out.alert().kind(), v1::FLIGHT_ALERT_NO_REMAINDER);
+    EXPECT_NE(out.alert().detail().find("no trajectory within the endurance"), std::string::npos)
+        << out.alert().detail();
+  }
 }
 
 }  // namespace

@@ -206,23 +206,33 @@ std::vector<std::string> FlightSession::ActiveZoneIds() const {
 }
 
 absl::Status FlightSession::BuildModel(const StopCondition& stop) {
+  const absl::Time started = absl::Now();
   absl::StatusOr<std::shared_ptr<const RiskModel>> base = env_.models->Get(*spec_.map, params_);
   if (!base.ok()) return base.status();
   active_ids_ = ActiveZoneIds();
   std::vector<const FlightZoneSpec*> active;
   for (const std::string& id : active_ids_) active.push_back(&zones_.at(id));
-  absl::StatusOr<std::shared_ptr<const RiskMap>> map = MapWithZones(spec_.map, active);
-  if (!map.ok()) return map.status();
   glide_.reset();
-  if (*map == spec_.map) {
+  int64_t closed = 0;
+  std::vector<uint8_t> nofly = NoFlyWithZones((*base)->map(), active, &closed);
+  if (closed == 0) {
     model_ = *base;
-    return absl::OkStatus();
+  } else {
+    // No map is copied: the model of the moment shares the base model's
+    // layers and table and has a no-fly layer of its own, and its glide
+    // layers are repaired from the model it follows (the zones that came or
+    // went since), or from the base one after a wind change.
+    const RiskModel& from = model_ != nullptr && model_base_ == *base ? *model_ : **base;
+    absl::StatusOr<std::shared_ptr<const RiskMap>> map =
+        RiskMap::WithNoFly(from.map_ptr(), std::move(nofly), stop);
+    if (!map.ok()) return map.status();
+    absl::StatusOr<std::shared_ptr<const RiskModel>> model =
+        RiskModel::WithMap(from, *std::move(map), stop);
+    if (!model.ok()) return model.status();
+    model_ = *std::move(model);
   }
-  ModelBuildLimits limits = BuildLimits(env_.request_limits, stop);
-  absl::StatusOr<std::shared_ptr<const RiskModel>> model =
-      RiskModel::Create(*map, params_, (*base)->table_ptr(), limits);
-  if (!model.ok()) return model.status();
-  model_ = *model;
+  model_base_ = *base;
+  model_update_ms_ = absl::ToDoubleMilliseconds(absl::Now() - started);
   return absl::OkStatus();
 }
 
@@ -548,10 +558,8 @@ void FlightSession::AddAlert(v1::FlightAlertKind kind, std::string detail, Outpu
       }
       glide = glide_;
     } else {
-      std::vector<uint8_t> nofly = spec_.map->layers().nofly;
-      for (const FlightZoneSpec* zone : closed) CloseZoneCells(*spec_.map, *zone, &nofly);
-      absl::StatusOr<std::shared_ptr<const std::vector<double>>> g =
-          GlideLayerWith(*spec_.map, nofly, params_, StopCondition());
+      absl::StatusOr<std::shared_ptr<const std::vector<double>>> g = GlideLayerRepaired(
+          *model_, NoFlyWithZones(*spec_.map, closed), StopCondition());
       if (g.ok()) glide = *g;
     }
     if (glide != nullptr) landing = FindEmergencyLanding(map, params_, *glide, commit);

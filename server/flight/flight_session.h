@@ -14,8 +14,9 @@
 // (zones, wind, a position off the route); its remainder starts at the
 // commit point, and its route (from the last waypoint at or behind the
 // aircraft to the goal) is admissible under the risk model of that moment:
-// the session's map with every active zone closed (MapWithZones) and its
-// current wind. Its risk, length and flight time are EvaluateTrajectory's.
+// the session's map with every active zone closed and its current wind
+// (BuildModel: a no-fly layer of its own, the other layers shared, the glide
+// layer repaired). Its risk, length and flight time are EvaluateTrajectory's.
 //
 // Replanning is "plan again from the commit point" with the request's
 // planner and the replanning budget, keeping the current remainder (or one
@@ -94,6 +95,8 @@ class FlightSession {
   double progress_m() const { return progress_m_; }
   double commit_arc_m() const { return cum_[committed_ - 1]; }
   std::shared_ptr<const RiskModel> model() const { return model_; }
+  // Wall time of the latest update of the model (zones or wind), ms.
+  double model_update_ms() const { return model_update_ms_; }
 
  private:
   using Outputs = std::vector<v1::FlightOutput>;
@@ -153,6 +156,8 @@ class FlightSession {
   double horizon_s_ = 10.0;
   PlannerBudget replan_budget_;
   std::shared_ptr<const RiskModel> model_;  // params_ and the active zones
+  std::shared_ptr<const RiskModel> model_base_;  // the cache's model model_ derives from
+  double model_update_ms_ = 0.0;
   std::shared_ptr<const std::vector<double>> glide_;  // of model_, made for alerts
   std::map<std::string, FlightZoneSpec> zones_;
   std::vector<std::string> active_ids_;

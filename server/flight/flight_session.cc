@@ -303,7 +303,8 @@ absl::StatusOr<TrajectoryEvaluation> FlightSession::Evaluate(std::span<const Pos
 std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
                                                          const PlannerBudget& budget,
                                                          const StopCondition& /*stop*/,
-                                                         std::string* why) {
+                                                         std::string* why,
+                                                         const ImprovementCallback& on_improvement) {
   PlanningProblem problem{model_, from, spec_.goal};
   if (absl::Status s = CheckEndpoint(*model_, from, "commit point"); !s.ok()) {
     *why = std::string(s.message());
@@ -326,7 +327,9 @@ std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
   // The session's cancellation (a broken stream, the drain) stops the planner.
   static const CancellationToken kNever;
   absl::StatusOr<PlanResult> result = (*planner)->Plan(
-      problem, options, cancel_ != nullptr ? *cancel_ : kNever, [](const PlanImprovement&) {});
+      problem, options, cancel_ != nullptr ? *cancel_ : kNever, [&](const PlanImprovement& imp) {
+        if (on_improvement) on_improvement(imp);
+      });
   if (!result.ok()) {
     *why = std::string(result.status().message());
     return std::nullopt;
@@ -398,8 +401,39 @@ void FlightSession::Replan(v1::FlightReason reason, const StopCondition& stop, O
       best = c;
     }
   }
+  // With an early sink (the call's), the first admissible remainder goes out
+  // at once: the best candidate known now, else the planner's first
+  // admissible solution; the plan's final one follows as an IMPROVED version
+  // when it is of less risk, from the same commit point.
+  const bool early = early_sink_ != nullptr && reason != v1::FLIGHT_REASON_OPENED;
+  const size_t committed_before = committed_;
+  std::optional<double> sent_risk;
+  const auto send_early = [&](const std::vector<Pose>& remainder, bool is_current, double risk) {
+    Outputs now;
+    if (Adopt(remainder, is_current, reason, &now)) sent_risk = risk;
+    for (v1::FlightOutput& o : now) early_sink_(std::move(o));
+  };
+  if (early && best_risk.has_value()) send_early(candidates[best], best == current_index, *best_risk);
+  ImprovementCallback on_improvement;
+  if (early && !sent_risk.has_value()) {
+    on_improvement = [&](const PlanImprovement& imp) {
+      if (sent_risk.has_value() || committed_ != committed_before) return;
+      absl::StatusOr<TrajectoryEvaluation> e = Evaluate(imp.waypoints, stop);
+      if (e.ok() && e->admissible) send_early(imp.waypoints, false, e->risk);
+    };
+  }
   std::string why;
-  std::optional<std::vector<Pose>> fresh = PlanFrom(commit, budget, stop, &why);
+  std::optional<std::vector<Pose>> fresh = PlanFrom(commit, budget, stop, &why, on_improvement);
+  if (sent_risk.has_value()) {
+    // A version is out. The plan's remainder replaces it only from the same
+    // commit point (the version may have moved it on) and with less risk.
+    if (!fresh.has_value() || committed_ != committed_before) return;
+    absl::StatusOr<TrajectoryEvaluation> e = Evaluate(*fresh, stop);
+    if (e.ok() && e->admissible && e->risk < *sent_risk) {
+      Adopt(*fresh, false, v1::FLIGHT_REASON_IMPROVED, out);
+    }
+    return;
+  }
   if (fresh.has_value()) {
     absl::StatusOr<TrajectoryEvaluation> e = Evaluate(*fresh, stop);
     if (e.ok() && e->admissible) {
@@ -418,34 +452,42 @@ void FlightSession::Replan(v1::FlightReason reason, const StopCondition& stop, O
              absl::StrCat("no admissible remainder from the commit point yet: ", why), out);
     return;
   }
-  if (best != current_index) {
+  Adopt(candidates[best], best == current_index, reason, out);
+}
+
+bool FlightSession::Adopt(const std::vector<Pose>& remainder, bool is_current,
+                          v1::FlightReason reason, Outputs* out) {
+  if (!is_current) {
     // The remainder it replaces stays a candidate for later changes.
+    const std::vector<Pose> current(route_.begin() + static_cast<std::ptrdiff_t>(committed_ - 1),
+                                    route_.end());
     if (current.size() >= 2) {
       alternatives_.push_back(current);
       if (alternatives_.size() > kMaxAlternatives) alternatives_.erase(alternatives_.begin());
     }
     route_.resize(committed_);
-    route_.insert(route_.end(), candidates[best].begin() + 1, candidates[best].end());
+    route_.insert(route_.end(), remainder.begin() + 1, remainder.end());
   }
   if (absl::Status s = RecomputeArcs(); !s.ok()) {
     searching_ = true;
     AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
-    return;
+    return false;
   }
   if (!CommitRuleHolds()) {
     if (absl::Status s = CommitTo(progress_m_ + 1.5 * HorizonM()); !s.ok()) {
       searching_ = true;
       AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
-      return;
+      return false;
     }
   }
   if (absl::Status s = AddVersion(reason, out); !s.ok()) {
     searching_ = true;
     AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
-    return;
+    return false;
   }
   searching_ = false;
   last_alert_ = v1::FLIGHT_ALERT_UNSPECIFIED;
+  return true;
 }
 
 absl::Status FlightSession::AddVersion(v1::FlightReason reason, Outputs* out) {

@@ -31,6 +31,7 @@
 #define RISKPLAN_SERVER_FLIGHT_FLIGHT_SESSION_H_
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -79,6 +80,16 @@ class FlightSession {
   // the server drains): the outputs made so far are returned.
   absl::StatusOr<std::vector<v1::FlightOutput>> Handle(const v1::FlightInput& input,
                                                        const CancellationToken& cancel);
+
+  // Where outputs made before an input's handling ends go at once (the
+  // FlightCall writes them): when set, a change's first admissible remainder
+  // (the best already known, else the planner's first admissible solution)
+  // is sent as soon as it exists, and the plan's final remainder follows as
+  // an IMPROVED version when it is of less risk. Without one (the default)
+  // each change makes one version, after the plan.
+  void set_early_sink(std::function<void(v1::FlightOutput)> sink) {
+    early_sink_ = std::move(sink);
+  }
 
   // An alert is in force: Search() plans again from the commit point.
   bool searching() const { return searching_; }
@@ -131,15 +142,22 @@ class FlightSession {
   // Plans from `from` to the goal with `budget`; nullopt (and *why) when no
   // admissible trajectory was found.
   std::optional<std::vector<Pose>> PlanFrom(const Pose& from, const PlannerBudget& budget,
-                                            const StopCondition& stop, std::string* why);
+                                            const StopCondition& stop, std::string* why,
+                                            const ImprovementCallback& on_improvement = {});
   // Replans from the commit point and sends a version, or an alert.
   void Replan(v1::FlightReason reason, const StopCondition& stop, Outputs* out,
               const PlannerBudget& budget);
+  // Makes `remainder` (from the commit point; the current one when
+  // `is_current`) the route's, keeps the commit rule and sends a version;
+  // false, with an alert, when it cannot.
+  bool Adopt(const std::vector<Pose>& remainder, bool is_current, v1::FlightReason reason,
+             Outputs* out);
   // A plan version of the current route (which must be admissible).
   absl::Status AddVersion(v1::FlightReason reason, Outputs* out);
   void AddAlert(v1::FlightAlertKind kind, std::string detail, Outputs* out);
 
   const FlightEnv env_;
+  std::function<void(v1::FlightOutput)> early_sink_;
   const CancellationToken* cancel_ = nullptr;  // of the Handle or Search running
   const std::string empty_;
   bool opened_ = false;

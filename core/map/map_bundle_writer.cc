@@ -105,7 +105,7 @@ absl::Status WriteBundleFiles(const RiskMap& map, const BundleFileSink& sink,
     std::vector<uint8_t> bytes = name == "density"   ? EncodeFloat32(l.density)
                                  : name == "shelter" ? EncodeFloat32(l.shelter)
                                  : name == "terrain" ? EncodeFloat32(l.terrain)
-                                                     : l.nofly;
+                                                     : map.nofly_layer();
     if (absl::Status s =
             sink(info.default_file, reinterpret_cast<const char*>(bytes.data()), bytes.size());
         !s.ok()) {

@@ -74,6 +74,13 @@ inline constexpr int kMaxMapSide = 65536;
 // buffer from an unchecked header.
 absl::Status ValidateMapHeader(const MapHeader& header);
 
+// How much work a RepairGlideAltitude() did.
+struct GlideRepairStats {
+  int64_t closed = 0;    // cells open before, no-fly now
+  int64_t opened = 0;    // cells no-fly before, open now
+  int64_t affected = 0;  // open cells whose every glide path ran through a closed cell
+  int64_t settled = 0;   // cells the restricted Dijkstra settled
+};
 class RiskMap {
  public:
   // Width of the border of padding around the padded density and shelter
@@ -121,25 +128,49 @@ class RiskMap {
   // Layer values of an in-map cell. REQUIRES: Contains(i, j).
   float density(int i, int j) const {
     RISKPLAN_DCHECK(Contains(i, j));
-    return layers_.density[Index(i, j)];
+    return density_[Index(i, j)];
   }
   float shelter(int i, int j) const {
     RISKPLAN_DCHECK(Contains(i, j));
-    return layers_.shelter[Index(i, j)];
+    return shelter_[Index(i, j)];
   }
   float terrain(int i, int j) const {
     RISKPLAN_DCHECK(Contains(i, j));
-    return layers_.terrain[Index(i, j)];
+    return terrain_[Index(i, j)];
   }
   bool nofly(int i, int j) const {
     RISKPLAN_DCHECK(Contains(i, j));
-    return layers_.nofly[Index(i, j)] != 0;
+    return nofly_[Index(i, j)] != 0;
   }
-  const MapLayers& layers() const { return layers_; }
+  // The layers the map was created with. A map made by WithNoFly() shares
+  // them with its base, and its no-fly layer is nofly_layer(), not
+  // layers().nofly (its base's): read the no-fly cells through nofly() or
+  // nofly_layer().
+  const MapLayers& layers() const { return shared_->layers; }
+  // The no-fly layer of this map (nx*ny entries, 0 or 1).
+  const std::vector<uint8_t>& nofly_layer() const { return *nofly_layer_; }
   // The lowest and highest terrain of the map, m AMSL (computed once).
-  double terrain_min_m() const { return terrain_min_m_; }
-  double terrain_max_m() const { return terrain_max_m_; }
-  const std::vector<LandingSite>& landing_sites() const { return layers_.landing_sites; }
+  double terrain_min_m() const { return shared_->terrain_min_m; }
+  double terrain_max_m() const { return shared_->terrain_max_m; }
+  const std::vector<LandingSite>& landing_sites() const { return shared_->layers.landing_sites; }
+
+  // A map with the header, density, shelter, terrain and landing sites of
+  // `base`, shared rather than copied, and `nofly` (nx*ny entries, each 0 or
+  // 1) as its no-fly layer: an in-flight session's map with its temporary
+  // zones closed. Its glide layer is `base`'s repaired by
+  // RepairGlideAltitude (the same layer as ComputeGlideAltitude of `nofly`,
+  // bit for bit), so it costs what the cells whose glide altitude changes
+  // cost, not a map's Dijkstra; `stats`, when given, says how many. Errors
+  // name the layer as Create() does ("layer 'nofly' has N entries; ...",
+  // "layer 'nofly': cell (i, j) has value V; nofly must be 0 or 1"), and
+  // Cancelled once `stop` is reached.
+  static absl::StatusOr<std::shared_ptr<const RiskMap>> WithNoFly(
+      const std::shared_ptr<const RiskMap>& base, std::vector<uint8_t> nofly,
+      const StopCondition& stop = StopCondition(), GlideRepairStats* stats = nullptr);
+  // True when both maps hold the same density, shelter and terrain layers
+  // and landing sites (one made from the other by WithNoFly(), or both from
+  // the same map): they differ at most in their no-fly cells.
+  bool SharesLayersWith(const RiskMap& other) const { return shared_ == other.shared_; }
 
   // Density and shelter with a border of kPad cells on every side (density 0,
   // shelter 10, as version 1 of the spec read unknown ground), so that the
@@ -153,14 +184,18 @@ class RiskMap {
   int64_t PaddedIndex(int i, int j) const {
     return static_cast<int64_t>(j + kPad) * padded_nx() + (i + kPad);
   }
-  const float* padded_density() const { return padded_density_.data(); }
-  const float* padded_shelter() const { return padded_shelter_.data(); }
+  const float* padded_density() const { return shared_->padded_density.data(); }
+  const float* padded_shelter() const { return shared_->padded_shelter.data(); }
 
   // Glide altitude of spec section 6 (m AMSL) for the glide ratio and clearance
   // the map was created with; +infinity where no landing site can be reached
   // (and everywhere when the map has no landing sites, where safe altitude is
   // terrain + min_agl alone). See SafeAltitude().
-  const std::vector<double>& glide_altitude() const { return glide_altitude_; }
+  const std::vector<double>& glide_altitude() const { return *glide_altitude_; }
+  // The same layer, to share it beyond the map's lifetime.
+  const std::shared_ptr<const std::vector<double>>& glide_altitude_ptr() const {
+    return glide_altitude_;
+  }
   double glide_ratio() const { return glide_ratio_; }
   double glide_clearance_m() const { return glide_clearance_m_; }
 
@@ -168,19 +203,32 @@ class RiskMap {
   // REQUIRES: Contains(i, j).
   double SafeAltitude(int i, int j, double min_agl_m) const;
 
-  // Bytes held by the layers (for metrics and the memory budget).
+  // Bytes held by the layers (for metrics and the memory budget), those
+  // shared with other maps (WithNoFly) included.
   size_t MemoryBytes() const;
 
  private:
   RiskMap() = default;
 
+  // What maps made by WithNoFly() share with their base.
+  struct Shared {
+    MapLayers layers;
+    std::vector<float> padded_density;
+    std::vector<float> padded_shelter;
+    double terrain_min_m = 0.0;
+    double terrain_max_m = 0.0;
+  };
+
   MapHeader header_;
-  MapLayers layers_;
-  std::vector<float> padded_density_;
-  std::vector<float> padded_shelter_;
-  std::vector<double> glide_altitude_;
-  double terrain_min_m_ = 0.0;
-  double terrain_max_m_ = 0.0;
+  std::shared_ptr<const Shared> shared_;
+  // shared_->layers.nofly, or a layer of the map's own (WithNoFly).
+  std::shared_ptr<const std::vector<uint8_t>> nofly_layer_;
+  std::shared_ptr<const std::vector<double>> glide_altitude_;
+  // The layers' data, read by the accessors above.
+  const float* density_ = nullptr;
+  const float* shelter_ = nullptr;
+  const float* terrain_ = nullptr;
+  const uint8_t* nofly_ = nullptr;
   double glide_ratio_ = 10.0;
   double glide_clearance_m_ = 10.0;
 };
@@ -227,6 +275,28 @@ absl::StatusOr<std::vector<double>> ComputeGlideAltitude(int nx, int ny, double 
                                                          double glide_ratio, double clearance_m,
                                                          const StopCondition& stop,
                                                          const GlideWind& wind = {});
+
+// Repairs a glide layer for a change of the no-fly layer: `*glide` holds
+// ComputeGlideAltitude(..., old_nofly, ...) on entry and, on success,
+// ComputeGlideAltitude(..., new_nofly, ...) on return, bit for bit (the
+// same parameters otherwise), at the cost of the cells the change reaches.
+// Closing cells can only raise glide altitudes: the open cells whose every
+// shortest glide ran through a newly closed cell (found in increasing
+// altitude, the neighbours that give a cell its altitude being its
+// predecessors) are reset, seeded from their other neighbours, and settled
+// again by the same relaxation. Opening cells can only lower them: the
+// reopened cells are seeded from their neighbours and the relaxation spreads
+// from them as far as it lowers anything. Both at once are one Dijkstra.
+// On error (Cancelled once `stop` is reached) *glide is unspecified.
+// REQUIRES: terrain, both no-fly layers and *glide hold nx*ny entries,
+// glide_ratio > 0.
+absl::Status RepairGlideAltitude(int nx, int ny, double res, const std::vector<float>& terrain,
+                                 const std::vector<LandingSite>& sites, double glide_ratio,
+                                 double clearance_m, const GlideWind& wind,
+                                 const std::vector<uint8_t>& old_nofly,
+                                 const std::vector<uint8_t>& new_nofly, std::vector<double>* glide,
+                                 const StopCondition& stop = StopCondition(),
+                                 GlideRepairStats* stats = nullptr);
 
 }  // namespace riskplan
 

@@ -127,7 +127,7 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
     const RiskMap& m = *model->map_;
     const WindVector w = WindVectorOf(params.wind_speed_mps, params.wind_from_deg);
     absl::StatusOr<std::vector<double>> glide = ComputeGlideAltitude(
-        m.nx(), m.ny(), m.res(), m.layers().terrain, m.layers().nofly, m.landing_sites(),
+        m.nx(), m.ny(), m.res(), m.layers().terrain, m.nofly_layer(), m.landing_sites(),
         params.glide_ratio, params.glide_clearance_m, limits.stop,
         GlideWind{.x = w.x, .y = w.y, .airspeed_mps = params.GlideAirspeed()});
     if (!glide.ok()) return glide.status();
@@ -143,6 +143,39 @@ absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::Create(
     model->margins_upto_.push_back(upto);
   }
   model->band_margins_ = upto;
+  return std::shared_ptr<const RiskModel>(std::move(model));
+}
+
+absl::StatusOr<std::shared_ptr<const RiskModel>> RiskModel::WithMap(
+    const RiskModel& from, std::shared_ptr<const RiskMap> map, const StopCondition& stop,
+    GlideRepairStats* stats) {
+  if (map == nullptr) return absl::InvalidArgumentError("risk model: no map");
+  if (!map->SharesLayersWith(*from.map_)) {
+    return absl::InvalidArgumentError(
+        "risk model: the map given does not share the model's map layers (RiskMap::WithNoFly)");
+  }
+  auto model = std::shared_ptr<RiskModel>(new RiskModel(from));
+  if (from.own_glide_ == nullptr) {
+    // From reads its map's layer (Create's rule), so this one reads its map's.
+    model->own_glide_ = nullptr;
+    model->glide_ = &map->glide_altitude();
+    if (stats != nullptr) *stats = GlideRepairStats{};
+  } else {
+    const ModelParams& p = from.params_;
+    const WindVector w = WindVectorOf(p.wind_speed_mps, p.wind_from_deg);
+    std::vector<double> glide = *from.own_glide_;
+    if (absl::Status s = RepairGlideAltitude(
+            map->nx(), map->ny(), map->res(), map->layers().terrain, map->landing_sites(),
+            p.glide_ratio, p.glide_clearance_m,
+            GlideWind{.x = w.x, .y = w.y, .airspeed_mps = p.GlideAirspeed()},
+            from.map_->nofly_layer(), map->nofly_layer(), &glide, stop, stats);
+        !s.ok()) {
+      return s;
+    }
+    model->own_glide_ = std::make_shared<const std::vector<double>>(std::move(glide));
+    model->glide_ = model->own_glide_.get();
+  }
+  model->map_ = std::move(map);
   return std::shared_ptr<const RiskModel>(std::move(model));
 }
 

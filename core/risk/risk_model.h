@@ -106,6 +106,19 @@ class RiskModel {
       std::shared_ptr<const RiskMap> map, const ModelParams& params,
       std::shared_ptr<const ImpactTable> table = nullptr, const ModelBuildLimits& limits = {});
 
+  // The same model (parameters, impact table, wind) on `map`, which must
+  // share the layers of from.map() (RiskMap::WithNoFly) and so differ from it
+  // only in its no-fly cells: every configuration risk is from's bit for bit,
+  // and admissibility and the glide layer are those of `map`'s no-fly cells.
+  // The glide layer is the map's own when the model reads its map's (still
+  // air, the map's glide ratio and clearance), else from's repaired for the
+  // change (RepairGlideAltitude: the layer Create() would compute, bit for
+  // bit, without a map's Dijkstra). InvalidArgument when `map` does not share
+  // from's layers; Cancelled once `stop` is reached.
+  static absl::StatusOr<std::shared_ptr<const RiskModel>> WithMap(
+      const RiskModel& from, std::shared_ptr<const RiskMap> map,
+      const StopCondition& stop = StopCondition(), GlideRepairStats* stats = nullptr);
+
   const RiskMap& map() const { return *map_; }
   const std::shared_ptr<const RiskMap>& map_ptr() const { return map_; }
   const ImpactTable& table() const { return *table_; }
@@ -165,6 +178,13 @@ class RiskModel {
   // map exactly when M(q) is defined.
   ViolationKind CheckConfiguration(const Pose& q, const ConfigurationRisk& m,
                                    double* limit_m = nullptr) const;
+
+  // The glide layer safe altitudes read (spec section 6, this model's wind,
+  // glide ratio and clearance, the map's no-fly cells): the map's own or one
+  // of the model's.
+  std::shared_ptr<const std::vector<double>> glide_layer() const {
+    return own_glide_ != nullptr ? own_glide_ : map_->glide_altitude_ptr();
+  }
 
   // safe_alt(cell) with this model's glide layer and min_agl.
   // REQUIRES: map().Contains(i, j).

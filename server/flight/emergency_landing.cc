@@ -9,16 +9,25 @@
 
 namespace riskplan::server {
 
-absl::StatusOr<std::shared_ptr<const std::vector<double>>> GlideLayerOf(const RiskModel& model,
-                                                                        const StopCondition& stop) {
+absl::StatusOr<std::shared_ptr<const std::vector<double>>> GlideLayerOf(
+    const RiskModel& model, const StopCondition& /*stop*/) {
+  return model.glide_layer();
+}
+
+absl::StatusOr<std::shared_ptr<const std::vector<double>>> GlideLayerRepaired(
+    const RiskModel& model, const std::vector<uint8_t>& nofly, const StopCondition& stop) {
   const RiskMap& map = model.map();
   const ModelParams& p = model.params();
-  if (p.Calm() && map.glide_ratio() == p.glide_ratio &&
-      map.glide_clearance_m() == p.glide_clearance_m) {
-    // The model reads the map's own layer (RiskModel::Create): share it.
-    return std::shared_ptr<const std::vector<double>>(model.map_ptr(), &map.glide_altitude());
+  const WindVector w = WindVectorOf(p.wind_speed_mps, p.wind_from_deg);
+  std::vector<double> glide = *model.glide_layer();
+  if (absl::Status s = RepairGlideAltitude(
+          map.nx(), map.ny(), map.res(), map.layers().terrain, map.landing_sites(), p.glide_ratio,
+          p.glide_clearance_m, GlideWind{w.x, w.y, p.GlideAirspeed()}, map.nofly_layer(), nofly,
+          &glide, stop);
+      !s.ok()) {
+    return s;
   }
-  return GlideLayerWith(map, map.layers().nofly, p, stop);
+  return std::make_shared<const std::vector<double>>(std::move(glide));
 }
 
 absl::StatusOr<std::shared_ptr<const std::vector<double>>> GlideLayerWith(

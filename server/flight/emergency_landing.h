@@ -34,10 +34,16 @@ struct EmergencyOption {
   double altitude_margin_m = 0.0;  // from.z - glide(from's cell)
 };
 
-// The glide layer of `model` (its map's own when the model uses it, else
-// computed again as RiskModel::Create computes it). Cancelled at `stop`.
+// The glide layer of `model` (RiskModel::glide_layer(): its map's own when
+// the model uses it, else the model's), shared, never computed again.
 absl::StatusOr<std::shared_ptr<const std::vector<double>>> GlideLayerOf(const RiskModel& model,
                                                                         const StopCondition& stop);
+
+// The glide layer `model` would have with `nofly` (nx*ny) as its map's no-fly
+// layer: its own repaired for the cells that differ (RepairGlideAltitude,
+// GlideLayerWith's layer bit for bit). Cancelled at `stop`.
+absl::StatusOr<std::shared_ptr<const std::vector<double>>> GlideLayerRepaired(
+    const RiskModel& model, const std::vector<uint8_t>& nofly, const StopCondition& stop);
 
 // The glide layer of `map`'s terrain, landing sites and `nofly` layer with
 // `params`' glide ratio, clearance and wind (what RiskModel::Create computes

@@ -22,7 +22,26 @@ FlightCall::FlightCall(const FlightCallEnv& env, grpc::CallbackServerContext* ct
       started_(absl::Now()),
       peer_(ctx->peer()),
       caller_(std::move(caller)),
-      session_(env.flight) {}
+      session_(env.flight) {
+  // Only the step running on the pool calls it (the session's thread).
+  session_.set_early_sink([this](v1::FlightOutput o) { EmitEarly(std::move(o)); });
+}
+
+void FlightCall::QueueLocked(v1::FlightOutput o) {
+  versions_ += o.has_plan() ? 1 : 0;
+  alerts_ += o.has_alert() ? 1 : 0;
+  refusals_ += o.has_refusal() ? 1 : 0;
+  outputs_.push_back(std::move(o));
+}
+
+void FlightCall::EmitEarly(v1::FlightOutput output) {
+  {
+    absl::MutexLock lock(&mu_);
+    if (end_.has_value()) return;
+    QueueLocked(std::move(output));
+  }
+  Pump();
+}
 
 void FlightCall::Start() {
   {
@@ -134,12 +153,7 @@ void FlightCall::Step() {
   bool again = false;
   {
     absl::MutexLock lock(&mu_);
-    for (v1::FlightOutput& o : outs) {
-      versions_ += o.has_plan() ? 1 : 0;
-      alerts_ += o.has_alert() ? 1 : 0;
-      refusals_ += o.has_refusal() ? 1 : 0;
-      outputs_.push_back(std::move(o));
-    }
+    for (v1::FlightOutput& o : outs) QueueLocked(std::move(o));
     if (map_.empty()) map_ = session_.map_name();
     if (outputs_.size() > kMaxQueuedOutputs) {
       end = grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,

@@ -80,6 +80,11 @@ class FlightCall final : public grpc::ServerBidiReactor<v1::FlightInput, v1::Fli
   void EndLocked(const grpc::Status& status) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
   // Starts the next write or the finish, if due. Called without mu_.
   void Pump() ABSL_LOCKS_EXCLUDED(mu_);
+  // Queues an output the step made before its end (the session's early
+  // sink: a change's first admissible remainder) and starts writing it.
+  void EmitEarly(v1::FlightOutput output) ABSL_LOCKS_EXCLUDED(mu_);
+  // Counts and queues `output`. REQUIRES mu_.
+  void QueueLocked(v1::FlightOutput output) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const FlightCallEnv env_;
   const absl::Time started_;

@@ -206,23 +206,33 @@ std::vector<std::string> FlightSession::ActiveZoneIds() const {
 }
 
 absl::Status FlightSession::BuildModel(const StopCondition& stop) {
+  const absl::Time started = absl::Now();
   absl::StatusOr<std::shared_ptr<const RiskModel>> base = env_.models->Get(*spec_.map, params_);
   if (!base.ok()) return base.status();
   active_ids_ = ActiveZoneIds();
   std::vector<const FlightZoneSpec*> active;
   for (const std::string& id : active_ids_) active.push_back(&zones_.at(id));
-  absl::StatusOr<std::shared_ptr<const RiskMap>> map = MapWithZones(spec_.map, active);
-  if (!map.ok()) return map.status();
   glide_.reset();
-  if (*map == spec_.map) {
+  int64_t closed = 0;
+  std::vector<uint8_t> nofly = NoFlyWithZones((*base)->map(), active, &closed);
+  if (closed == 0) {
     model_ = *base;
-    return absl::OkStatus();
+  } else {
+    // No map is copied: the model of the moment shares the base model's
+    // layers and table and has a no-fly layer of its own, and its glide
+    // layers are repaired from the model it follows (the zones that came or
+    // went since), or from the base one after a wind change.
+    const RiskModel& from = model_ != nullptr && model_base_ == *base ? *model_ : **base;
+    absl::StatusOr<std::shared_ptr<const RiskMap>> map =
+        RiskMap::WithNoFly(from.map_ptr(), std::move(nofly), stop);
+    if (!map.ok()) return map.status();
+    absl::StatusOr<std::shared_ptr<const RiskModel>> model =
+        RiskModel::WithMap(from, *std::move(map), stop);
+    if (!model.ok()) return model.status();
+    model_ = *std::move(model);
   }
-  ModelBuildLimits limits = BuildLimits(env_.request_limits, stop);
-  absl::StatusOr<std::shared_ptr<const RiskModel>> model =
-      RiskModel::Create(*map, params_, (*base)->table_ptr(), limits);
-  if (!model.ok()) return model.status();
-  model_ = *model;
+  model_base_ = *base;
+  model_update_ms_ = absl::ToDoubleMilliseconds(absl::Now() - started);
   return absl::OkStatus();
 }
 
@@ -341,7 +351,8 @@ std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
                                                          const PlannerBudget& budget,
                                                          const ::riskplan::FlightLimits& limits,
                                                          const StopCondition& /*stop*/,
-                                                         std::string* why) {
+                                                         std::string* why,
+                                                         const ImprovementCallback& on_improvement) {
   PlanningProblem problem{model_, from, spec_.goal};
   if (absl::Status s = CheckEndpoint(*model_, from, "commit point"); !s.ok()) {
     *why = std::string(s.message());
@@ -365,7 +376,9 @@ std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
   // The session's cancellation (a broken stream, the drain) stops the planner.
   static const CancellationToken kNever;
   absl::StatusOr<PlanResult> result = (*planner)->Plan(
-      problem, options, cancel_ != nullptr ? *cancel_ : kNever, [](const PlanImprovement&) {});
+      problem, options, cancel_ != nullptr ? *cancel_ : kNever, [&](const PlanImprovement& imp) {
+        if (on_improvement) on_improvement(imp);
+      });
   if (!result.ok()) {
     *why = std::string(result.status().message());
     return std::nullopt;
@@ -465,8 +478,45 @@ void FlightSession::Replan(v1::FlightReason reason, const StopCondition& stop, O
       best = c;
     }
   }
+  // With an early sink (the call's), the first admissible remainder that fits
+  // the limits goes out at once: the best candidate known now, else the
+  // planner's first such solution; the plan's final one follows as an
+  // IMPROVED version when it is better by the objective, from the same
+  // commit point. (sent_risk holds the objective's value: risk, or time.)
+  const bool early = early_sink_ != nullptr && reason != v1::FLIGHT_REASON_OPENED;
+  const size_t committed_before = committed_;
+  std::optional<double> sent_risk;
+  const auto send_early = [&](const std::vector<Pose>& remainder, bool is_current, double risk) {
+    Outputs now;
+    if (Adopt(remainder, is_current, reason, &now)) sent_risk = risk;
+    for (v1::FlightOutput& o : now) early_sink_(std::move(o));
+  };
+  if (early && best_risk.has_value()) send_early(candidates[best], best == current_index, *best_risk);
+  ImprovementCallback on_improvement;
+  if (early && !sent_risk.has_value()) {
+    on_improvement = [&](const PlanImprovement& imp) {
+      if (sent_risk.has_value() || committed_ != committed_before) return;
+      absl::StatusOr<TrajectoryEvaluation> e = Evaluate(imp.waypoints, stop);
+      if (e.ok() && e->admissible && RemainderFits(*committed_numbers, *e, *left)) {
+        send_early(imp.waypoints, false, value(*e));
+      }
+    };
+  }
   std::string why;
-  std::optional<std::vector<Pose>> fresh = PlanFrom(commit, budget, *left, stop, &why);
+  std::optional<std::vector<Pose>> fresh =
+      PlanFrom(commit, budget, *left, stop, &why, on_improvement);
+  if (sent_risk.has_value()) {
+    // A version is out. The plan's remainder replaces it only from the same
+    // commit point (the version may have moved it on), within what the
+    // limits leave, and better by the objective.
+    if (!fresh.has_value() || committed_ != committed_before) return;
+    absl::StatusOr<TrajectoryEvaluation> e = Evaluate(*fresh, stop);
+    if (e.ok() && e->admissible && RemainderFits(*committed_numbers, *e, *left) &&
+        value(*e) < *sent_risk) {
+      Adopt(*fresh, false, v1::FLIGHT_REASON_IMPROVED, out);
+    }
+    return;
+  }
   if (fresh.has_value()) {
     absl::StatusOr<TrajectoryEvaluation> e = Evaluate(*fresh, stop);
     if (e.ok() && e->admissible && RemainderFits(*committed_numbers, *e, *left)) {
@@ -496,34 +546,42 @@ void FlightSession::Replan(v1::FlightReason reason, const StopCondition& stop, O
     AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::move(detail), out);
     return;
   }
-  if (best != current_index) {
+  Adopt(candidates[best], best == current_index, reason, out);
+}
+
+bool FlightSession::Adopt(const std::vector<Pose>& remainder, bool is_current,
+                          v1::FlightReason reason, Outputs* out) {
+  if (!is_current) {
     // The remainder it replaces stays a candidate for later changes.
+    const std::vector<Pose> current(route_.begin() + static_cast<std::ptrdiff_t>(committed_ - 1),
+                                    route_.end());
     if (current.size() >= 2) {
       alternatives_.push_back(current);
       if (alternatives_.size() > kMaxAlternatives) alternatives_.erase(alternatives_.begin());
     }
     route_.resize(committed_);
-    route_.insert(route_.end(), candidates[best].begin() + 1, candidates[best].end());
+    route_.insert(route_.end(), remainder.begin() + 1, remainder.end());
   }
   if (absl::Status s = RecomputeArcs(); !s.ok()) {
     searching_ = true;
     AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
-    return;
+    return false;
   }
   if (!CommitRuleHolds()) {
     if (absl::Status s = CommitTo(progress_m_ + 1.5 * HorizonM()); !s.ok()) {
       searching_ = true;
       AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
-      return;
+      return false;
     }
   }
   if (absl::Status s = AddVersion(reason, out); !s.ok()) {
     searching_ = true;
     AddAlert(v1::FLIGHT_ALERT_NO_REMAINDER, std::string(s.message()), out);
-    return;
+    return false;
   }
   searching_ = false;
   last_alert_ = v1::FLIGHT_ALERT_UNSPECIFIED;
+  return true;
 }
 
 absl::Status FlightSession::AddVersion(v1::FlightReason reason, Outputs* out) {
@@ -665,10 +723,8 @@ void FlightSession::AddAlert(v1::FlightAlertKind kind, std::string detail, Outpu
       }
       glide = glide_;
     } else {
-      std::vector<uint8_t> nofly = spec_.map->layers().nofly;
-      for (const FlightZoneSpec* zone : closed) CloseZoneCells(*spec_.map, *zone, &nofly);
-      absl::StatusOr<std::shared_ptr<const std::vector<double>>> g =
-          GlideLayerWith(*spec_.map, nofly, params_, StopCondition());
+      absl::StatusOr<std::shared_ptr<const std::vector<double>>> g = GlideLayerRepaired(
+          *model_, NoFlyWithZones(*spec_.map, closed), StopCondition());
       if (g.ok()) glide = *g;
     }
     if (glide != nullptr) landing = FindEmergencyLanding(map, params_, *glide, commit);

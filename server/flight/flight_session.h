@@ -14,8 +14,9 @@
 // (zones, wind, a position off the route); its remainder starts at the
 // commit point, and its route (from the last waypoint at or behind the
 // aircraft to the goal) is admissible under the risk model of that moment:
-// the session's map with every active zone closed (MapWithZones) and its
-// current wind. Its risk, length and flight time are EvaluateTrajectory's.
+// the session's map with every active zone closed and its current wind
+// (BuildModel: a no-fly layer of its own, the other layers shared, the glide
+// layer repaired). Its risk, length and flight time are EvaluateTrajectory's.
 //
 // Replanning is "plan again from the commit point" with the request's
 // planner and the replanning budget, keeping the current remainder (or one
@@ -30,6 +31,7 @@
 #define RISKPLAN_SERVER_FLIGHT_FLIGHT_SESSION_H_
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -79,6 +81,16 @@ class FlightSession {
   absl::StatusOr<std::vector<v1::FlightOutput>> Handle(const v1::FlightInput& input,
                                                        const CancellationToken& cancel);
 
+  // Where outputs made before an input's handling ends go at once (the
+  // FlightCall writes them): when set, a change's first admissible remainder
+  // (the best already known, else the planner's first admissible solution)
+  // is sent as soon as it exists, and the plan's final remainder follows as
+  // an IMPROVED version when it is of less risk. Without one (the default)
+  // each change makes one version, after the plan.
+  void set_early_sink(std::function<void(v1::FlightOutput)> sink) {
+    early_sink_ = std::move(sink);
+  }
+
   // An alert is in force: Search() plans again from the commit point.
   bool searching() const { return searching_; }
   std::vector<v1::FlightOutput> Search(const CancellationToken& cancel);
@@ -94,6 +106,8 @@ class FlightSession {
   double progress_m() const { return progress_m_; }
   double commit_arc_m() const { return cum_[committed_ - 1]; }
   std::shared_ptr<const RiskModel> model() const { return model_; }
+  // Wall time of the latest update of the model (zones or wind), ms.
+  double model_update_ms() const { return model_update_ms_; }
 
  private:
   using Outputs = std::vector<v1::FlightOutput>;
@@ -129,7 +143,8 @@ class FlightSession {
   // *why, with the limit filter's note) when no admissible trajectory was found.
   std::optional<std::vector<Pose>> PlanFrom(const Pose& from, const PlannerBudget& budget,
                                             const ::riskplan::FlightLimits& limits,
-                                            const StopCondition& stop, std::string* why);
+                                            const StopCondition& stop, std::string* why,
+                                            const ImprovementCallback& on_improvement = {});
   // The opening request's flight limits apply to the whole mission (issue
   // 35): from the session's first pose to the goal. The committed prefix
   // (route_[0] ... the commit point): its exact numbers.
@@ -145,11 +160,17 @@ class FlightSession {
   // Replans from the commit point and sends a version, or an alert.
   void Replan(v1::FlightReason reason, const StopCondition& stop, Outputs* out,
               const PlannerBudget& budget);
+  // Makes `remainder` (from the commit point; the current one when
+  // `is_current`) the route's, keeps the commit rule and sends a version;
+  // false, with an alert, when it cannot.
+  bool Adopt(const std::vector<Pose>& remainder, bool is_current, v1::FlightReason reason,
+             Outputs* out);
   // A plan version of the current route (which must be admissible).
   absl::Status AddVersion(v1::FlightReason reason, Outputs* out);
   void AddAlert(v1::FlightAlertKind kind, std::string detail, Outputs* out);
 
   const FlightEnv env_;
+  std::function<void(v1::FlightOutput)> early_sink_;
   const CancellationToken* cancel_ = nullptr;  // of the Handle or Search running
   const std::string empty_;
   bool opened_ = false;
@@ -166,6 +187,8 @@ class FlightSession {
   double horizon_s_ = 10.0;
   PlannerBudget replan_budget_;
   std::shared_ptr<const RiskModel> model_;  // params_ and the active zones
+  std::shared_ptr<const RiskModel> model_base_;  // the cache's model model_ derives from
+  double model_update_ms_ = 0.0;
   std::shared_ptr<const std::vector<double>> glide_;  // of model_, made for alerts
   std::map<std::string, FlightZoneSpec> zones_;
   std::vector<std::string> active_ids_;

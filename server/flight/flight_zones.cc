@@ -256,15 +256,23 @@ int64_t CloseZoneCells(const RiskMap& map, const FlightZoneSpec& zone,
   return closed;
 }
 
+std::vector<uint8_t> NoFlyWithZones(const RiskMap& map,
+                                    const std::vector<const FlightZoneSpec*>& zones,
+                                    int64_t* closed) {
+  std::vector<uint8_t> nofly = map.nofly_layer();
+  int64_t n = 0;
+  for (const FlightZoneSpec* zone : zones) n += CloseZoneCells(map, *zone, &nofly);
+  if (closed != nullptr) *closed = n;
+  return nofly;
+}
+
 absl::StatusOr<std::shared_ptr<const RiskMap>> MapWithZones(
     const std::shared_ptr<const RiskMap>& map, const std::vector<const FlightZoneSpec*>& zones) {
   if (zones.empty()) return map;
-  MapLayers layers = map->layers();
   int64_t closed = 0;
-  for (const FlightZoneSpec* zone : zones) closed += CloseZoneCells(*map, *zone, &layers.nofly);
+  std::vector<uint8_t> nofly = NoFlyWithZones(*map, zones, &closed);
   if (closed == 0) return map;
-  return RiskMap::Create(map->header(), std::move(layers), map->glide_ratio(),
-                         map->glide_clearance_m());
+  return RiskMap::WithNoFly(map, std::move(nofly));
 }
 
 }  // namespace riskplan::server

@@ -79,9 +79,16 @@ bool SegmentsIntersect(ZoneVertex2 a, ZoneVertex2 b, ZoneVertex2 c, ZoneVertex2 
 // number of cells it closed that were open.
 int64_t CloseZoneCells(const RiskMap& map, const FlightZoneSpec& zone, std::vector<uint8_t>* nofly);
 
-// A copy of `map` whose no-fly layer also closes every zone of `zones`
-// (its glide layer computed again with them, as RiskMap::Create does).
-// `map` itself when `zones` is empty.
+// `map`'s no-fly layer with every zone of `zones` closed; *closed (when
+// given) the number of cells the zones closed that were open.
+std::vector<uint8_t> NoFlyWithZones(const RiskMap& map,
+                                    const std::vector<const FlightZoneSpec*>& zones,
+                                    int64_t* closed = nullptr);
+
+// `map` with every zone of `zones` closed as well: RiskMap::WithNoFly of
+// NoFlyWithZones, which shares `map`'s other layers and repairs its glide
+// layer for the closed cells only. `map` itself when the zones close no
+// open cell.
 absl::StatusOr<std::shared_ptr<const RiskMap>> MapWithZones(
     const std::shared_ptr<const RiskMap>& map, const std::vector<const FlightZoneSpec*>& zones);
 

@@ -1,7 +1,9 @@
 // server/flight/ without gRPC: zones (checks, containment, closed cells),
 // the emergency landing over the glide layer, and a session's versions in a
 // wind: their risk is EvaluateTrajectory's bit for bit with the wind's model.
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -356,6 +358,126 @@ TEST_F(FlightSessionTest, TheFlightLimitsApplyToTheWholeMission) {
     EXPECT_EQ(out.alert().kind(), v1::FLIGHT_ALERT_NO_REMAINDER);
     EXPECT_NE(out.alert().detail().find("no trajectory within the endurance"), std::string::npos)
         << out.alert().detail();
+  }
+}
+
+v1::FlightInput CircleZone(const std::string& id, double x, double y, double r) {
+  v1::FlightInput in;
+  in.mutable_add_zone()->set_id(id);
+  in.mutable_add_zone()->mutable_circle()->set_x(x);
+  in.mutable_add_zone()->mutable_circle()->set_y(y);
+  in.mutable_add_zone()->mutable_circle()->set_radius_m(r);
+  return in;
+}
+
+v1::FlightInput RemoveZone(const std::string& id) {
+  v1::FlightInput in;
+  in.mutable_remove_zone()->set_id(id);
+  return in;
+}
+
+// The model of the moment, derived from the model before it without a map
+// copy: after zones come and go (in still air and after a wind), it shares
+// the session map's layers, its no-fly layer is the map's with the active
+// zones closed, and its glide layer is the full computation's in every cell.
+TEST_F(FlightSessionTest, TheModelOfTheMomentIsTheFullModelOfTheZonesBitForBit) {
+  for (const bool windy : {false, true}) {
+    SCOPED_TRACE(windy ? "wind" : "still air");
+    FlightSession session(env_);
+    ASSERT_TRUE(session.Handle(Open(), never_).ok());
+    if (windy) {
+      v1::FlightInput wind;
+      wind.mutable_wind()->set_wind_speed_mps(5.0);
+      wind.mutable_wind()->set_wind_from_deg(200.0);
+      ASSERT_TRUE(session.Handle(wind, never_).ok());
+    }
+    std::shared_ptr<const RiskMap> map = registry_->Find("demo-city");
+    struct Zone {
+      std::string id;
+      double x, y, r;
+    };
+    const std::vector<Zone> zones = {
+        {"a", 900, 900, 120}, {"b", 1200, 700, 200}, {"c", 1000, 800, 150}};
+    // Active zone ids after each input: add a, b, c, remove a, remove c, remove b.
+    const std::vector<std::pair<std::string, bool>> inputs = {
+        {"a", true}, {"b", true}, {"c", true}, {"a", false}, {"c", false}, {"b", false}};
+    std::vector<std::string> active;
+    for (const auto& [id, add] : inputs) {
+      SCOPED_TRACE(id + (add ? " added" : " removed"));
+      const Zone& z = *std::find_if(zones.begin(), zones.end(), [&](const Zone& z) { return z.id == id; });
+      ASSERT_TRUE(session.Handle(add ? CircleZone(z.id, z.x, z.y, z.r) : RemoveZone(z.id), never_).ok());
+      if (add) {
+        active.push_back(id);
+      } else {
+        active.erase(std::find(active.begin(), active.end(), id));
+      }
+      std::vector<uint8_t> nofly = map->layers().nofly;
+      for (const std::string& a : active) {
+        const Zone& az = *std::find_if(zones.begin(), zones.end(), [&](const Zone& q) { return q.id == a; });
+        v1::FlightInput in = CircleZone(az.id, az.x, az.y, az.r);
+        CloseZoneCells(*map, *ZoneFromProto(in.add_zone(), {}, "zone"), &nofly);
+      }
+      const RiskModel& model = *session.model();
+      EXPECT_TRUE(model.map().SharesLayersWith(*map));
+      ASSERT_EQ(model.map().nofly_layer(), nofly);
+      std::shared_ptr<const std::vector<double>> full =
+          *GlideLayerWith(*map, nofly, model.params(), StopCondition());
+      const std::vector<double>& got = *model.glide_layer();
+      ASSERT_EQ(got.size(), full->size());
+      for (size_t k = 0; k < got.size(); ++k) {
+        ASSERT_EQ(std::memcmp(&got[k], &(*full)[k], sizeof(double)), 0) << "cell " << k;
+      }
+    }
+    // No zone left: the cache's model itself.
+    ModelParams params;
+    if (windy) {
+      params.wind_speed_mps = 5.0;
+      params.wind_from_deg = 200.0;
+    }
+    EXPECT_EQ(session.model(), *models_->Get(*map, params));
+  }
+}
+
+// With an early sink a zone's first admissible remainder goes out before the
+// plan ends; a later IMPROVED version keeps the commit point and lowers the
+// risk; every version is admissible with the zone closed.
+TEST_F(FlightSessionTest, WithAnEarlySinkTheFirstAdmissibleRemainderGoesOutAtOnce) {
+  FlightSession session(env_);
+  std::vector<v1::FlightOutput> early;
+  session.set_early_sink([&](v1::FlightOutput o) { early.push_back(std::move(o)); });
+  absl::StatusOr<std::vector<v1::FlightOutput>> opened = session.Handle(Open(), never_);
+  ASSERT_TRUE(opened.ok() && opened->size() == 1u && opened->front().has_plan());
+  EXPECT_TRUE(early.empty());  // the opening is not a change: one version after the plan
+  const v1::Trajectory& route = opened->front().plan().route();
+  const double step = route.length_m() / (route.path_size() - 1);
+  const v1::Pose& ahead = route.path(static_cast<int>(std::lround(700.0 / step)));
+  absl::StatusOr<std::vector<v1::FlightOutput>> out =
+      session.Handle(CircleZone("fire", ahead.x(), ahead.y(), 120), never_);
+  ASSERT_TRUE(out.ok());
+  ASSERT_EQ(early.size(), 1u);
+  ASSERT_TRUE(early.front().has_plan()) << early.front().DebugString();
+  const v1::FlightPlanVersion& first = early.front().plan();
+  EXPECT_EQ(first.reason(), v1::FLIGHT_REASON_ZONE_ADDED);
+  std::vector<const v1::FlightPlanVersion*> versions = {&first};
+  ASSERT_LE(out->size(), 1u);
+  if (!out->empty()) {
+    ASSERT_TRUE(out->front().has_plan());
+    const v1::FlightPlanVersion& better = out->front().plan();
+    EXPECT_EQ(better.reason(), v1::FLIGHT_REASON_IMPROVED);
+    EXPECT_EQ(better.version(), first.version() + 1);
+    EXPECT_EQ(better.committed_until_m(), first.committed_until_m());
+    EXPECT_LT(better.remainder().risk(), first.remainder().risk());
+    versions.push_back(&better);
+  }
+  for (const v1::FlightPlanVersion* v : versions) {
+    for (const v1::Pose& p : v->route().path()) {
+      EXPECT_GT(std::hypot(p.x() - ahead.x(), p.y() - ahead.y()), 120.0);
+    }
+    const std::vector<Pose> poses = Waypoints(v->route());
+    TrajectoryEvaluation e =
+        *EvaluateTrajectory(*session.model(), *PiecesFromWaypoints(poses, ModelParams{}));
+    EXPECT_TRUE(e.admissible);
+    EXPECT_EQ(e.risk, v->route().risk());
   }
 }
 

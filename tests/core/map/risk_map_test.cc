@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -10,6 +11,7 @@
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "core/map/demo_city.h"
 
 namespace riskplan {
 namespace {
@@ -431,6 +433,187 @@ TEST(RiskMapTest, TerrainExtremesAreKept) {
   ASSERT_TRUE(map.ok()) << map.status();
   EXPECT_EQ((*map)->terrain_min_m(), -4.5);
   EXPECT_EQ((*map)->terrain_max_m(), 120.25);
+}
+
+
+// Closes (value 1) or opens (value 0) the cells of `map` whose centre lies
+// within `radius_m` of (x, y), leaving the map's own no-fly cells closed.
+void SetDisc(const RiskMap& map, double x, double y, double radius_m, uint8_t value,
+             std::vector<uint8_t>* nofly) {
+  for (int j = 0; j < map.ny(); ++j) {
+    const double cy = map.y0() + (j + 0.5) * map.res();
+    if (std::fabs(cy - y) > radius_m) continue;
+    for (int i = 0; i < map.nx(); ++i) {
+      const double cx = map.x0() + (i + 0.5) * map.res();
+      if (std::hypot(cx - x, cy - y) > radius_m) continue;
+      const size_t k = map.Index(i, j);
+      (*nofly)[k] = value != 0 ? 1 : map.layers().nofly[k];
+    }
+  }
+}
+
+// Every cell equal, bit for bit (infinities included); names the first that is not.
+::testing::AssertionResult SameLayer(const std::vector<double>& got,
+                                     const std::vector<double>& want, int nx) {
+  if (got.size() != want.size()) return ::testing::AssertionFailure() << "sizes differ";
+  for (size_t k = 0; k < got.size(); ++k) {
+    if (std::memcmp(&got[k], &want[k], sizeof(double)) != 0) {
+      return ::testing::AssertionFailure()
+             << "cell (" << k % nx << ", " << k / nx << "): repaired " << got[k] << ", full "
+             << want[k];
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// Zones come and go on demo-city (a landing site closed and reopened, zones
+// overlapping, two removed at once, back to none): after every change the
+// repaired layer equals a full computation in every cell, in still air and
+// in a wind, and a repair settles a small part of the map.
+TEST(RiskMapTest, RepairedGlideLayerEqualsTheFullComputationBitForBit) {
+  for (const bool windy : {false, true}) {
+    SCOPED_TRACE(windy ? "wind" : "still air");
+    // The full 8 km city in still air; a 4 km one in the wind (a test's time).
+    absl::StatusOr<std::shared_ptr<const RiskMap>> made =
+        MakeDemoCity({.size_m = windy ? 4000.0 : 8000.0});
+    ASSERT_TRUE(made.ok()) << made.status();
+    const RiskMap& map = **made;
+    const GlideWind wind =
+        windy ? GlideWind{.x = 5.5, .y = -3.0, .airspeed_mps = 18.0} : GlideWind{};
+    const auto full = [&](const std::vector<uint8_t>& nofly) {
+      return *ComputeGlideAltitude(map.nx(), map.ny(), map.res(), map.layers().terrain, nofly,
+                                   map.landing_sites(), 10.0, 10.0, StopCondition(), wind);
+    };
+    const double s = map.width_m() / 8000.0;
+    const LandingSite& site = map.landing_sites()[map.landing_sites().size() / 2];
+    const double site_x = map.x0() + (site.i + 0.5) * map.res();
+    const double site_y = map.y0() + (site.j + 0.5) * map.res();
+    struct Disc {
+      double x, y, r;
+    };
+    const std::vector<Disc> zones = {
+        {3000 * s, 3100 * s, 150},              // 0: a zone
+        {site_x, site_y, 100},                  // 1: one on a landing site
+        {5000 * s, 2500 * s, 600},              // 2: a large one
+        {5000 * s + 500, 2500 * s + 300, 300},  // 3: overlapping the large one
+        {1500 * s, 6500 * s, 200},              // 4
+    };
+    // The zones active after each change.
+    const std::vector<std::vector<int>> steps = {
+        {0}, {0, 1}, {0, 1, 2},  // added one by one
+        {1, 2},                  // the first removed
+        {1, 2, 3},               // one overlapping another
+        {3},                     // two removed at once
+        {4},                     // one out, one in
+        {},                      // none left
+    };
+    std::vector<uint8_t> nofly = map.layers().nofly;
+    std::vector<double> glide = full(nofly);
+    int64_t lost = 0;
+    for (size_t k = 0; k < steps.size(); ++k) {
+      SCOPED_TRACE(k);
+      std::vector<uint8_t> next = map.layers().nofly;
+      for (int z : steps[k]) SetDisc(map, zones[z].x, zones[z].y, zones[z].r, 1, &next);
+      GlideRepairStats stats;
+      ASSERT_TRUE(RepairGlideAltitude(map.nx(), map.ny(), map.res(), map.layers().terrain,
+                                      map.landing_sites(), 10.0, 10.0, wind, nofly, next, &glide,
+                                      StopCondition(), &stats)
+                      .ok());
+      ASSERT_TRUE(SameLayer(glide, full(next), map.nx()));
+      EXPECT_GT(stats.closed + stats.opened, 0);
+      EXPECT_LT(stats.settled, static_cast<int64_t>(glide.size()) / 4);
+      lost += stats.affected;
+      nofly = std::move(next);
+    }
+    EXPECT_EQ(nofly, map.layers().nofly);
+    EXPECT_GT(lost, 0);  // some glides ran through a zone
+    EXPECT_TRUE(SameLayer(glide, windy ? full(map.layers().nofly) : map.glide_altitude(), map.nx()));
+  }
+}
+
+// Random closures and openings of scattered cells on a rough random map
+// (many ties between predecessors, sites closed and reopened, walls): the
+// repair still equals the full computation after every change.
+TEST(RiskMapTest, RepairedGlideLayerEqualsTheFullComputationOnRandomChanges) {
+  const int nx = 70, ny = 55;
+  Raw raw = Flat(nx, ny, 5.0, 0.0f);
+  uint64_t state = 777;
+  auto next = [&state]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  for (size_t k = 0; k < raw.layers.terrain.size(); ++k) {
+    // Whole metres: many equal floors, so many ties.
+    raw.layers.terrain[k] = static_cast<float>(std::floor(100.0 + 30.0 * next()));
+    raw.layers.nofly[k] = next() < 0.1 ? 1 : 0;
+  }
+  raw.layers.landing_sites = {{"a", 3, 3}, {"b", 60, 50}, {"c", 30, 20}, {"d", 69, 0}};
+  auto map = MustCreate(raw, 10.0, 10.0);
+  ASSERT_NE(map, nullptr);
+  for (const GlideWind& wind : {GlideWind{}, GlideWind{.x = -7.0, .y = 4.0, .airspeed_mps = 12.0}}) {
+    std::vector<uint8_t> nofly = raw.layers.nofly;
+    std::vector<double> glide =
+        *ComputeGlideAltitude(nx, ny, 5.0, raw.layers.terrain, nofly, raw.layers.landing_sites,
+                              10.0, 10.0, StopCondition(), wind);
+    for (int step = 0; step < 40; ++step) {
+      std::vector<uint8_t> changed = nofly;
+      const int flips = 1 + static_cast<int>(next() * 60);
+      for (int f = 0; f < flips; ++f) {
+        const size_t k = static_cast<size_t>(next() * changed.size()) % changed.size();
+        changed[k] ^= 1;
+      }
+      if (step % 10 == 3) {  // a wall across the map with one gap
+        const int i = 10 + step;
+        for (int j = 0; j < ny; ++j) changed[Idx(raw, i, j)] = j == 27 ? 0 : 1;
+      }
+      if (step % 7 == 5) changed[Idx(raw, 30, 20)] ^= 1;  // a site closed or reopened
+      ASSERT_TRUE(RepairGlideAltitude(nx, ny, 5.0, raw.layers.terrain, raw.layers.landing_sites,
+                                      10.0, 10.0, wind, nofly, changed, &glide)
+                      .ok());
+      ASSERT_TRUE(SameLayer(glide,
+                            *ComputeGlideAltitude(nx, ny, 5.0, raw.layers.terrain, changed,
+                                                  raw.layers.landing_sites, 10.0, 10.0,
+                                                  StopCondition(), wind),
+                            nx))
+          << "step " << step;
+      nofly = std::move(changed);
+    }
+  }
+}
+
+TEST(RiskMapTest, WithNoFlySharesTheLayersAndRepairsTheGlideLayer) {
+  const int nx = 40, ny = 30;
+  Raw raw = Flat(nx, ny, 5.0, 50.0f);
+  raw.layers.landing_sites = {{"a", 2, 2}, {"b", 35, 25}};
+  auto map = MustCreate(raw, 10.0, 10.0);
+  ASSERT_NE(map, nullptr);
+  std::vector<uint8_t> nofly = raw.layers.nofly;
+  for (int j = 5; j < 30; ++j) nofly[Idx(raw, 20, j)] = 1;  // a wall, open at the south
+  absl::StatusOr<std::shared_ptr<const RiskMap>> closed = RiskMap::WithNoFly(map, nofly);
+  ASSERT_TRUE(closed.ok()) << closed.status();
+  const RiskMap& c = **closed;
+  EXPECT_TRUE(c.SharesLayersWith(*map));
+  EXPECT_EQ(c.padded_density(), map->padded_density());
+  EXPECT_EQ(&c.layers(), &map->layers());
+  EXPECT_TRUE(c.nofly(20, 10));
+  EXPECT_FALSE(map->nofly(20, 10));
+  EXPECT_EQ(c.nofly_layer(), nofly);
+  EXPECT_EQ(c.glide_altitude(), ComputeGlideAltitude(nx, ny, 5.0, raw.layers.terrain, nofly,
+                                                     raw.layers.landing_sites, 10.0, 10.0));
+  EXPECT_GT(c.SafeAltitude(19, 28, 0.0), map->SafeAltitude(19, 28, 0.0));
+  // And back: a map made from it with the base's cells is the base's layer.
+  absl::StatusOr<std::shared_ptr<const RiskMap>> open =
+      RiskMap::WithNoFly(*closed, raw.layers.nofly);
+  ASSERT_TRUE(open.ok());
+  EXPECT_EQ((*open)->glide_altitude(), map->glide_altitude());
+  EXPECT_TRUE((*open)->SharesLayersWith(*map));
+
+  nofly[Idx(raw, 3, 4)] = 2;
+  EXPECT_THAT(RiskMap::WithNoFly(map, nofly).status().message(),
+              HasSubstr("layer 'nofly': cell (3, 4) has value 2; nofly must be 0 or 1"));
+  nofly.pop_back();
+  EXPECT_THAT(RiskMap::WithNoFly(map, nofly).status().message(),
+              HasSubstr("layer 'nofly' has 1199 entries; expected nx*ny = 1200"));
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "core/flight/trajectory_piece.h"
 #include "server/api/proto_convert.h"
 #include "server/flight/emergency_landing.h"
+#include "server/plan/plan_evaluator.h"
 
 namespace riskplan::server {
 namespace {
@@ -353,18 +354,12 @@ std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
                                                          const StopCondition& /*stop*/,
                                                          std::string* why,
                                                          const ImprovementCallback& on_improvement) {
-  PlanningProblem problem{model_, from, spec_.goal};
   if (absl::Status s = CheckEndpoint(*model_, from, "commit point"); !s.ok()) {
     *why = std::string(s.message());
     return std::nullopt;
   }
   if (absl::Status s = CheckEndpoint(*model_, spec_.goal, "goal"); !s.ok()) {
     *why = std::string(s.message());
-    return std::nullopt;
-  }
-  absl::StatusOr<std::unique_ptr<Planner>> planner = MakePlanner(spec_.algorithm);
-  if (!planner.ok()) {
-    *why = std::string(planner.status().message());
     return std::nullopt;
   }
   PlanOptions options = spec_.options;
@@ -375,10 +370,18 @@ std::optional<std::vector<Pose>> FlightSession::PlanFrom(const Pose& from,
   options.seed = spec_.options.seed + version_ * 7919 + searches_;
   // The session's cancellation (a broken stream, the drain) stops the planner.
   static const CancellationToken kNever;
-  absl::StatusOr<PlanResult> result = (*planner)->Plan(
-      problem, options, cancel_ != nullptr ? *cancel_ : kNever, [&](const PlanImprovement& imp) {
-        if (on_improvement) on_improvement(imp);
-      });
+  const CancellationToken& cancel = cancel_ != nullptr ? *cancel_ : kNever;
+  // Risks by accel's exact kernel on this thread (the planner's own risks bit
+  // for bit, faster); the plan a query into the session's kept goal tree
+  // (SessionTree: RISK_RRT_STAR without binding limits), else a plan from
+  // the goal.
+  std::unique_ptr<RiskEvaluator> evaluator =
+      NewPlanEvaluator(nullptr, options, StopCondition(&cancel));
+  absl::StatusOr<PlanResult> result =
+      tree_.Plan(model_, spec_.algorithm, from, spec_.goal, options, evaluator.get(), cancel,
+                 [&](const PlanImprovement& imp) {
+                   if (on_improvement) on_improvement(imp);
+                 });
   if (!result.ok()) {
     *why = std::string(result.status().message());
     return std::nullopt;

@@ -46,6 +46,7 @@
 #include "riskplan/v1/planner.pb.h"
 #include "server/api/request_validation.h"
 #include "server/flight/flight_zones.h"
+#include "server/flight/session_tree.h"
 #include "server/models/map_registry.h"
 #include "server/models/model_cache.h"
 
@@ -186,6 +187,7 @@ class FlightSession {
   ModelParams params_;
   double horizon_s_ = 10.0;
   PlannerBudget replan_budget_;
+  SessionTree tree_;  // the goal tree every plan of the session queries
   std::shared_ptr<const RiskModel> model_;  // params_ and the active zones
   std::shared_ptr<const RiskModel> model_base_;  // the cache's model model_ derives from
   double model_update_ms_ = 0.0;

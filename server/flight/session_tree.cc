@@ -1,5 +1,6 @@
 #include "server/flight/session_tree.h"
 
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -15,6 +16,19 @@ double MaxNodes(const PlanOptions& options) {
     if (p.name == "max_nodes") return p.default_value;
   }
   return 0.0;
+}
+
+// True when `b` gives every configuration the risk `a` gives: the same
+// model parameters (the wind among them) over maps that differ at most in
+// their no-fly cells (RiskMap::WithNoFly). Only admissibility may differ.
+bool SameRisks(const RiskModel& a, const RiskModel& b) {
+  if (!a.map().SharesLayersWith(b.map())) return false;
+  for (std::string_view name : ModelParamNames()) {
+    const absl::StatusOr<double> x = GetModelParam(a.params(), name);
+    const absl::StatusOr<double> y = GetModelParam(b.params(), name);
+    if (!x.ok() || !y.ok() || !(*x == *y)) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -46,6 +60,8 @@ absl::StatusOr<PlanResult> SessionTree::Plan(const std::shared_ptr<const RiskMod
        static_cast<double>(tree_->nodes.size()) > 0.5 * MaxNodes(options))) {
     Reset();
   }
+  // A new wind, new parameters or another map: every risk changes.
+  if (tree_ != nullptr && tree_model_ != model && !SameRisks(*tree_model_, *model)) Reset();
   if (tree_ != nullptr && tree_model_ != model) {
     absl::StatusOr<GoalTree> pruned =
         PruneGoalTree(*tree_, *model, StopCondition(&cancel), &stats_.last_prune);

@@ -14,8 +14,11 @@
 // pruned for the new model (PruneGoalTree: the nodes whose edges a zone cuts
 // go, with their subtrees; every kept risk is exact). A zone removed only
 // opens cells: every kept edge stays admissible, and the pruning check finds
-// nothing to cut. A new wind or new parameters change every risk: Reset(),
-// and the next plan grows a tree from the goal again.
+// nothing to cut. A new wind, new parameters or another map change every
+// risk: the tree is dropped (as by Reset()) and the next plan grows one from
+// the goal again. Models count as the same but for closed cells when their
+// maps share their layers (RiskMap::SharesLayersWith: one made from the other
+// by WithNoFly) and every model parameter is equal.
 //
 // Bounded: a tree past half the plan's max_nodes is dropped before the next
 // plan (a tree at max_nodes would end every plan at once), so a session holds
@@ -50,7 +53,7 @@ struct SessionTreeStats {
 
 class SessionTree {
  public:
-  // Forgets the tree: the wind or the model parameters changed.
+  // Forgets the tree.
   void Reset();
 
   // A plan from `from` to `goal` under `model` with `options` (its budget and

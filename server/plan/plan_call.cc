@@ -7,7 +7,6 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
-#include "accel/kernel_evaluator.h"
 #include "core/base/check.h"
 #include "server/api/message_codec.h"
 #include "server/api/proto_convert.h"
@@ -16,13 +15,6 @@
 
 namespace riskplan::server {
 
-std::unique_ptr<RiskEvaluator> NewPlanEvaluator(accel::RiskEngine* engine,
-                                                const PlanOptions& options, StopCondition stop) {
-  if (engine != nullptr) return engine->NewEvaluator(stop);
-  const auto cache = options.params.find("risk_cache_log2");
-  if (cache != options.params.end() && cache->second > 0) return nullptr;
-  return std::make_unique<accel::KernelRiskEvaluator>();
-}
 
 // ---------------------------------------------------------------------------
 // ActivePlans

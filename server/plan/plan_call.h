@@ -49,20 +49,12 @@
 #include "server/models/model_cache.h"
 #include "server/plan/open_calls.h"
 #include "server/plan/plan_call_state.h"
+#include "server/plan/plan_evaluator.h"
 #include "server/api/request_validation.h"
 #include "server/plan/timer_queue.h"
 
 namespace riskplan::server {
 
-// The evaluator one plan computes its risks with. With an engine, the
-// engine's (its batches stop waiting for boards once `stop` is reached).
-// Without one, accel's exact CPU kernel on the planning thread: the same
-// risks bit for bit as the planner's own one-window loop, so the same plans,
-// in less time (docs/benchmarks.md, "Tree nodes per second"); except that a
-// request asking for the planner's exact risk cache (risk_cache_log2 > 0)
-// gets it (null: the planner evaluates with its own).
-std::unique_ptr<RiskEvaluator> NewPlanEvaluator(accel::RiskEngine* engine,
-                                                const PlanOptions& options, StopCondition stop);
 
 // What holds a plan slot: a PlanTrajectory call, or a group of PlanFleet
 // missions planned together (server/fleet/fleet_scheduler.h).

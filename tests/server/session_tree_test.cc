@@ -18,21 +18,23 @@ namespace {
 using testing_planner::FindFlyablePose;
 using testing_planner::ReEvaluate;
 
+// `model` with every cell whose centre lies within r of (x, y) closed, made
+// as a Fly session makes its model of the moment (RiskMap::WithNoFly, the
+// other layers shared; RiskModel::WithMap, the glide layer repaired).
 std::shared_ptr<const RiskModel> WithClosedDisc(const RiskModel& model, double x, double y,
                                                 double r) {
   const RiskMap& map = model.map();
-  MapLayers layers = map.layers();
+  std::vector<uint8_t> nofly = map.nofly_layer();
   for (int j = 0; j < map.ny(); ++j) {
     for (int i = 0; i < map.nx(); ++i) {
       const double cx = map.x0() + (i + 0.5) * map.res();
       const double cy = map.y0() + (j + 0.5) * map.res();
-      if (std::hypot(cx - x, cy - y) <= r) layers.nofly[map.Index(i, j)] = 1;
+      if (std::hypot(cx - x, cy - y) <= r) nofly[map.Index(i, j)] = 1;
     }
   }
-  auto closed =
-      RiskMap::Create(map.header(), std::move(layers), map.glide_ratio(), map.glide_clearance_m());
+  auto closed = RiskMap::WithNoFly(model.map_ptr(), std::move(nofly));
   EXPECT_TRUE(closed.ok()) << closed.status();
-  auto out = RiskModel::Create(*closed, model.params());
+  auto out = RiskModel::WithMap(model, *closed);
   EXPECT_TRUE(out.ok()) << out.status();
   return *out;
 }
@@ -142,6 +144,21 @@ TEST_F(SessionTreeTest, ResetTheBoundAndLimitsPlanFromTheGoal) {
   ExpectExact(*model_, r);
   EXPECT_LE(r->best->length_m, 5000.0);
   EXPECT_EQ(limited.stats().tree_nodes, 0);
+}
+
+TEST_F(SessionTreeTest, ANewWindDropsTheTree) {
+  SessionTree tree;
+  ExpectExact(*model_, Plan(&tree, model_, start_, Options(200)));
+  ASSERT_GT(tree.stats().tree_nodes, 0);
+  const std::shared_ptr<const RiskModel> windy = testing_planner::SmallCityModel(6.0, 200.0);
+  ExpectExact(*windy, Plan(&tree, windy, later_, Options(100)));
+  EXPECT_EQ(tree.stats().from_tree, 0);
+  EXPECT_EQ(tree.stats().resets, 1);
+  // A map with the same layers but built on its own is another map.
+  const std::shared_ptr<const RiskModel> other = testing_planner::SmallCityModel(6.0, 200.0);
+  ExpectExact(*other, Plan(&tree, other, later_, Options(50)));
+  EXPECT_EQ(tree.stats().from_tree, 0);
+  EXPECT_EQ(tree.stats().resets, 2);
 }
 
 }  // namespace

@@ -1,5 +1,8 @@
 #include "core/planners/goal_tree_repair.h"
 
+#include <algorithm>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include "absl/strings/str_format.h"
@@ -13,8 +16,36 @@ enum class NodeState : uint8_t { kUnknown, kVisiting, kKept, kDropped };
 
 }  // namespace
 
+std::optional<PruneRegion> StricterRegion(const RiskModel& before, const RiskModel& after) {
+  const RiskMap& a = before.map();
+  const RiskMap& b = after.map();
+  const std::vector<uint8_t>& nofly_a = a.nofly_layer();
+  const std::vector<uint8_t>& nofly_b = b.nofly_layer();
+  const std::shared_ptr<const std::vector<double>> glide_a = before.glide_layer();
+  const std::shared_ptr<const std::vector<double>> glide_b = after.glide_layer();
+  const bool same_glide =
+      glide_a == glide_b || glide_a == nullptr || glide_b == nullptr || b.landing_sites().empty();
+  int i_min = b.nx(), j_min = b.ny(), i_max = -1, j_max = -1;
+  for (int j = 0; j < b.ny(); ++j) {
+    for (int i = 0; i < b.nx(); ++i) {
+      const int64_t k = b.Index(i, j);
+      const bool stricter =
+          (nofly_b[k] != 0 && nofly_a[k] == 0) || (!same_glide && (*glide_b)[k] > (*glide_a)[k]);
+      if (!stricter) continue;
+      i_min = std::min(i_min, i);
+      j_min = std::min(j_min, j);
+      i_max = std::max(i_max, i);
+      j_max = std::max(j_max, j);
+    }
+  }
+  if (i_max < 0) return std::nullopt;
+  return PruneRegion{b.x0() + i_min * b.res(), b.y0() + j_min * b.res(),
+                     b.x0() + (i_max + 1) * b.res(), b.y0() + (j_max + 1) * b.res()};
+}
+
 absl::StatusOr<GoalTree> PruneGoalTree(const GoalTree& tree, const RiskModel& model,
-                                       const StopCondition& stop, GoalTreePruneStats* stats) {
+                                       const StopCondition& stop, GoalTreePruneStats* stats,
+                                       const std::optional<PruneRegion>& region) {
   GoalTreePruneStats local;
   GoalTreePruneStats& st = stats != nullptr ? *stats : local;
   st = GoalTreePruneStats{};
@@ -35,13 +66,28 @@ absl::StatusOr<GoalTree> PruneGoalTree(const GoalTree& tree, const RiskModel& mo
   };
   // Whether node k's own pose and the midpoints of its edge to its parent are
   // admissible (the edge as RISK_RRT_STAR adds it: from the node to its parent).
+  // Whether the disc of radius r around p meets the region (a cell's square
+  // counts as reached from anywhere within it: the margin of one cell).
+  const double margin = model.map().res();
+  const auto reaches = [&](const Pose& p, double r) {
+    if (!region.has_value()) return true;
+    return p.x + r + margin >= region->x_min && p.x - r - margin <= region->x_max &&
+           p.y + r + margin >= region->y_min && p.y - r - margin <= region->y_max;
+  };
   const auto edge_holds = [&](int64_t k) {
     const GoalTreeNode& node = tree.nodes[k];
+    if (node.parent < 0) return !reaches(node.pose, 0.0) || admissible(node.pose);
+    const Pose& to = tree.nodes[node.parent].pose;
+    const TrajectoryPiece piece =
+        TrajectoryPiece::Manoeuvre(node.pose, to, mp.GroundTurnRadius(), mp.GroundClimbAngle());
+    // Every pose of the edge lies within its length of both ends.
+    const double length = piece.Length();
+    if (!reaches(node.pose, length) || !reaches(to, length)) {
+      ++st.skipped_edges;
+      return true;
+    }
     if (!admissible(node.pose)) return false;
-    if (node.parent < 0) return true;
-    const PieceRisk rule(TrajectoryPiece::Manoeuvre(node.pose, tree.nodes[node.parent].pose,
-                                                    mp.GroundTurnRadius(), mp.GroundClimbAngle()),
-                         mp.sample_step_m, mp);
+    const PieceRisk rule(piece, mp.sample_step_m, mp);
     for (int64_t i = 0; i < rule.parts(); ++i) {
       if (!admissible(rule.Midpoint(i))) return false;
     }

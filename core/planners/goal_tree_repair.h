@@ -22,6 +22,7 @@
 #define RISKPLAN_CORE_PLANNERS_GOAL_TREE_REPAIR_H_
 
 #include <cstdint>
+#include <optional>
 
 #include "core/base/cancellation.h"
 #include "core/planners/shared_goal_tree.h"
@@ -29,11 +30,29 @@
 
 namespace riskplan {
 
+// A rectangle of the plane (map coordinates, m) outside which the new model
+// is no stricter than the tree's: only edges that may pass through it are
+// checked (an edge of length L lies within L of both its ends).
+struct PruneRegion {
+  double x_min = 0.0;
+  double y_min = 0.0;
+  double x_max = 0.0;
+  double y_max = 0.0;
+};
+
+// Where `after` is stricter than `before` (a cell closed, or its glide
+// altitude raised), as the bounding box of those cells' squares, or nullopt
+// when it is nowhere stricter (then no tree edge can have become
+// inadmissible). REQUIRES: both models' maps share their layers but for the
+// no-fly cells (RiskMap::SharesLayersWith) and their parameters are equal.
+std::optional<PruneRegion> StricterRegion(const RiskModel& before, const RiskModel& after);
+
 struct GoalTreePruneStats {
   int64_t kept = 0;             // nodes of the pruned tree, the goal included
   int64_t cut_edges = 0;        // nodes whose own pose or edge is inadmissible
   int64_t orphaned = 0;         // nodes dropped below a cut edge
   int64_t checked_samples = 0;  // configurations checked for admissibility
+  int64_t skipped_edges = 0;    // edges wholly outside the region, not checked
 };
 
 // `tree` without every node that is not admissible, or whose edge to its
@@ -41,10 +60,13 @@ struct GoalTreePruneStats {
 // cells closed; the caller keeps that promise). Nodes keep their order (the
 // goal stays node 0) and are renumbered; goal, params, seed and generation
 // are kept. When the goal itself is not admissible, the result has no nodes.
-// Cancelled once `stop` is reached (checked between nodes).
+// Cancelled once `stop` is reached (checked between nodes). With `region`,
+// only nodes and edges that may reach into it are checked (the caller
+// promises the model is nowhere else stricter than the tree's: StricterRegion).
 absl::StatusOr<GoalTree> PruneGoalTree(const GoalTree& tree, const RiskModel& model,
                                        const StopCondition& stop = {},
-                                       GoalTreePruneStats* stats = nullptr);
+                                       GoalTreePruneStats* stats = nullptr,
+                                       const std::optional<PruneRegion>& region = std::nullopt);
 
 }  // namespace riskplan
 

@@ -63,13 +63,24 @@ absl::StatusOr<PlanResult> SessionTree::Plan(const std::shared_ptr<const RiskMod
   // A new wind, new parameters or another map: every risk changes.
   if (tree_ != nullptr && tree_model_ != model && !SameRisks(*tree_model_, *model)) Reset();
   if (tree_ != nullptr && tree_model_ != model) {
-    absl::StatusOr<GoalTree> pruned =
-        PruneGoalTree(*tree_, *model, StopCondition(&cancel), &stats_.last_prune);
-    if (!pruned.ok()) return pruned.status();
-    if (pruned->nodes.empty()) {
-      Reset();
+    // Only where the new model is stricter (cells closed, glide altitudes
+    // raised) can an edge have become inadmissible; nowhere (a zone removed):
+    // the tree holds as it is.
+    const std::optional<PruneRegion> region = StricterRegion(*tree_model_, *model);
+    stats_.last_prune = GoalTreePruneStats{};
+    stats_.last_prune.kept = static_cast<int64_t>(tree_->nodes.size());
+    if (region.has_value()) {
+      absl::StatusOr<GoalTree> pruned =
+          PruneGoalTree(*tree_, *model, StopCondition(&cancel), &stats_.last_prune, region);
+      if (!pruned.ok()) return pruned.status();
+      tree_ =
+          pruned->nodes.empty() ? nullptr : std::make_shared<const GoalTree>(*std::move(pruned));
+    }
+    if (tree_ == nullptr) {
+      ++stats_.resets;  // the goal closed: grow from it again when it opens
+      tree_model_.reset();
+      stats_.tree_nodes = 0;
     } else {
-      tree_ = std::make_shared<const GoalTree>(*std::move(pruned));
       tree_model_ = model;
       stats_.tree_nodes = static_cast<int64_t>(tree_->nodes.size());
     }

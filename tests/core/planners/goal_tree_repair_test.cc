@@ -155,6 +155,33 @@ TEST(GoalTreeRepairTest, AClosedDiscCutsTheEdgesThroughItAndTheirSubtrees) {
   EXPECT_EQ(pruned->nodes[0].parent, -1);
 }
 
+TEST(GoalTreeRepairTest, CheckingOnlyWhereTheModelIsStricterCutsTheSame) {
+  const Grown g = GrowTree(500);
+  const std::shared_ptr<const RiskModel> zoned = WithClosedDisc(*g.model, kZoneX, kZoneY, kZoneR);
+  const std::optional<PruneRegion> region = StricterRegion(*g.model, *zoned);
+  ASSERT_TRUE(region.has_value());
+  // The disc's cells, and the cells whose glide altitude rose around it.
+  EXPECT_LE(region->x_min, kZoneX - kZoneR + 5.0);
+  EXPECT_GE(region->x_max, kZoneX + kZoneR - 5.0);
+  EXPECT_LE(region->y_min, kZoneY - kZoneR + 5.0);
+  EXPECT_GE(region->y_max, kZoneY + kZoneR - 5.0);
+  GoalTreePruneStats full_stats, region_stats;
+  auto full = PruneGoalTree(g.tree, *zoned, {}, &full_stats);
+  auto limited = PruneGoalTree(g.tree, *zoned, {}, &region_stats, region);
+  ASSERT_TRUE(full.ok() && limited.ok());
+  ASSERT_EQ(full->nodes.size(), limited->nodes.size());
+  for (size_t k = 0; k < full->nodes.size(); ++k) {
+    EXPECT_EQ(full->nodes[k].parent, limited->nodes[k].parent);
+    EXPECT_EQ(full->nodes[k].pose.x, limited->nodes[k].pose.x);
+  }
+  EXPECT_EQ(full_stats.cut_edges, region_stats.cut_edges);
+  EXPECT_GT(region_stats.skipped_edges, 0);
+  EXPECT_LT(region_stats.checked_samples, full_stats.checked_samples);
+  // Nowhere stricter: the same model, or one with fewer closed cells.
+  EXPECT_FALSE(StricterRegion(*g.model, *g.model).has_value());
+  EXPECT_FALSE(StricterRegion(*zoned, *g.model).has_value());
+}
+
 TEST(GoalTreeRepairTest, APlanFromThePrunedTreeIsAdmissibleAndExact) {
   const Grown g = GrowTree(500);
   const std::shared_ptr<const RiskModel> zoned = WithClosedDisc(*g.model, kZoneX, kZoneY, kZoneR);

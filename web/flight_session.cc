@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -83,8 +82,7 @@ void FlightSession::Start(std::shared_ptr<grpc::Channel> channel) {
   thread_ = std::thread([this, channel = std::move(channel)] { Run(channel); });
 }
 
-void FlightSession::AppendJson(const std::string& type, const std::string& fields,
-                               bool terminal) {
+void FlightSession::AppendJson(const std::string& type, const std::string& fields, bool terminal) {
   events_.Append(type, absl::StrCat("{\"gateway_ms\":", GatewayMs(), fields, "}"), terminal);
 }
 
@@ -123,12 +121,12 @@ void FlightSession::Run(std::shared_ptr<grpc::Channel> channel) {
       absl::MutexLock lock(&mu_);
       failed_ = true;
     }
-    AppendJson("failed",
-               absl::StrCat(",\"code\":", Json(client::StatusCodeName(s.error_code())).dump(),
-                            ",\"message\":",
-                            Json(prefix + s.error_message())
-                                .dump(-1, ' ', false, Json::error_handler_t::replace)),
-               true);
+    AppendJson(
+        "failed",
+        absl::StrCat(
+            ",\"code\":", Json(client::StatusCodeName(s.error_code())).dump(), ",\"message\":",
+            Json(prefix + s.error_message()).dump(-1, ' ', false, Json::error_handler_t::replace)),
+        true);
   };
   link_ = std::make_unique<client::FlightLink>(
       channel, open_, [this](int, const v1::FlightOutput& out) { OnOutput(out); },
@@ -156,10 +154,11 @@ void FlightSession::Run(std::shared_ptr<grpc::Channel> channel) {
     }
     if (absl::Now() > give_up) {
       link_->Break();
-      return fail(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
-                               absl::StrFormat("no plan version within %d s",
-                                               absl::ToInt64Seconds(limits_.first_version_timeout))),
-                  "");
+      return fail(
+          grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
+                       absl::StrFormat("no plan version within %d s",
+                                       absl::ToInt64Seconds(limits_.first_version_timeout))),
+          "");
     }
     if (!Wait(absl::Milliseconds(20))) break;
   }
@@ -172,9 +171,8 @@ void FlightSession::Run(std::shared_ptr<grpc::Channel> channel) {
     const std::optional<v1::FlightPlanVersion> v = link_->latest();
     if (!v.has_value()) break;
     const double total = v->committed_until_m() + v->remainder().length_m();
-    const double speed = v->route().flight_time_s() > 0.0
-                             ? v->route().length_m() / v->route().flight_time_s()
-                             : 0.0;
+    const double speed =
+        v->route().flight_time_s() > 0.0 ? v->route().length_m() / v->route().flight_time_s() : 0.0;
     bool alert;
     {
       absl::MutexLock lock(&mu_);
@@ -243,8 +241,9 @@ absl::Status FlightSession::Input(const v1::FlightInput& input) {
           "the flight has no plan version yet; send zones once the first has come");
     }
     const absl::Time now = absl::Now();
-    tokens_ = std::min(limits_.max_changes_per_s,
-                       tokens_ + limits_.max_changes_per_s * absl::ToDoubleSeconds(now - tokens_at_));
+    tokens_ =
+        std::min(limits_.max_changes_per_s,
+                 tokens_ + limits_.max_changes_per_s * absl::ToDoubleSeconds(now - tokens_at_));
     tokens_at_ = now;
     if (tokens_ < 1.0) {
       return absl::ResourceExhaustedError(absl::StrFormat(
@@ -315,60 +314,16 @@ absl::StatusOr<std::shared_ptr<FlightSession>> FlightRegistry::Start(
         "(--max_flight_zones)",
         open.zones_size(), limits_.max_zones));
   }
-  std::shared_ptr<FlightSession> session;
-  std::vector<std::shared_ptr<FlightSession>> dropped;  // destroyed outside the lock
-  {
-    absl::MutexLock lock(&mu_);
-    if (stopped_) return absl::UnavailableError("the gateway is shutting down");
-    int running = 0;
-    for (const auto& s : sessions_) running += s->ended() ? 0 : 1;
-    if (running >= limits_.max_running) {
-      return absl::ResourceExhaustedError(absl::StrFormat(
-          "this gateway flies at most %d flights at once (--max_flights); end one or wait for "
-          "one to land",
-          limits_.max_running));
-    }
-    for (auto it = sessions_.begin();
-         it != sessions_.end() && static_cast<int>(sessions_.size()) >= limits_.max_kept;) {
-      if ((*it)->ended()) {
-        dropped.push_back(std::move(*it));
-        it = sessions_.erase(it);
-      } else {
-        ++it;
-      }
-    }
-    static thread_local std::mt19937_64 generator(std::random_device{}());
-    session = std::make_shared<FlightSession>(absl::StrFormat("f%x-%016x", ++counter_, generator()),
-                                              std::move(open), speedup, limits_);
-    sessions_.push_back(session);
-  }
-  session->Start(std::move(channel));
+  absl::StatusOr<std::shared_ptr<FlightSession>> session = sessions_.Add(
+      limits_.max_running, limits_.max_kept,
+      absl::StrFormat("this gateway flies at most %d flights at once (--max_flights); end one or "
+                      "wait for one to land",
+                      limits_.max_running),
+      "f", [&](std::string id) {
+        return std::make_shared<FlightSession>(std::move(id), std::move(open), speedup, limits_);
+      });
+  if (session.ok()) (*session)->Start(std::move(channel));
   return session;
-}
-
-std::shared_ptr<FlightSession> FlightRegistry::Find(const std::string& id) const {
-  absl::MutexLock lock(&mu_);
-  for (const auto& s : sessions_) {
-    if (s->id() == id) return s;
-  }
-  return nullptr;
-}
-
-int FlightRegistry::running() const {
-  absl::MutexLock lock(&mu_);
-  int running = 0;
-  for (const auto& s : sessions_) running += s->ended() ? 0 : 1;
-  return running;
-}
-
-void FlightRegistry::StopAll() {
-  std::vector<std::shared_ptr<FlightSession>> sessions;
-  {
-    absl::MutexLock lock(&mu_);
-    stopped_ = true;
-    sessions.swap(sessions_);
-  }
-  for (const auto& s : sessions) s->Stop();
 }
 
 }  // namespace riskplan::web

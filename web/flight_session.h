@@ -38,6 +38,7 @@
 #include "grpcpp/grpcpp.h"
 #include "riskplan/v1/planner.pb.h"
 #include "web/event_log.h"
+#include "web/session_list.h"
 
 namespace riskplan::web {
 
@@ -56,14 +57,14 @@ namespace riskplan::web {
 //   "failed"    {"code", "message"}: the session failed (a refused opening,
 //               the server's words untouched); last
 struct FlightGatewayLimits {
-  int max_running = 2;       // flights at once (--max_flights); more: ResourceExhausted
-  int max_kept = 8;          // flights kept (ended ones dropped oldest first)
-  int max_zones = 16;        // zones the page holds on one flight at once (--max_flight_zones)
+  int max_running = 2;  // flights at once (--max_flights); more: ResourceExhausted
+  int max_kept = 8;     // flights kept (ended ones dropped oldest first)
+  int max_zones = 16;   // zones the page holds on one flight at once (--max_flight_zones)
   // Zone and wind changes of one flight: at most this many a second, in
   // bursts of as many.
   double max_changes_per_s = 4.0;
-  double max_speedup = 100.0;      // speedup in [1, max_speedup]
-  double max_flight_time_s = 3600; // of flight time, then the flight ends
+  double max_speedup = 100.0;                             // speedup in [1, max_speedup]
+  double max_flight_time_s = 3600;                        // of flight time, then the flight ends
   absl::Duration report_every = absl::Milliseconds(100);  // real time between reports
   absl::Duration first_version_timeout = absl::Seconds(120);
   PlanEventLimits events;
@@ -135,17 +136,14 @@ class FlightRegistry {
   // limit) when max_running flights fly already.
   absl::StatusOr<std::shared_ptr<FlightSession>> Start(v1::FlightOpen open, double speedup,
                                                        std::shared_ptr<grpc::Channel> channel);
-  std::shared_ptr<FlightSession> Find(const std::string& id) const;
-  int running() const;
+  std::shared_ptr<FlightSession> Find(const std::string& id) const { return sessions_.Find(id); }
+  int running() const { return sessions_.running(); }
   const FlightGatewayLimits& limits() const { return limits_; }
-  void StopAll();
+  void StopAll() { sessions_.StopAll(); }
 
  private:
   const FlightGatewayLimits limits_;
-  mutable absl::Mutex mu_;
-  std::vector<std::shared_ptr<FlightSession>> sessions_ ABSL_GUARDED_BY(mu_);  // oldest first
-  uint64_t counter_ ABSL_GUARDED_BY(mu_) = 0;
-  bool stopped_ ABSL_GUARDED_BY(mu_) = false;
+  SessionList<FlightSession> sessions_;
 };
 
 }  // namespace riskplan::web

@@ -1,7 +1,6 @@
 #include "web/plan_session.h"
 
 #include <cmath>
-#include <random>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -68,10 +67,9 @@ bool PlanSession::EndIfCancelled(const grpc::Status& status) {
   if (!cancelled || (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED)) {
     return false;
   }
-  Append(
-      "cancelled",
-      nlohmann::json{{"message", "cancelled from the page; the server stopped the plan"}}.dump(),
-      PlanState::kCancelled);
+  Append("cancelled",
+         nlohmann::json{{"message", "cancelled from the page; the server stopped the plan"}}.dump(),
+         PlanState::kCancelled);
   return true;
 }
 
@@ -180,69 +178,19 @@ PlanRegistry::PlanRegistry(v1::Planner::Stub* stub, PlanRegistryLimits limits)
 
 PlanRegistry::~PlanRegistry() { StopAll(); }
 
-std::string PlanRegistry::NewId() {
-  // Random, so that a page reconnecting to a restarted gateway cannot land
-  // on someone else's plan of the same number.
-  static thread_local std::mt19937_64 generator(std::random_device{}());
-  return absl::StrFormat("%x-%016x", ++counter_, generator());
-}
-
 absl::StatusOr<std::shared_ptr<PlanSession>> PlanRegistry::Start(
     v1::PlanRequest request, std::shared_ptr<const MissionPlan> mission) {
-  std::shared_ptr<PlanSession> session;
-  std::vector<std::shared_ptr<PlanSession>> dropped;  // destroyed outside the lock
-  {
-    absl::MutexLock lock(&mu_);
-    if (stopped_) return absl::UnavailableError("the gateway is shutting down");
-    int running = 0;
-    for (const auto& s : sessions_) running += s->ended() ? 0 : 1;
-    if (running >= limits_.max_running) {
-      return absl::ResourceExhaustedError(absl::StrFormat(
-          "this gateway runs at most %d plans at once (--max_running_plans); cancel one or "
-          "wait for one to end",
-          limits_.max_running));
-    }
-    // Make room: the oldest ended sessions go first.
-    for (auto it = sessions_.begin();
-         it != sessions_.end() && static_cast<int>(sessions_.size()) >= limits_.max_kept;) {
-      if ((*it)->ended()) {
-        dropped.push_back(std::move(*it));
-        it = sessions_.erase(it);
-      } else {
-        ++it;
-      }
-    }
-    session = std::make_shared<PlanSession>(NewId(), std::move(request), limits_.events,
-                                            std::move(mission));
-    sessions_.push_back(session);
-  }
-  session->Start(stub_);
+  absl::StatusOr<std::shared_ptr<PlanSession>> session = sessions_.Add(
+      limits_.max_running, limits_.max_kept,
+      absl::StrFormat("this gateway runs at most %d plans at once (--max_running_plans); cancel "
+                      "one or wait for one to end",
+                      limits_.max_running),
+      "", [&](std::string id) {
+        return std::make_shared<PlanSession>(std::move(id), std::move(request), limits_.events,
+                                             std::move(mission));
+      });
+  if (session.ok()) (*session)->Start(stub_);
   return session;
-}
-
-std::shared_ptr<PlanSession> PlanRegistry::Find(const std::string& id) const {
-  absl::MutexLock lock(&mu_);
-  for (const auto& s : sessions_) {
-    if (s->id() == id) return s;
-  }
-  return nullptr;
-}
-
-int PlanRegistry::running() const {
-  absl::MutexLock lock(&mu_);
-  int running = 0;
-  for (const auto& s : sessions_) running += s->ended() ? 0 : 1;
-  return running;
-}
-
-void PlanRegistry::StopAll() {
-  std::vector<std::shared_ptr<PlanSession>> sessions;
-  {
-    absl::MutexLock lock(&mu_);
-    stopped_ = true;
-    sessions.swap(sessions_);
-  }
-  for (const auto& s : sessions) s->Stop();
 }
 
 }  // namespace riskplan::web

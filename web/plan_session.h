@@ -27,6 +27,7 @@
 #include "riskplan/v1/planner.grpc.pb.h"
 #include "web/event_log.h"
 #include "web/mission_file.h"
+#include "web/session_list.h"
 
 namespace riskplan::web {
 
@@ -161,22 +162,16 @@ class PlanRegistry {
   absl::StatusOr<std::shared_ptr<PlanSession>> Start(
       v1::PlanRequest request, std::shared_ptr<const MissionPlan> mission = nullptr);
   // The session `id`, or nullptr.
-  std::shared_ptr<PlanSession> Find(const std::string& id) const;
-  int running() const;
+  std::shared_ptr<PlanSession> Find(const std::string& id) const { return sessions_.Find(id); }
+  int running() const { return sessions_.running(); }
   const PlanRegistryLimits& limits() const { return limits_; }
   // Stops every session (Stop) and refuses new plans.
-  void StopAll();
+  void StopAll() { sessions_.StopAll(); }
 
  private:
-  std::string NewId() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-
   v1::Planner::Stub* const stub_;
   const PlanRegistryLimits limits_;
-  mutable absl::Mutex mu_;
-  // Oldest first.
-  std::vector<std::shared_ptr<PlanSession>> sessions_ ABSL_GUARDED_BY(mu_);
-  uint64_t counter_ ABSL_GUARDED_BY(mu_) = 0;
-  bool stopped_ ABSL_GUARDED_BY(mu_) = false;
+  SessionList<PlanSession> sessions_;
 };
 
 // Milliseconds since the Unix epoch, with microseconds: the timestamps of

@@ -402,7 +402,10 @@ TEST_F(FlightSessionTest, TheModelOfTheMomentIsTheFullModelOfTheZonesBitForBit) 
     const std::vector<std::pair<std::string, bool>> inputs = {
         {"a", true}, {"b", true}, {"c", true}, {"a", false}, {"c", false}, {"b", false}};
     std::vector<std::string> active;
-    for (const auto& [id, add] : inputs) {
+    for (const auto& input : inputs) {
+      // Named copies: a lambda may not capture a structured binding in C++17 (clang 14).
+      const std::string& id = input.first;
+      const bool add = input.second;
       SCOPED_TRACE(id + (add ? " added" : " removed"));
       const Zone& z = *std::find_if(zones.begin(), zones.end(), [&](const Zone& z) { return z.id == id; });
       ASSERT_TRUE(session.Handle(add ? CircleZone(z.id, z.x, z.y, z.r) : RemoveZone(z.id), never_).ok());

@@ -18,6 +18,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
+#include "tests/qgc_plan_testing.h"
 #include "tests/integration/server_process.h"
 
 namespace riskplan::testing {
@@ -77,10 +78,7 @@ class MissionTest : public ::testing::Test {
   static Json Item(int command, int id, double x, double y, double alt_m) {
     auto g = frame_->ToWgs84(std::vector<Pose>{Pose{x, y, alt_m, 0.0}});
     EXPECT_TRUE(g.ok());
-    return Json{{"type", "SimpleItem"}, {"command", command},      {"frame", 0},
-                {"doJumpId", id},       {"autoContinue", true},
-                {"params", Json::array({0, 0, 0, nullptr, (*g)[0].lat_deg, (*g)[0].lon_deg,
-                                        alt_m})}};
+    return testing_qgc::SimpleItem(command, id, (*g)[0].lat_deg, (*g)[0].lon_deg, alt_m);
   }
   // Takeoff, two waypoints, land, inside the 2 km city.
   static std::string FourItemPlan(double waypoint_x = 800.0) {
@@ -88,21 +86,8 @@ class MissionTest : public ::testing::Test {
                               Item(16, 3, 1300, 1100, 250), Item(21, 4, 1700, 1625, 250)});
     auto home = frame_->ToWgs84(std::vector<Pose>{Pose{300, 375, 200, 0.0}});
     EXPECT_TRUE(home.ok());
-    Json plan = {{"fileType", "Plan"},
-                 {"version", 1},
-                 {"groundStation", "QGroundControl"},
-                 {"mission",
-                  {{"version", 2},
-                   {"firmwareType", 12},
-                   {"vehicleType", 1},
-                   {"cruiseSpeed", 18},
-                   {"hoverSpeed", 5},
-                   {"plannedHomePosition",
-                    Json::array({(*home)[0].lat_deg, (*home)[0].lon_deg, 200})},
-                   {"items", items}}},
-                 {"geoFence", {{"version", 2}, {"circles", Json::array()}, {"polygons", Json::array()}}},
-                 {"rallyPoints", {{"version", 2}, {"points", Json::array()}}}};
-    return plan.dump(2);
+    return testing_qgc::PlanDocument((*home)[0].lat_deg, (*home)[0].lon_deg, 200, std::move(items))
+        .dump(2);
   }
 
   static ServerProcess* server_;

@@ -22,6 +22,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "nlohmann/json.hpp"
+#include "tests/qgc_plan_testing.h"
 #include "tests/integration/server_process.h"
 #include "tests/web/http_test_client.h"
 
@@ -110,28 +111,15 @@ class MissionGatewayTest : public ::testing::Test {
   }
   static Json Item(int command, int id, double x, double y, double alt_m) {
     const auto [lat, lon] = Wgs84(x, y);
-    return Json{{"type", "SimpleItem"}, {"command", command}, {"frame", 0},
-                {"doJumpId", id},       {"autoContinue", true},
-                {"params", Json::array({0, 0, 0, nullptr, lat, lon, alt_m})}};
+    return testing_qgc::SimpleItem(command, id, lat, lon, alt_m);
   }
   // Takeoff, a waypoint, land, inside the city; `extra` merged at the top.
   static Json ThreePointPlan(double waypoint_x = 1000.0, const Json& extra = Json::object()) {
     const auto [home_lat, home_lon] = Wgs84(300, 375);
-    Json plan = {{"fileType", "Plan"},
-                 {"version", 1},
-                 {"groundStation", "QGroundControl"},
-                 {"mission",
-                  {{"version", 2},
-                   {"firmwareType", 12},
-                   {"vehicleType", 1},
-                   {"cruiseSpeed", 18},
-                   {"hoverSpeed", 5},
-                   {"plannedHomePosition", Json::array({home_lat, home_lon, 200})},
-                   {"items", Json::array({Item(22, 1, 300, 375, 240),
-                                          Item(16, 2, waypoint_x, 900, 250),
-                                          Item(21, 3, 1700, 1625, 250)})}}},
-                 {"geoFence", {{"version", 2}, {"circles", Json::array()}, {"polygons", Json::array()}}},
-                 {"rallyPoints", {{"version", 2}, {"points", Json::array()}}}};
+    Json plan = testing_qgc::PlanDocument(
+        home_lat, home_lon, 200,
+        Json::array({Item(22, 1, 300, 375, 240), Item(16, 2, waypoint_x, 900, 250),
+                     Item(21, 3, 1700, 1625, 250)}));
     for (auto it = extra.begin(); it != extra.end(); ++it) plan[it.key()] = it.value();
     return plan;
   }

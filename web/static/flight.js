@@ -129,22 +129,24 @@ function watchFlight(id) {
     if (!fresh(e)) return;
     $('flight-alerts').textContent = JSON.parse(e.data).message;
   });
-  flightSource.addEventListener('ended', (e) => {
-    if (!fresh(e)) return;
+  // The flight's last event (ended or failed): the stream closes, the buttons
+  // and the zone tool go back to their rest.
+  const finish = (e) => {
     const d = JSON.parse(e.data);
     rp.flight.ended = d;
     closeFlightSource();
     setFlightButtons(false);
     stopPlacingZone();
+    return d;
+  };
+  flightSource.addEventListener('ended', (e) => {
+    if (!fresh(e)) return;
+    const d = finish(e);
     $('flight-state').textContent = `flight ended at ${d.time_s.toFixed(1)} s, ${d.progress_m.toFixed(0)} m flown: ${d.message}`;
   });
   flightSource.addEventListener('failed', (e) => {
     if (!fresh(e)) return;
-    const d = JSON.parse(e.data);
-    rp.flight.ended = d;
-    closeFlightSource();
-    setFlightButtons(false);
-    stopPlacingZone();
+    const d = finish(e);
     $('flight-state').textContent = 'the flight failed';
     showError(new ApiError(d.code, d.message, 'server'));
   });

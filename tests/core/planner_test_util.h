@@ -49,6 +49,27 @@ inline std::shared_ptr<const RiskModel> SmallCityModel(double wind_mps, double f
   return *model;
 }
 
+// `model` with every cell whose centre lies within r of (x, y) closed, made
+// as a Fly session makes its model of the moment (RiskMap::WithNoFly, the
+// other layers shared; RiskModel::WithMap, the glide layer repaired).
+inline std::shared_ptr<const RiskModel> WithClosedDisc(const RiskModel& model, double x, double y,
+                                                       double r) {
+  const RiskMap& map = model.map();
+  std::vector<uint8_t> nofly = map.nofly_layer();
+  for (int j = 0; j < map.ny(); ++j) {
+    for (int i = 0; i < map.nx(); ++i) {
+      const double cx = map.x0() + (i + 0.5) * map.res();
+      const double cy = map.y0() + (j + 0.5) * map.res();
+      if (std::hypot(cx - x, cy - y) <= r) nofly[map.Index(i, j)] = 1;
+    }
+  }
+  auto closed = RiskMap::WithNoFly(model.map_ptr(), std::move(nofly));
+  EXPECT_TRUE(closed.ok()) << closed.status();
+  auto out = RiskModel::WithMap(model, *closed);
+  EXPECT_TRUE(out.ok()) << out.status();
+  return *out;
+}
+
 // The shared scenario set (bench/scenarios.h), with every pose found.
 inline std::vector<Scenario> DemoCityScenarios(const RiskModel& model) {
   std::vector<Scenario> out = bench::DemoCityScenarios(model);
@@ -98,7 +119,8 @@ inline void ExpectImpactWindowsInside(const RiskModel& model, const std::vector<
       ASSERT_TRUE(map.CellOf(q.x, q.y, &i, &j));
       const double h = q.z - map.terrain(i, j);
       ASSERT_GT(h, 0.0);
-      const ImpactKernel& k = t.kernel(t.HeightBinOf(h), t.HeadingBinOf(model.wind().AirHeading(q.theta)));
+      const ImpactKernel& k =
+          t.kernel(t.HeightBinOf(h), t.HeadingBinOf(model.wind().AirHeading(q.theta)));
       const int ci = static_cast<int>(std::floor((q.x + k.offset_x_m - map.x0()) / map.res()));
       const int cj = static_cast<int>(std::floor((q.y + k.offset_y_m - map.y0()) / map.res()));
       ASSERT_GE(ci - k.half_width, 0) << "sample at " << q.x << ", " << q.y;

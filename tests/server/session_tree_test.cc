@@ -17,27 +17,7 @@ namespace {
 
 using testing_planner::FindFlyablePose;
 using testing_planner::ReEvaluate;
-
-// `model` with every cell whose centre lies within r of (x, y) closed, made
-// as a Fly session makes its model of the moment (RiskMap::WithNoFly, the
-// other layers shared; RiskModel::WithMap, the glide layer repaired).
-std::shared_ptr<const RiskModel> WithClosedDisc(const RiskModel& model, double x, double y,
-                                                double r) {
-  const RiskMap& map = model.map();
-  std::vector<uint8_t> nofly = map.nofly_layer();
-  for (int j = 0; j < map.ny(); ++j) {
-    for (int i = 0; i < map.nx(); ++i) {
-      const double cx = map.x0() + (i + 0.5) * map.res();
-      const double cy = map.y0() + (j + 0.5) * map.res();
-      if (std::hypot(cx - x, cy - y) <= r) nofly[map.Index(i, j)] = 1;
-    }
-  }
-  auto closed = RiskMap::WithNoFly(model.map_ptr(), std::move(nofly));
-  EXPECT_TRUE(closed.ok()) << closed.status();
-  auto out = RiskModel::WithMap(model, *closed);
-  EXPECT_TRUE(out.ok()) << out.status();
-  return *out;
-}
+using testing_planner::WithClosedDisc;
 
 class SessionTreeTest : public ::testing::Test {
  protected:

@@ -22,30 +22,11 @@ namespace {
 
 using testing_planner::FindFlyablePose;
 using testing_planner::ReEvaluate;
+using testing_planner::WithClosedDisc;
 
 constexpr double kZoneX = 1000.0;
 constexpr double kZoneY = 1000.0;
 constexpr double kZoneR = 150.0;
-
-// `model`'s map with every cell whose centre lies within r of (x, y) closed.
-std::shared_ptr<const RiskModel> WithClosedDisc(const RiskModel& model, double x, double y,
-                                                double r) {
-  const RiskMap& map = model.map();
-  MapLayers layers = map.layers();
-  for (int j = 0; j < map.ny(); ++j) {
-    for (int i = 0; i < map.nx(); ++i) {
-      const double cx = map.x0() + (i + 0.5) * map.res();
-      const double cy = map.y0() + (j + 0.5) * map.res();
-      if (std::hypot(cx - x, cy - y) <= r) layers.nofly[map.Index(i, j)] = 1;
-    }
-  }
-  auto closed =
-      RiskMap::Create(map.header(), std::move(layers), map.glide_ratio(), map.glide_clearance_m());
-  EXPECT_TRUE(closed.ok()) << closed.status();
-  auto out = RiskModel::Create(*closed, model.params());
-  EXPECT_TRUE(out.ok()) << out.status();
-  return *out;
-}
 
 struct Grown {
   std::shared_ptr<const RiskModel> model;

@@ -1,6 +1,8 @@
 #include "core/planners/cost_to_go_field.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "core/base/model_params.h"
@@ -28,6 +30,16 @@ absl::StatusOr<std::unique_ptr<CostToGoField>> CostToGoField::Build(const RiskMo
   absl::StatusOr<LatticeField> field = f->lattice_->Field(goal, evaluator, stop, &f->stats_);
   if (!field.ok()) return field.status();
   f->field_ = std::move(*field);
+  const StateLattice& g = *f->lattice_;
+  const int per = g.states_per_position();
+  f->least_by_position_.assign(g.position_count(), std::numeric_limits<double>::infinity());
+  for (int64_t p = 0; p < g.position_count(); ++p) {
+    for (int64_t s = p * per; s < (p + 1) * per; ++s) {
+      if (g.valid(static_cast<int32_t>(s))) {
+        f->least_by_position_[p] = std::min(f->least_by_position_[p], f->field_.cost[s]);
+      }
+    }
+  }
   // Routes down the field read no edge memo.
   f->lattice_->DropMemo();
   return f;
@@ -37,6 +49,11 @@ absl::StatusOr<std::optional<LatticeRoute>> CostToGoField::Route(const RiskModel
                                                                  const Pose& start,
                                                                  RiskEvaluator* evaluator) const {
   return lattice_->RouteDown(model, field_, start, evaluator);
+}
+
+double CostToGoField::LeastCostNear(double x, double y) const {
+  const int64_t p = lattice_->PositionNear(x, y);
+  return p < 0 ? std::numeric_limits<double>::infinity() : least_by_position_[p];
 }
 
 GuideFieldCache& GuideFieldCache::Default() {

@@ -51,15 +51,24 @@ class CostToGoField {
   absl::StatusOr<std::optional<LatticeRoute>> Route(const RiskModel& model, const Pose& start,
                                                     RiskEvaluator* evaluator) const;
 
+  // The least cost-to-go of the states at the lattice position nearest
+  // (x, y), over every heading and level: +inf off the map or where none
+  // reaches the goal. A guide's figure (edge risks at risk_step_m), O(1).
+  double LeastCostNear(double x, double y) const;
+
   const LatticeField& field() const { return field_; }
   const StateLattice& lattice() const { return *lattice_; }
   const LatticeSearchStats& build_stats() const { return stats_; }
-  size_t MemoryBytes() const { return lattice_->MemoryBytes() + field_.MemoryBytes(); }
+  size_t MemoryBytes() const {
+    return lattice_->MemoryBytes() + field_.MemoryBytes() +
+           least_by_position_.capacity() * sizeof(double);
+  }
 
  private:
   CostToGoField() = default;
   std::unique_ptr<StateLattice> lattice_;
   LatticeField field_;
+  std::vector<double> least_by_position_;  // LeastCostNear's table
   LatticeSearchStats stats_;
 };
 

@@ -34,6 +34,7 @@ absl::StatusOr<Params> Params::Parse(const std::map<std::string, double>& given)
   p.guide = values->Get("guide") >= 1.0;
   p.guide_field_m = values->Get("guide_field_m");
   p.guide_field_step_m = values->Get("guide_field_step_m");
+  p.guide_informed = values->Get("guide_informed");
   if (p.near_radius_m == 0.0) p.near_radius_m = 2.5 * p.step_m;
   if (p.refine_scale_m == 0.0) p.refine_scale_m = 0.5 * p.step_m;
   if (p.goal_bias + p.path_bias > 0.9) {
@@ -79,6 +80,10 @@ const std::vector<PlannerParamInfo>& ParamInfo() {
       {"guide_field_step_m", 25.0, 5.0, 200.0,
        "sampling step of the guide field's edge risks, m (a guide only: reported risks stay "
        "exact)"},
+      {"guide_informed", 0.0, 0.0, 10.0,
+       "with guide = 1: a uniform sample is drawn again (up to 8 times) while the field's "
+       "least cost-to-go near it exceeds this times the largest risk of a running mission's "
+       "route down the field, so samples stay where a cheap route can pass (0: off)"},
       {"risk_cache_log2", 0, 0, 20,
        "log2 of the entries of the exact configuration-risk cache (40 B each) used when no "
        "external evaluator is given; 0 turns it off"},

@@ -236,6 +236,8 @@ void Run::Finish(size_t m, StopReason reason) {
   MissionRun& r = missions_[m];
   r.state = MissionState::kDone;
   --running_;
+  // Its start no longer needs the samples only it could use.
+  UpdateInformedLimit();
   PlanResult result;
   result.reason = reason;
   if (!r.best.has_value() && reason != StopReason::kCancelled) {

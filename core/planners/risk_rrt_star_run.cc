@@ -12,6 +12,9 @@ namespace {
 // Under binding limits the start is connected again every this many
 // iterations (besides its goal-biased samples): each connection moves lambda.
 constexpr int64_t kLimitedConnectEvery = 16;
+// SampleInformed's draws before it takes what it has: samples off the
+// informed set stay possible, so the search stays complete.
+constexpr int kInformedDraws = 8;
 }  // namespace
 
 bool Run::SampleUniform(Pose* q) {
@@ -32,6 +35,26 @@ bool Run::SampleUniform(Pose* q) {
     return true;
   }
   return false;
+}
+
+bool Run::SampleInformed(Pose* q) {
+  bool got = false;
+  for (int draw = 0; draw < kInformedDraws; ++draw) {
+    if (!SampleUniform(q)) continue;
+    got = true;
+    if (field_->LeastCostNear(q->x, q->y) <= informed_limit_) return true;
+  }
+  return got;
+}
+
+void Run::UpdateInformedLimit() {
+  informed_limit_ = kInf;
+  if (field_ == nullptr || params_.guide_informed <= 0.0) return;
+  double largest = 0.0;
+  for (const MissionRun& r : missions_) {
+    if (r.state == MissionState::kRunning) largest = std::max(largest, r.field_route_risk);
+  }
+  if (largest > 0.0) informed_limit_ = params_.guide_informed * largest;
 }
 
 bool Run::SamplePathBiased(size_t m, Pose* q) {
@@ -72,7 +95,7 @@ Pose Run::Sample(int* start_of) {
     const int m = NextMission(&path_cursor_, Pick::kWithBest);
     if (m >= 0 && SamplePathBiased(m, &q)) return q;
   }
-  if (SampleUniform(&q)) return q;
+  if (informed_limit_ < kInf ? SampleInformed(&q) : SampleUniform(&q)) return q;
   // A map with almost nothing flyable: head for a start.
   *start_of = NextMission(&start_cursor_, Pick::kRunning);
   return missions_[*start_of].spec.start;
@@ -392,6 +415,7 @@ void Run::Execute() {
     if (!Running(m)) continue;
     if (absl::Status s = Guide(m); !s.ok() && !IsRunStopped(s)) return FailRunning(s);
   }
+  UpdateInformedLimit();
   while (UpdateMissions()) {
     if (absl::Status s = Iterate(); !s.ok() && !IsRunStopped(s)) return FailRunning(s);
   }

@@ -58,6 +58,10 @@ struct Params {
   bool guide = false;           // the lattice's cost-to-go field (risk_rrt_star_guide.cc)
   double guide_field_m = 400.0;
   double guide_field_step_m = 25.0;
+  // With guide: a uniform sample is drawn again (up to kInformedDraws times)
+  // while the field's least cost-to-go near it exceeds this times the field
+  // route's risk of the running mission with the largest (0: off).
+  double guide_informed = 0.0;
 
   // The defaults overridden by `given` (PlannerParamValues::Parse's checks),
   // integer parameters rounded down, and goal_bias + path_bias <= 0.9.
@@ -234,6 +238,9 @@ class Run {
     // Under binding limits: whether best meets them, and its flight time.
     bool best_fits = false;
     double best_time_s = kInf;
+    // With params_.guide: the risk of the route down the field from the
+    // start (+inf: none).
+    double field_route_risk = kInf;
   };
 
   bool Admissible(const Pose& q) const {
@@ -267,6 +274,11 @@ class Run {
   int NextMission(size_t* cursor, Pick pick) const;
 
   bool SampleUniform(Pose* q);
+  // SampleUniform, drawn again while the field says the sample cannot lie
+  // on a route as cheap as the starts' field routes (params_.guide_informed).
+  bool SampleInformed(Pose* q);
+  // informed_limit_ from the running missions' field routes.
+  void UpdateInformedLimit();
   bool SamplePathBiased(size_t m, Pose* q);
   // A sample; *start_of is the mission whose start it is, or -1.
   Pose Sample(int* start_of);
@@ -340,7 +352,9 @@ class Run {
   absl::Status Guide(size_t m);
   // With params_.guide: seeds the tree with mission m's route down the goal's
   // cost-to-go field (core/planners/cost_to_go_field.h), built once per goal
-  // and wind and shared through GuideFieldCache::Default().
+  // and wind and shared through GuideFieldCache::Default(); a build that
+  // does not fit in half the time left is given up and the run goes on
+  // without the field.
   absl::Status GuideByField(size_t m);
   // One iteration: a sample, an extension (or a start's connection), the
   // reports and the refinement.
@@ -372,6 +386,9 @@ class Run {
   std::optional<CoarseRiskGrid> guide_grid_;  // built for the first guide route
   // With params_.guide: the goal's cost-to-go field, got for the first mission.
   std::shared_ptr<const CostToGoField> field_;
+  bool field_unavailable_ = false;  // its build did not fit in its share of the budget
+  // SampleInformed's bound on the field's cost-to-go near a sample (+inf: off).
+  double informed_limit_ = kInf;
   SpatialGrid grid_;
   std::vector<Node> nodes_;
   int64_t iterations_ = 0;

@@ -78,6 +78,10 @@ absl::StatusOr<std::unique_ptr<StateLattice>> StateLattice::Create(const RiskMod
   g->nx_ = std::max(1, static_cast<int>(std::floor(map.width_m() / options.spacing_m)));
   g->ny_ = std::max(1, static_cast<int>(std::floor(map.height_m() / options.spacing_m)));
   g->levels_ = static_cast<int>(options.level_offsets_m.size());
+  g->x0_ = map.x0();
+  g->y0_ = map.y0();
+  g->width_m_ = map.width_m();
+  g->height_m_ = map.height_m();
   const int H = options.headings;
   const int64_t n = static_cast<int64_t>(g->nx_) * g->ny_ * H * g->levels_;
   if (n > (int64_t{1} << 30)) {
@@ -132,6 +136,15 @@ absl::StatusOr<std::unique_ptr<StateLattice>> StateLattice::Create(const RiskMod
     g->max_into_ = std::max(g->max_into_, g->into_[h1].size());
   }
   return g;
+}
+
+int64_t StateLattice::PositionNear(double x, double y) const {
+  const double u = x - x0_;
+  const double v = y - y0_;
+  if (!(u >= 0.0 && u <= width_m_ && v >= 0.0 && v <= height_m_)) return -1;
+  const int i = std::min(nx_ - 1, static_cast<int>(u / options_.spacing_m));
+  const int j = std::min(ny_ - 1, static_cast<int>(v / options_.spacing_m));
+  return static_cast<int64_t>(j) * nx_ + i;
 }
 
 void StateLattice::DropMemo() { std::vector<double>().swap(memo_); }
@@ -276,7 +289,9 @@ absl::Status StateLattice::Search(const Pose& goal,
     queue.pop();
     if (settled[s] || c > field->cost[s]) continue;
     if (c >= *bound) break;
-    if ((++pops & 255) == 0 && stop.Reached())
+    // Every 16 settled states: each may price dozens of edges, a batch or
+    // more of the evaluator's (a slow one too: an FPGA shim).
+    if ((++pops & 15) == 0 && stop.Reached())
       return absl::CancelledError("lattice search stopped");
     settled[s] = 1;
     if (stats != nullptr) ++stats->states_settled;

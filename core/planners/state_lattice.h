@@ -101,6 +101,13 @@ class StateLattice {
   const Pose& pose(int32_t s) const { return poses_[s]; }
   // Primitives into a state of one heading (the same for every heading).
   size_t primitives_per_heading() const { return into_[0].size(); }
+  // The grid positions: states p * states_per_position() up to the next
+  // position's are those of position p (every heading and level).
+  int64_t position_count() const { return static_cast<int64_t>(nx_) * ny_; }
+  int states_per_position() const { return options_.headings * levels_; }
+  // The grid position whose square holds (x, y) (the last row or column for
+  // the strip of the map past the grid), -1 off the map.
+  int64_t PositionNear(double x, double y) const;
 
   // The cheapest lattice route from `start` to `goal` (both admissible:
   // callers check them), or nullopt when the lattice joins them by none.
@@ -167,6 +174,10 @@ class StateLattice {
 
   const RiskModel* model_;  // Solve and Field only
   LatticeOptions options_;
+  double x0_ = 0.0;  // the map's corner
+  double y0_ = 0.0;
+  double width_m_ = 0.0;
+  double height_m_ = 0.0;
   int nx_ = 0;
   int ny_ = 0;
   int levels_ = 0;

@@ -2,12 +2,19 @@
 // planner's parameter `guide`): the field cache honours its bounds, the
 // guided planner is deterministic for a seed and an iteration budget and
 // reports EvaluateTrajectory's risk bit for bit (still air and wind), and
-// `guide` = 0 is the planner without the parameter.
+// `guide` = 0 is the planner without the parameter; the field's least
+// cost-to-go near a point, which the informed draws (`guide_informed`) read.
 #include "core/planners/cost_to_go_field.h"
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/planners/shared_goal_tree.h"
@@ -60,14 +67,43 @@ TEST(GuideFieldCacheTest, HonoursItsByteAndEntryBounds) {
   }
 }
 
+TEST(CostToGoFieldTest, LeastCostNearIsTheLeastOfItsPosition) {
+  auto model = SmallCity(0.0);
+  DirectRiskEvaluator evaluator;
+  const LatticeOptions options = GuideLatticeOptions(250.0, 25.0);
+  auto field =
+      CostToGoField::Build(*model, *FindFlyablePose(*model, 1000, 1000, 0), options, &evaluator);
+  ASSERT_TRUE(field.ok()) << field.status();
+  const StateLattice& g = (*field)->lattice();
+  const int per = g.states_per_position();
+  int finite = 0;
+  for (int32_t s = 0; s < g.state_count(); s += per) {
+    if (!g.valid(s)) continue;
+    const Pose& p = g.pose(s);
+    double least = std::numeric_limits<double>::infinity();
+    for (int32_t t = s - s % per; t < s - s % per + per; ++t) {
+      if (g.valid(t)) least = std::min(least, (*field)->field().cost[t]);
+    }
+    // The state's own position, and a point 100 m off the centre in its square.
+    EXPECT_EQ((*field)->LeastCostNear(p.x, p.y), least);
+    EXPECT_EQ((*field)->LeastCostNear(p.x + 100.0, p.y - 100.0), least);
+    if (least < std::numeric_limits<double>::infinity()) ++finite;
+  }
+  EXPECT_GT(finite, 10);
+  const RiskMap& map = model->map();
+  EXPECT_EQ((*field)->LeastCostNear(map.x0() - 1.0, map.y0() + 10.0),
+            std::numeric_limits<double>::infinity());
+}
+
 struct Outcome {
   double risk = -1.0;
   std::vector<Pose> waypoints;
   int64_t tree = 0;
+  std::vector<TreeEdge> edges;  // with record_tree
 };
 
 Outcome Plan(const std::shared_ptr<const RiskModel>& model, const Pose& s, const Pose& g,
-             const std::map<std::string, double>& params) {
+             const std::map<std::string, double>& params, bool record_tree = false) {
   auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar);
   EXPECT_TRUE(planner.ok());
   PlanOptions options;
@@ -75,6 +111,7 @@ Outcome Plan(const std::shared_ptr<const RiskModel>& model, const Pose& s, const
   options.budget.max_iterations = 200;
   options.seed = 11;
   options.params = params;
+  options.record_tree = record_tree;
   CancellationToken cancel;
   auto result = (*planner)->Plan({model, s, g}, options, cancel, nullptr);
   EXPECT_TRUE(result.ok()) << result.status();
@@ -83,6 +120,7 @@ Outcome Plan(const std::shared_ptr<const RiskModel>& model, const Pose& s, const
     out.risk = result->best->risk;
     out.waypoints = result->best->waypoints;
     out.tree = result->tree_size;
+    out.edges = result->tree;
   }
   return out;
 }
@@ -108,6 +146,80 @@ TEST(GuidedPlannerTest, DeterministicAndExact) {
     EXPECT_EQ(ReEvaluate(*model, a.waypoints, &admissible), a.risk);
     EXPECT_TRUE(admissible);
   }
+}
+
+TEST(GuidedPlannerTest, InformedSamplingIsDeterministicExactAndChangesTheSearch) {
+  for (double wind : {0.0, 8.0}) {
+    SCOPED_TRACE(wind);
+    auto model = SmallCity(wind);
+    // The goal near one corner: much of the map costs more to the goal than
+    // the start does, so the informed draws reject samples.
+    const Pose s = *FindFlyablePose(*model, 1000, 900, 0.5);
+    const Pose g = *FindFlyablePose(*model, 300, 300, 0.5);
+    const std::map<std::string, double> informed = {
+        {"guide", 1.0}, {"guide_field_m", 200.0}, {"guide_informed", 1.0}};
+    const Outcome a = Plan(model, s, g, informed, /*record_tree=*/true);
+    const Outcome b = Plan(model, s, g, informed);
+    ASSERT_GT(a.risk, 0.0);
+    EXPECT_EQ(a.risk, b.risk);
+    EXPECT_EQ(a.tree, b.tree);
+    ASSERT_EQ(a.waypoints.size(), b.waypoints.size());
+    bool admissible = false;
+    EXPECT_EQ(ReEvaluate(*model, a.waypoints, &admissible), a.risk);
+    EXPECT_TRUE(admissible);
+    // In still air: the same plan without the informed draws grows another
+    // tree, and the informed one's nodes lie nearer the goal (the field's
+    // cost-to-go). (In this wind the 200-m field has no route from this
+    // start, so the draws are off and the trees are the same.)
+    if (wind != 0.0) continue;
+    const Outcome plain =
+        Plan(model, s, g, {{"guide", 1.0}, {"guide_field_m", 200.0}}, /*record_tree=*/true);
+    ASSERT_GT(plain.risk, 0.0);
+    auto mean_distance = [&](const Outcome& o) {
+      double sum = 0.0;
+      for (const TreeEdge& e : o.edges) sum += std::hypot(e.from.x - g.x, e.from.y - g.y);
+      return sum / static_cast<double>(std::max<size_t>(1, o.edges.size()));
+    };
+    ASSERT_FALSE(a.edges.empty());
+    EXPECT_LT(mean_distance(a), mean_distance(plain));
+  }
+}
+
+// The direct evaluator, 10 ms slower per batch.
+class SlowEvaluator final : public RiskEvaluator {
+ public:
+  absl::Status EvaluateBatch(const RiskModel& model, std::span<const Pose> configs,
+                             std::span<ConfigurationRisk> out) override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    return direct_.EvaluateBatch(model, configs, out);
+  }
+  uint64_t evaluated() const override { return direct_.evaluated(); }
+
+ private:
+  DirectRiskEvaluator direct_;
+};
+
+TEST(GuidedPlannerTest, AFieldTooSlowForTheBudgetIsGivenUpAndThePlanGoesOn) {
+  // A field of a spacing no other test uses (not cached), whose build takes
+  // far more than half of a 1-s budget at 10 ms a batch: the run gives it up
+  // at half the budget, keeps nothing in the cache, and plans on without it
+  // (no coarse guide route either, so every node is the iterations').
+  auto model = SmallCity(0.0);
+  SlowEvaluator slow;
+  auto planner = MakePlanner(PlannerAlgorithm::kRiskRrtStar, &slow);
+  ASSERT_TRUE(planner.ok());
+  PlanOptions options;
+  options.budget.max_time_s = 1.0;
+  options.seed = 3;
+  options.params = {{"guide", 1.0}, {"guide_field_m", 130.0}, {"guide_cell_m", 0.0}};
+  const size_t entries = GuideFieldCache::Default().stats().entries;
+  CancellationToken cancel;
+  auto result = (*planner)->Plan({model, *FindFlyablePose(*model, 300, 1000, 0.0),
+                                  *FindFlyablePose(*model, 1700, 1000, 0.0)},
+                                 options, cancel, nullptr);
+  ASSERT_TRUE(result.ok()) << result.status();
+  EXPECT_GT(result->iterations, 0);
+  EXPECT_EQ(GuideFieldCache::Default().stats().entries, entries);
 }
 
 TEST(GuidedPlannerTest, GuideZeroIsThePlannerWithoutIt) {

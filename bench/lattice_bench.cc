@@ -46,11 +46,13 @@ ABSL_FLAG(int, seeds, 10, "seeds per scenario and planner");
 ABSL_FLAG(std::string, budgets, "0.1,0.3,1,3", "checkpoints, CPU seconds of the planning thread");
 ABSL_FLAG(double, wall_factor, 5.0, "wall-time budget of a run: this x the last checkpoint");
 ABSL_FLAG(std::string, lattices, "400:8,250:16",
-          "lattice resolutions spacing_m:headings, comma-separated (levels 3 and 25 m above the "
-          "safe altitude; empty: none)");
+          "lattice resolutions spacing_m:headings[:levels], comma-separated; levels are offsets "
+          "above the safe altitude in m, '/'-separated (default 3/25; empty: no lattice)");
 ABSL_FLAG(double, bound_block_m, 50.0, "block of the lower bound, m");
-ABSL_FLAG(std::string, modes, "unguided,guided", "RISK_RRT_STAR variants to run");
-ABSL_FLAG(std::string, params, "", "extra RISK_RRT_STAR parameters for both variants");
+ABSL_FLAG(std::string, modes, "unguided,guided",
+          "RISK_RRT_STAR variants to run: unguided (guide = 0), guided (guide = 1), informed "
+          "(guide = 1 and guide_informed = 1.25 unless --params sets it)");
+ABSL_FLAG(std::string, params, "", "extra RISK_RRT_STAR parameters for every variant");
 
 namespace riskplan {
 namespace {
@@ -127,8 +129,22 @@ int Main() {
   const double wall = absl::GetFlag(FLAGS_wall_factor) * budgets.back();
   std::vector<std::string> modes =
       absl::StrSplit(absl::GetFlag(FLAGS_modes), ',', absl::SkipEmpty());
+  for (const std::string& mode : modes) {
+    if (mode != "unguided" && mode != "guided" && mode != "informed") {
+      std::fprintf(stderr, "--modes: unknown variant '%s' (unguided, guided, informed)\n",
+                   mode.c_str());
+      return 1;
+    }
+  }
   const std::map<std::string, double> extra =
       bench::ParsePlannerParams(absl::GetFlag(FLAGS_params));
+  // The guide field's lattice, as the planner builds it from its parameters.
+  auto param_or = [&](const char* name, double fallback) {
+    auto it = extra.find(name);
+    return it == extra.end() ? fallback : it->second;
+  };
+  const LatticeOptions field_options =
+      GuideLatticeOptions(param_or("guide_field_m", 400.0), param_or("guide_field_step_m", 25.0));
 
   // The lower bound, once for the model.
   double cpu = ThreadCpuSeconds();
@@ -154,6 +170,12 @@ int Main() {
     LatticeOptions lo;
     lo.spacing_m = std::stod(parts[0]);
     lo.headings = parts.size() > 1 ? std::stoi(parts[1]) : 8;
+    if (parts.size() > 2) {
+      lo.level_offsets_m.clear();
+      for (absl::string_view level : absl::StrSplit(parts[2], '/')) {
+        lo.level_offsets_m.push_back(std::stod(std::string(level)));
+      }
+    }
     auto lattice = StateLattice::Create(*model, lo);
     if (!lattice.ok()) {
       std::fprintf(stderr, "%s\n", std::string(lattice.status().message()).c_str());
@@ -209,16 +231,15 @@ int Main() {
     // The guide's field for this goal: built once, outside the runs' budgets.
     {
       cpu = ThreadCpuSeconds();
-      auto field = GuideFieldCache::Default().Get(*model, sc.goal, GuideLatticeOptions(400.0, 25.0),
-                                                  &evaluator);
+      auto field = GuideFieldCache::Default().Get(*model, sc.goal, field_options, &evaluator);
       if (!field.ok()) {
         std::fprintf(stderr, "%s\n", std::string(field.status().message()).c_str());
         return 1;
       }
       std::printf(
-          "guide field (400 m, 8 headings, 25 m step): %.2f CPU s, %.2f MB, %.2fM "
+          "guide field (%.0f m, 8 headings, %.0f m step): %.2f CPU s, %.2f MB, %.2fM "
           "configurations\n",
-          ThreadCpuSeconds() - cpu, (*field)->MemoryBytes() / 1e6,
+          field_options.spacing_m, field_options.risk_step_m, ThreadCpuSeconds() - cpu, (*field)->MemoryBytes() / 1e6,
           (*field)->build_stats().configurations / 1e6);
     }
 
@@ -233,7 +254,8 @@ int Main() {
         options.budget.max_time_s = wall;
         options.seed = seed;
         options.params = extra;
-        options.params["guide"] = mode == "guided" ? 1.0 : 0.0;
+        options.params["guide"] = mode == "unguided" ? 0.0 : 1.0;
+        if (mode == "informed") options.params.emplace("guide_informed", 1.25);
         CancellationToken cancel;
         std::vector<std::pair<double, double>> curve;  // CPU s, risk
         std::vector<Pose> best;

@@ -239,8 +239,8 @@ int Main() {
       std::printf(
           "guide field (%.0f m, 8 headings, %.0f m step): %.2f CPU s, %.2f MB, %.2fM "
           "configurations\n",
-          field_options.spacing_m, field_options.risk_step_m, ThreadCpuSeconds() - cpu, (*field)->MemoryBytes() / 1e6,
-          (*field)->build_stats().configurations / 1e6);
+          field_options.spacing_m, field_options.risk_step_m, ThreadCpuSeconds() - cpu,
+          (*field)->MemoryBytes() / 1e6, (*field)->build_stats().configurations / 1e6);
     }
 
     // risk_at[mode][budget] over seeds.

@@ -291,8 +291,7 @@ absl::Status StateLattice::Search(const Pose& goal,
     if (c >= *bound) break;
     // Every 16 settled states: each may price dozens of edges, a batch or
     // more of the evaluator's (a slow one too: an FPGA shim).
-    if ((++pops & 15) == 0 && stop.Reached())
-      return absl::CancelledError("lattice search stopped");
+    if ((++pops & 15) == 0 && stop.Reached()) return absl::CancelledError("lattice search stopped");
     settled[s] = 1;
     if (stats != nullptr) ++stats->states_settled;
     if (!start_risk.empty() && start_risk[s] + c < *bound) {

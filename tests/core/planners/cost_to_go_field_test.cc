@@ -214,9 +214,9 @@ TEST(GuidedPlannerTest, AFieldTooSlowForTheBudgetIsGivenUpAndThePlanGoesOn) {
   options.params = {{"guide", 1.0}, {"guide_field_m", 130.0}, {"guide_cell_m", 0.0}};
   const size_t entries = GuideFieldCache::Default().stats().entries;
   CancellationToken cancel;
-  auto result = (*planner)->Plan({model, *FindFlyablePose(*model, 300, 1000, 0.0),
-                                  *FindFlyablePose(*model, 1700, 1000, 0.0)},
-                                 options, cancel, nullptr);
+  auto result = (*planner)->Plan(
+      {model, *FindFlyablePose(*model, 300, 1000, 0.0), *FindFlyablePose(*model, 1700, 1000, 0.0)},
+      options, cancel, nullptr);
   ASSERT_TRUE(result.ok()) << result.status();
   EXPECT_GT(result->iterations, 0);
   EXPECT_EQ(GuideFieldCache::Default().stats().entries, entries);

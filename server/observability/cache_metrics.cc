@@ -3,6 +3,8 @@
 #include <string>
 #include <utility>
 
+#include "core/planners/cost_to_go_field.h"
+
 namespace riskplan::server {
 namespace {
 
@@ -80,6 +82,25 @@ std::vector<prometheus::MetricFamily> CacheMetrics::Collect() const {
   out.push_back(Gauge("riskplan_goal_tree_cache_limit_bytes",
                       "Most bytes of goal trees kept (--goal_tree_cache_mb; 0: off)"));
   Add(&out.back(), static_cast<double>(goal_trees_ != nullptr ? goal_trees_->max_bytes() : 0));
+  // RISK_RRT_STAR's guide fields (`guide` = 1): the process's one cache.
+  const GuideFieldCache& fields = GuideFieldCache::Default();
+  const CacheStats guide = fields.stats();
+  out.push_back(Counter("riskplan_guide_field_cache_hits_total",
+                        "Guided plans (guide = 1) that found their goal's field cached",
+                        static_cast<double>(guide.hits)));
+  out.push_back(Counter("riskplan_guide_field_cache_misses_total",
+                        "Guide fields built (or given up: a build that did not fit its plan's "
+                        "budget is not kept)",
+                        static_cast<double>(guide.misses)));
+  out.push_back(Counter("riskplan_guide_field_cache_evictions_total",
+                        "Guide fields evicted to stay within the cache's bounds",
+                        static_cast<double>(guide.evictions)));
+  out.push_back(Gauge("riskplan_guide_field_cache_bytes", "Guide fields cached, bytes"));
+  Add(&out.back(), static_cast<double>(guide.bytes));
+  out.push_back(Gauge("riskplan_guide_field_cache_entries", "Guide fields cached"));
+  Add(&out.back(), static_cast<double>(guide.entries));
+  out.push_back(Gauge("riskplan_guide_field_cache_limit_bytes", "Most bytes of guide fields kept"));
+  Add(&out.back(), static_cast<double>(fields.limits().max_bytes));
   return out;
 }
 

@@ -15,6 +15,13 @@
 //   riskplan_goal_tree_cache_bytes           gauge  trees cached (GoalTreeCache::TreeBytes)
 //   riskplan_goal_tree_cache_entries         gauge  trees cached
 //   riskplan_goal_tree_cache_limit_bytes     gauge  their bound (--goal_tree_cache_mb; 0: off)
+//   riskplan_guide_field_cache_hits_total    counter guided plans (guide = 1) whose goal's field
+//                                                   was cached (GuideFieldCache::Default())
+//   riskplan_guide_field_cache_misses_total  counter fields built or given up
+//   riskplan_guide_field_cache_evictions_total counter fields evicted to stay within the bounds
+//   riskplan_guide_field_cache_bytes         gauge  fields cached (CostToGoField::MemoryBytes)
+//   riskplan_guide_field_cache_entries       gauge  fields cached
+//   riskplan_guide_field_cache_limit_bytes   gauge  their bound (256 MiB)
 //
 // The accelerator's caches are in accel/engine_metrics.h (riskplan_accel_cache_bytes).
 #ifndef RISKPLAN_SERVER_OBSERVABILITY_CACHE_METRICS_H_

@@ -137,6 +137,23 @@ TEST(MetricsTest, ReportsTheMemoryAndBoundsOfTheServersCaches) {
   ASSERT_TRUE(client.EvaluateRisk(overridden, &response).ok());
   EXPECT_EQ(metric("riskplan_model_cache_models"), 1.0);
   EXPECT_GE(metric("riskplan_model_cache_bytes{kind=\"overridden\"}").value_or(0), 400.0 * 400 * 8);
+
+  // Guided plans (an iteration budget: the field's build runs to its end):
+  // the first builds its goal's field, the second, to the same goal, finds it.
+  EXPECT_EQ(metric("riskplan_guide_field_cache_entries"), 0.0);
+  EXPECT_EQ(metric("riskplan_guide_field_cache_limit_bytes"), 256.0 * 1024 * 1024);
+  v1::PlanRequest guided = SmallCityPlan(0, 50);
+  (*guided.mutable_planner_params())["guide"] = 1.0;
+  (*guided.mutable_planner_params())["guide_field_m"] = 250.0;
+  ASSERT_TRUE(RunPlan(client, guided).status.ok());
+  EXPECT_EQ(metric("riskplan_guide_field_cache_misses_total"), 1.0);
+  EXPECT_EQ(metric("riskplan_guide_field_cache_hits_total"), 0.0);
+  EXPECT_EQ(metric("riskplan_guide_field_cache_entries"), 1.0);
+  EXPECT_GT(metric("riskplan_guide_field_cache_bytes").value_or(0), 1000.0);
+  guided.set_seed(8);
+  ASSERT_TRUE(RunPlan(client, guided).status.ok());
+  EXPECT_EQ(metric("riskplan_guide_field_cache_hits_total"), 1.0);
+  EXPECT_EQ(metric("riskplan_guide_field_cache_misses_total"), 1.0);
 }
 
 }  // namespace

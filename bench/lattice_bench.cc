@@ -139,12 +139,7 @@ int Main() {
   const std::map<std::string, double> extra =
       bench::ParsePlannerParams(absl::GetFlag(FLAGS_params));
   // The guide field's lattice, as the planner builds it from its parameters.
-  auto param_or = [&](const char* name, double fallback) {
-    auto it = extra.find(name);
-    return it == extra.end() ? fallback : it->second;
-  };
-  const LatticeOptions field_options =
-      GuideLatticeOptions(param_or("guide_field_m", 400.0), param_or("guide_field_step_m", 25.0));
+  const LatticeOptions field_options = bench::GuideFieldOptions(extra);
 
   // The lower bound, once for the model.
   double cpu = ThreadCpuSeconds();
@@ -237,10 +232,11 @@ int Main() {
         return 1;
       }
       std::printf(
-          "guide field (%.0f m, 8 headings, %.0f m step): %.2f CPU s, %.2f MB, %.2fM "
-          "configurations\n",
-          field_options.spacing_m, field_options.risk_step_m, ThreadCpuSeconds() - cpu,
-          (*field)->MemoryBytes() / 1e6, (*field)->build_stats().configurations / 1e6);
+          "guide field (%.0f m, %d headings, %zu levels, %.0f m step): %.2f CPU s, %.2f MB, "
+          "%.2fM configurations\n",
+          field_options.spacing_m, field_options.headings, field_options.level_offsets_m.size(),
+          field_options.risk_step_m, ThreadCpuSeconds() - cpu, (*field)->MemoryBytes() / 1e6,
+          (*field)->build_stats().configurations / 1e6);
     }
 
     // risk_at[mode][budget] over seeds.

@@ -20,6 +20,9 @@
 #include "absl/strings/string_view.h"
 #include "bench/scenarios.h"
 #include "core/map/demo_city.h"
+#include "core/planners/cost_to_go_field.h"
+#include "core/planners/planner.h"
+#include "core/planners/planner_support.h"
 #include "core/risk/risk_model.h"
 
 namespace riskplan::bench {
@@ -49,6 +52,22 @@ inline std::map<std::string, double> ParsePlannerParams(absl::string_view text) 
     if (parts.size() == 2) params[parts[0]] = std::stod(parts[1]);
   }
   return params;
+}
+
+// The guide field's lattice that RISK_RRT_STAR builds for `params` (its
+// guide_field_* parameters, the planner's defaults for those not given).
+inline LatticeOptions GuideFieldOptions(const std::map<std::string, double>& params) {
+  std::map<std::string, double> field;
+  for (const char* name :
+       {"guide_field_m", "guide_field_step_m", "guide_field_headings", "guide_field_levels"}) {
+    if (auto it = params.find(name); it != params.end()) field[name] = it->second;
+  }
+  absl::StatusOr<PlannerParamValues> v = PlannerParamValues::Parse(
+      "RISK_RRT_STAR", PlannerParams(PlannerAlgorithm::kRiskRrtStar), field);
+  if (!v.ok()) return GuideLatticeOptions(400.0, 25.0);
+  return GuideLatticeOptions(v->Get("guide_field_m"), v->Get("guide_field_step_m"),
+                             static_cast<int>(v->Get("guide_field_headings")),
+                             static_cast<int>(v->Get("guide_field_levels")));
 }
 
 // The demo-city model (default parameters) and its scenarios, only those named

@@ -9,11 +9,17 @@
 
 namespace riskplan {
 
-LatticeOptions GuideLatticeOptions(double spacing_m, double risk_step_m) {
+LatticeOptions GuideLatticeOptions(double spacing_m, double risk_step_m, int headings, int levels) {
   LatticeOptions o;
   o.spacing_m = spacing_m;
-  o.headings = 8;
-  o.level_offsets_m = {5.0};
+  o.headings = headings;
+  o.level_offsets_m.clear();
+  constexpr double kLowest = 5.0;
+  constexpr double kHighest = 120.0;
+  for (int k = 0; k < levels; ++k) {
+    o.level_offsets_m.push_back(levels == 1 ? kLowest
+                                            : kLowest + (kHighest - kLowest) * k / (levels - 1));
+  }
   o.risk_step_m = risk_step_m;
   return o;
 }
@@ -72,7 +78,8 @@ absl::StatusOr<std::shared_ptr<const CostToGoField>> GuideFieldCache::Get(
   }
   key.goal = {goal.x, goal.y, goal.z, goal.theta};
   key.lattice = {options.spacing_m, static_cast<double>(options.headings), options.risk_step_m,
-                 options.level_offsets_m.empty() ? 0.0 : options.level_offsets_m[0]};
+                 options.level_offsets_m.empty() ? 0.0 : options.level_offsets_m[0],
+                 static_cast<double>(options.level_offsets_m.size())};
   return cache_.GetOrBuild(
       key,
       [&]() -> absl::StatusOr<Cache::Built> {

@@ -31,9 +31,11 @@
 
 namespace riskplan {
 
-// The lattice of a guide field: `spacing_m` apart, 8 headings, one level 5 m
-// above the safe altitude, edges sampled every risk_step_m.
-LatticeOptions GuideLatticeOptions(double spacing_m, double risk_step_m);
+// The lattice of a guide field: `spacing_m` apart, `headings` headings,
+// `levels` altitude levels from 5 m to 120 m above the safe altitude evenly
+// (one level: 5 m), edges sampled every risk_step_m.
+LatticeOptions GuideLatticeOptions(double spacing_m, double risk_step_m, int headings = 8,
+                                   int levels = 1);
 
 class CostToGoField {
  public:
@@ -79,7 +81,7 @@ class GuideFieldCache {
     const void* map = nullptr;
     std::vector<double> params;  // every model parameter, in ModelParamNames order
     std::array<double, 4> goal{};
-    std::array<double, 4> lattice{};  // spacing, headings, risk step, first level
+    std::array<double, 5> lattice{};  // spacing, headings, risk step, first level, levels
     bool operator<(const Key& o) const {
       return std::tie(map, params, goal, lattice) < std::tie(o.map, o.params, o.goal, o.lattice);
     }

@@ -34,6 +34,8 @@ absl::StatusOr<Params> Params::Parse(const std::map<std::string, double>& given)
   p.guide = values->Get("guide") >= 1.0;
   p.guide_field_m = values->Get("guide_field_m");
   p.guide_field_step_m = values->Get("guide_field_step_m");
+  p.guide_field_headings = static_cast<int>(integer("guide_field_headings"));
+  p.guide_field_levels = static_cast<int>(integer("guide_field_levels"));
   p.guide_informed = values->Get("guide_informed");
   if (p.near_radius_m == 0.0) p.near_radius_m = 2.5 * p.step_m;
   if (p.refine_scale_m == 0.0) p.refine_scale_m = 0.5 * p.step_m;
@@ -80,6 +82,10 @@ const std::vector<PlannerParamInfo>& ParamInfo() {
       {"guide_field_step_m", 25.0, 5.0, 200.0,
        "sampling step of the guide field's edge risks, m (a guide only: reported risks stay "
        "exact)"},
+      {"guide_field_headings", 8, 4, 32, "track headings of the guide field's lattice"},
+      {"guide_field_levels", 1, 1, 8,
+       "altitude levels of the guide field's lattice, from 5 m to 120 m above the safe "
+       "altitude evenly (1: 5 m)"},
       {"guide_informed", 0.0, 0.0, 10.0,
        "with guide = 1: a uniform sample is drawn again (up to 8 times) while the field's "
        "least cost-to-go near it exceeds this times the largest risk of a running mission's "

@@ -28,7 +28,9 @@ absl::Status Run::GuideByField(size_t m) {
       build_deadline = now + (*earliest - now) / 2;
     }
     absl::StatusOr<std::shared_ptr<const CostToGoField>> field = GuideFieldCache::Default().Get(
-        model_, goal_, GuideLatticeOptions(params_.guide_field_m, params_.guide_field_step_m),
+        model_, goal_,
+        GuideLatticeOptions(params_.guide_field_m, params_.guide_field_step_m,
+                            params_.guide_field_headings, params_.guide_field_levels),
         evaluator_, StopCondition(&cancel_, nullptr, build_deadline));
     if (!field.ok()) {
       if (!absl::IsCancelled(field.status())) return field.status();

@@ -58,6 +58,8 @@ struct Params {
   bool guide = false;           // the lattice's cost-to-go field (risk_rrt_star_guide.cc)
   double guide_field_m = 400.0;
   double guide_field_step_m = 25.0;
+  int guide_field_headings = 8;
+  int guide_field_levels = 1;
   // With guide: a uniform sample is drawn again (up to kInformedDraws times)
   // while the field's least cost-to-go near it exceeds this times the field
   // route's risk of the running mission with the largest (0: off).

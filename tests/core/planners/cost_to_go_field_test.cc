@@ -95,6 +95,33 @@ TEST(CostToGoFieldTest, LeastCostNearIsTheLeastOfItsPosition) {
             std::numeric_limits<double>::infinity());
 }
 
+TEST(CostToGoFieldTest, LevelsAndHeadingsOfTheGuideLattice) {
+  const LatticeOptions one = GuideLatticeOptions(400.0, 25.0);
+  EXPECT_EQ(one.headings, 8);
+  EXPECT_EQ(one.level_offsets_m, std::vector<double>{5.0});
+  const LatticeOptions four = GuideLatticeOptions(200.0, 25.0, 16, 4);
+  EXPECT_EQ(four.headings, 16);
+  ASSERT_EQ(four.level_offsets_m.size(), 4u);
+  EXPECT_EQ(four.level_offsets_m.front(), 5.0);
+  EXPECT_EQ(four.level_offsets_m.back(), 120.0);
+  EXPECT_NEAR(four.level_offsets_m[1], 5.0 + 115.0 / 3.0, 1e-12);
+  EXPECT_TRUE(CheckLatticeOptions(four).ok());
+
+  // Fields of one goal that differ only in their levels are two entries.
+  auto model = SmallCity(0.0);
+  DirectRiskEvaluator evaluator;
+  GuideFieldCache cache({size_t{1} << 30, 8});
+  const Pose goal = *FindFlyablePose(*model, 1000, 1000, 0.0);
+  auto a = cache.Get(*model, goal, GuideLatticeOptions(250.0, 25.0, 8, 1), &evaluator);
+  auto b = cache.Get(*model, goal, GuideLatticeOptions(250.0, 25.0, 8, 3), &evaluator);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(cache.stats().entries, 2u);
+  EXPECT_EQ((*b)->lattice().states_per_position(), 8 * 3);
+  // More levels: no state's cost-to-go is higher than with the lowest alone
+  // (every route of the one-level lattice is one of the three-level one's).
+  EXPECT_LE((*b)->LeastCostNear(300.0, 300.0), (*a)->LeastCostNear(300.0, 300.0));
+}
+
 struct Outcome {
   double risk = -1.0;
   std::vector<Pose> waypoints;
@@ -131,7 +158,10 @@ TEST(GuidedPlannerTest, DeterministicAndExact) {
     auto model = SmallCity(wind);
     const Pose s = *FindFlyablePose(*model, 300, 400, 0.5);
     const Pose g = *FindFlyablePose(*model, 1700, 1600, 0.5);
-    const std::map<std::string, double> guided = {{"guide", 1.0}, {"guide_field_m", 200.0}};
+    const std::map<std::string, double> guided = {{"guide", 1.0},
+                                                  {"guide_field_m", 200.0},
+                                                  {"guide_field_headings", wind > 0.0 ? 16.0 : 8.0},
+                                                  {"guide_field_levels", wind > 0.0 ? 3.0 : 1.0}};
     const Outcome a = Plan(model, s, g, guided);
     const Outcome b = Plan(model, s, g, guided);
     ASSERT_GT(a.risk, 0.0);

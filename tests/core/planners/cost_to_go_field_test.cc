@@ -152,6 +152,27 @@ Outcome Plan(const std::shared_ptr<const RiskModel>& model, const Pose& s, const
   return out;
 }
 
+// Plans twice with the same seed and iteration budget: the same result bit
+// for bit, admissible, its risk EvaluateTrajectory's. Returns the first.
+Outcome PlanTwiceAndCheck(const std::shared_ptr<const RiskModel>& model, const Pose& s,
+                          const Pose& g, const std::map<std::string, double>& params,
+                          bool record_tree = false) {
+  const Outcome a = Plan(model, s, g, params, record_tree);
+  const Outcome b = Plan(model, s, g, params);
+  EXPECT_GT(a.risk, 0.0);
+  EXPECT_EQ(a.risk, b.risk);
+  EXPECT_EQ(a.tree, b.tree);
+  EXPECT_EQ(a.waypoints.size(), b.waypoints.size());
+  for (size_t k = 0; k < std::min(a.waypoints.size(), b.waypoints.size()); ++k) {
+    EXPECT_EQ(a.waypoints[k].x, b.waypoints[k].x);
+    EXPECT_EQ(a.waypoints[k].theta, b.waypoints[k].theta);
+  }
+  bool admissible = false;
+  EXPECT_EQ(ReEvaluate(*model, a.waypoints, &admissible), a.risk);
+  EXPECT_TRUE(admissible);
+  return a;
+}
+
 TEST(GuidedPlannerTest, DeterministicAndExact) {
   for (double wind : {0.0, 8.0}) {
     SCOPED_TRACE(wind);
@@ -162,19 +183,7 @@ TEST(GuidedPlannerTest, DeterministicAndExact) {
                                                   {"guide_field_m", 200.0},
                                                   {"guide_field_headings", wind > 0.0 ? 16.0 : 8.0},
                                                   {"guide_field_levels", wind > 0.0 ? 3.0 : 1.0}};
-    const Outcome a = Plan(model, s, g, guided);
-    const Outcome b = Plan(model, s, g, guided);
-    ASSERT_GT(a.risk, 0.0);
-    EXPECT_EQ(a.risk, b.risk);
-    EXPECT_EQ(a.tree, b.tree);
-    ASSERT_EQ(a.waypoints.size(), b.waypoints.size());
-    for (size_t k = 0; k < a.waypoints.size(); ++k) {
-      EXPECT_EQ(a.waypoints[k].x, b.waypoints[k].x);
-      EXPECT_EQ(a.waypoints[k].theta, b.waypoints[k].theta);
-    }
-    bool admissible = false;
-    EXPECT_EQ(ReEvaluate(*model, a.waypoints, &admissible), a.risk);
-    EXPECT_TRUE(admissible);
+    PlanTwiceAndCheck(model, s, g, guided);
   }
 }
 
@@ -188,15 +197,8 @@ TEST(GuidedPlannerTest, InformedSamplingIsDeterministicExactAndChangesTheSearch)
     const Pose g = *FindFlyablePose(*model, 300, 300, 0.5);
     const std::map<std::string, double> informed = {
         {"guide", 1.0}, {"guide_field_m", 200.0}, {"guide_informed", 1.0}};
-    const Outcome a = Plan(model, s, g, informed, /*record_tree=*/true);
-    const Outcome b = Plan(model, s, g, informed);
+    const Outcome a = PlanTwiceAndCheck(model, s, g, informed, /*record_tree=*/true);
     ASSERT_GT(a.risk, 0.0);
-    EXPECT_EQ(a.risk, b.risk);
-    EXPECT_EQ(a.tree, b.tree);
-    ASSERT_EQ(a.waypoints.size(), b.waypoints.size());
-    bool admissible = false;
-    EXPECT_EQ(ReEvaluate(*model, a.waypoints, &admissible), a.risk);
-    EXPECT_TRUE(admissible);
     // In still air: the same plan without the informed draws grows another
     // tree, and the informed one's nodes lie nearer the goal (the field's
     // cost-to-go). (In this wind the 200-m field has no route from this

@@ -77,16 +77,21 @@ class FlightGatewayTest : public ::testing::Test {
     EXPECT_TRUE(stream.ok()) << stream.status();
     return stream.ok() ? *std::move(stream) : nullptr;
   }
-  // Reads events until `done` holds for the newest one or the stream ends;
-  // the events read so far.
+  // Reads events until `done` holds for one of them (checked from the
+  // stream's first event) or the stream ends: the events up to and including
+  // the first for which it holds, else all read. One read may bring more
+  // than the event sought (an alert and the position after it), so the one
+  // sought is the last returned, not the stream's newest.
   template <typename F>
-  static const std::vector<SseEvent>& ReadUntil(SseStream* stream, F done) {
+  static std::vector<SseEvent> ReadUntil(SseStream* stream, F done) {
     const absl::Time deadline = absl::Now() + kDeadline;
     size_t seen = 0;
     while (true) {
       const std::vector<SseEvent>& events = stream->events();
       for (; seen < events.size(); ++seen) {
-        if (done(events[seen])) return events;
+        if (done(events[seen])) {
+          return std::vector<SseEvent>(events.begin(), events.begin() + seen + 1);
+        }
       }
       if (absl::Now() >= deadline || stream->ended()) return events;
       stream->ReadEvents(events.size() + 1, deadline - absl::Now());

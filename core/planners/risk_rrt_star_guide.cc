@@ -17,11 +17,7 @@ absl::Status Run::GuideByField(size_t m) {
     // short there is given up for this run (and not cached), and the run goes
     // on without the field. Without a deadline (an iteration budget) the
     // build runs to its end, so the run stays deterministic.
-    std::optional<std::chrono::steady_clock::time_point> earliest;
-    for (const MissionRun& r : missions_) {
-      if (r.state != MissionState::kRunning || !r.deadline.has_value()) continue;
-      if (!earliest.has_value() || *r.deadline < *earliest) earliest = r.deadline;
-    }
+    const std::optional<std::chrono::steady_clock::time_point> earliest = EarliestDeadline();
     std::optional<std::chrono::steady_clock::time_point> build_deadline;
     if (earliest.has_value()) {
       const auto now = std::chrono::steady_clock::now();

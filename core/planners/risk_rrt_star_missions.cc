@@ -191,15 +191,19 @@ double Run::Bound() const {
   return bound;
 }
 
-void Run::ResetStop() {
-  // Only the earliest deadline matters: when it passes, UpdateMissions ends
-  // that mission and the condition moves on to the next one.
+std::optional<std::chrono::steady_clock::time_point> Run::EarliestDeadline() const {
   std::optional<std::chrono::steady_clock::time_point> earliest;
   for (const MissionRun& m : missions_) {
     if (m.state != MissionState::kRunning || !m.deadline.has_value()) continue;
     if (!earliest.has_value() || *m.deadline < *earliest) earliest = m.deadline;
   }
-  stop_ = StopCondition(&cancel_, nullptr, earliest);
+  return earliest;
+}
+
+void Run::ResetStop() {
+  // Only the earliest deadline matters: when it passes, UpdateMissions ends
+  // that mission and the condition moves on to the next one.
+  stop_ = StopCondition(&cancel_, nullptr, EarliestDeadline());
   refiner_.set_stop(stop_);
 }
 

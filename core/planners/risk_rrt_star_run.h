@@ -266,6 +266,8 @@ class Run {
   void Finish(size_t m, StopReason reason);
   void FailRunning(const absl::Status& status);
   void ResetStop();
+  // The earliest deadline of a running mission (nullopt: none has one).
+  std::optional<std::chrono::steady_clock::time_point> EarliestDeadline() const;
   // The goal, the starts and initial_tree_'s nodes, into nodes_ and grid_.
   void Seed();
   // Which missions a round-robin pick may choose.
